@@ -1,0 +1,42 @@
+# vibrogear: every target does its own set-up (apt stack, venv, editable install).
+VENV   := .venv
+PY     := $(VENV)/bin/python
+VG     := $(VENV)/bin/vibrogear
+STAMP  := $(VENV)/.installed
+OUT    ?= out
+export OPENBLAS_NUM_THREADS ?= 1
+export XDG_CACHE_HOME ?= $(HOME)/.cache
+
+.PHONY: setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml constraints.txt scripts/setup.sh
+	./scripts/setup.sh
+
+## main job on the default scene: impact-pair figures (paper Figs 4-8)
+demo: figures
+
+## the CI test suite (fast; slow cases: make test-slow)
+test: $(STAMP)
+	$(PY) -m pytest
+
+test-slow: $(STAMP)
+	$(PY) -m pytest -m slow
+
+bench: $(STAMP)
+	$(PY) benchmarks/run_all.py
+
+figures: fig4 fig5 fig7
+
+fig4: $(STAMP)
+	$(VG) run configs/impact_pair.toml --out $(OUT)/fig4_zeta0.015
+
+fig5: $(STAMP)
+	$(VG) run configs/impact_pair.toml --set impact_pair.zeta=0.03 --out $(OUT)/fig5_zeta0.03
+
+fig7: $(STAMP)
+	$(VG) run configs/impact_pair.toml --set impact_pair.zeta=0.05 --out $(OUT)/fig7_zeta0.05
+
+clean:
+	rm -rf $(OUT)

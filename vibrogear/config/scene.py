@@ -1,0 +1,100 @@
+"""A scene: one TOML file read once into a frozen, validated :class:`Scene`."""
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from .base import ConfigError, build, parse_override, set_path, spec
+from .housing import HousingConfig
+from .rotor import RotorConfig
+from .sections import (ContinuationConfig, ImpactPairConfig, IntegrationConfig, ReportConfig,
+                       SceneInfo, ShootingConfig, SweepConfig, TimeResponseConfig)
+
+__all__ = ["Scene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
+
+#: sections that define the mechanical model; a scene has exactly one kind of model
+MODEL_SECTIONS = ("impact_pair", "rotor", "housing")
+
+#: analysis -> option section it needs (None: needs none)
+ANALYSIS_SECTION = {
+    "time_response": "time_response",
+    "sweep": "sweep",
+    "continuation": "continuation",
+    "report": "report",
+    "modes": None,
+    "campbell": None,
+}
+
+#: analysis -> model sections that support it
+ANALYSIS_MODELS = {
+    "time_response": ("impact_pair",),
+    "sweep": ("impact_pair",),
+    "continuation": ("impact_pair",),
+    "report": ("impact_pair",),
+    "modes": ("rotor", "housing"),
+    "campbell": ("rotor",),
+}
+
+
+@dataclass(frozen=True)
+class Scene:
+    scene: SceneInfo = spec()
+    impact_pair: ImpactPairConfig | None = spec(None)
+    rotor: RotorConfig | None = spec(None)
+    housing: HousingConfig | None = spec(None)
+    integration: IntegrationConfig = spec(IntegrationConfig())
+    shooting: ShootingConfig = spec(ShootingConfig())
+    sweep: SweepConfig | None = spec(None)
+    continuation: ContinuationConfig | None = spec(None)
+    time_response: TimeResponseConfig | None = spec(None)
+    report: ReportConfig | None = spec(None)
+
+    @property
+    def model_kind(self) -> str:
+        present = [s for s in MODEL_SECTIONS if getattr(self, s) is not None]
+        return present[0]
+
+    def validate(self, path: str) -> None:
+        present = [s for s in MODEL_SECTIONS if getattr(self, s) is not None]
+        if not present:
+            raise ConfigError("", f"missing section: a scene needs one of [{'], ['.join(MODEL_SECTIONS)}]")
+        if len(present) > 1 and "impact_pair" in present:
+            raise ConfigError("impact_pair", "an impact-pair scene cannot also have "
+                              f"[{'], ['.join(p for p in present if p != 'impact_pair')}]")
+        for i, analysis in enumerate(self.scene.analyses):
+            allowed = ANALYSIS_MODELS[analysis]
+            if not any(getattr(self, s) is not None for s in allowed):
+                raise ConfigError(f"scene.analyses[{i}]", f"{analysis!r} needs a model section "
+                                  f"[{'] or ['.join(allowed)}]")
+            section = ANALYSIS_SECTION[analysis]
+            if section is not None and getattr(self, section) is None:
+                raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(str(path), "no such file")
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(str(path), f"not a valid TOML file: {exc}") from None
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "not a valid TOML file: not UTF-8 text") from None
+
+
+def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Scene:
+    data = copy.deepcopy(data)
+    for text in overrides:
+        keys, value = parse_override(text)
+        set_path(data, keys, value)
+    return build(Scene, data)
+
+
+def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
+    """Read, override (``section.key=value``) and validate a scene file."""
+    return scene_from_dict(read_toml(path), overrides)
