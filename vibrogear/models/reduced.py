@@ -1,0 +1,141 @@
+"""The reduced model: the one interface every solver sees.
+
+A :class:`ReducedModel` is the second-order system in modal coordinates x (m of them)
+
+    x'' + D x' + W x + P^T [ Bc(s) P x' + Kc(s) P x ] + sum_j c_j f_j(delta_j, delta_j') = F(t)
+
+with D, W diagonal (modal damping and squared frequencies), the linear coupling kept
+low-rank through P (r x m) and small dense Kc(s) = Kc0 + s Kc1, Bc(s) = Bc0 + s Bc1
+(gyroscopic / circulatory terms scale with the spin s), and contact laws acting on
+linear combinations of the state: delta_j = c_j . x - e_j(t) (e_j: kinematic
+transmission error), delta_j' = c_j . x' - e_j'(t).  Each contact is a dead zone with
+an upper gap g_hi and a lower gap g_lo (g_lo = -inf: one-sided):
+
+    f_j = k_hi(t) (delta - g_hi)^p + c delta'         delta > g_hi   (mode +1)
+    f_j = 0                                           g_lo <= delta <= g_hi (mode 0)
+    f_j = -k_lo(t) (g_lo - delta)^p + c delta'        delta < g_lo   (mode -1)
+
+with p = 1 (piecewise linear), 3/2 (Hertz, balls) or 10/9 (rollers) and
+k(t) = k (1 + sum_h a_h cos(h W t) + b_h sin(h W t)) (periodic mesh stiffness).
+Forcing F(t) = F0 + sum_h Fc_h cos(h W t) + Fs_h sin(h W t), with the base excitation
+frequency W = omega_per_param * param and the spin s = spin_per_param * param, so one
+scalar param (Omega for the impact pair, driving speed in rpm for a gearbox) moves
+both.  The state is u = [x, x'] (length 2m).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["ReducedModel", "ContactSet", "LinearCoupling", "Forcing"]
+
+
+def _arr(a, shape=None, dtype=float) -> np.ndarray:
+    out = np.ascontiguousarray(np.asarray(a, dtype=dtype))
+    if shape is not None and out.shape != shape:
+        raise ValueError(f"expected shape {shape}, got {out.shape}")
+    out.setflags(write=False)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class ContactSet:
+    """nc contact laws acting on delta = directions @ x - e(t)."""
+    directions: np.ndarray            # (nc, m)
+    k_hi: np.ndarray                  # (nc,) stiffness beyond the upper gap
+    k_lo: np.ndarray                  # (nc,) stiffness beyond the lower gap
+    gap_hi: np.ndarray                # (nc,)
+    gap_lo: np.ndarray                # (nc,) (-inf: one-sided)
+    exponent: np.ndarray              # (nc,) 1, 1.5, 10/9
+    damping: np.ndarray               # (nc,) viscous, only in contact
+    stiffness_cos: np.ndarray         # (nc, H) relative mesh-stiffness harmonics
+    stiffness_sin: np.ndarray         # (nc, H)
+    error_cos: np.ndarray             # (nc, H) kinematic transmission error e(t)
+    error_sin: np.ndarray             # (nc, H)
+    names: tuple[str, ...] = ()
+
+    @property
+    def count(self) -> int:
+        return self.directions.shape[0]
+
+    @staticmethod
+    def empty(m: int, n_harmonics: int) -> "ContactSet":
+        z = np.zeros(0)
+        zh = np.zeros((0, n_harmonics))
+        return ContactSet(np.zeros((0, m)), z, z, z, z, z, z, zh, zh, zh, zh)
+
+
+@dataclass(frozen=True, eq=False)
+class LinearCoupling:
+    """Low-rank linear coupling P^T (Kc P x + Bc P x'), Kc = Kc0 + s Kc1, Bc = Bc0 + s Bc1."""
+    P: np.ndarray    # (r, m)
+    Kc0: np.ndarray  # (r, r)
+    Kc1: np.ndarray  # (r, r)
+    Bc0: np.ndarray  # (r, r)
+    Bc1: np.ndarray  # (r, r)
+
+    @staticmethod
+    def none(m: int) -> "LinearCoupling":
+        z = np.zeros((0, 0))
+        return LinearCoupling(np.zeros((0, m)), z, z, z, z)
+
+
+@dataclass(frozen=True, eq=False)
+class Forcing:
+    """F(t) = F0 + sum_h Fc[h-1] cos(h W t) + Fs[h-1] sin(h W t)."""
+    F0: np.ndarray   # (m,)
+    Fc: np.ndarray   # (H, m)
+    Fs: np.ndarray   # (H, m)
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedModel:
+    """First-order system u' = f(t, u; param), u = [x, x'] (see module docstring)."""
+    omega2: np.ndarray             # (m,) diagonal stiffness (squared modal circular frequencies)
+    damping: np.ndarray            # (m,) diagonal damping (2 zeta_i omega_i)
+    coupling: LinearCoupling
+    forcing: Forcing
+    contacts: ContactSet
+    omega_per_param: float = 1.0   # excitation circular frequency W = omega_per_param * param
+    spin_per_param: float = 0.0    # spin s = spin_per_param * param
+    monitor: int = 0               # contact whose deformation the analyses report
+    name: str = "model"
+    param_name: str = "Omega"
+    state_names: tuple[str, ...] = field(default=())
+
+    def __post_init__(self):
+        m = self.omega2.shape[0]
+        object.__setattr__(self, "omega2", _arr(self.omega2, (m,)))
+        object.__setattr__(self, "damping", _arr(self.damping, (m,)))
+        H = self.forcing.Fc.shape[0]
+        for name in ("Fc", "Fs"):
+            _arr(getattr(self.forcing, name), (H, m))
+        nc = self.contacts.count
+        if self.contacts.directions.shape != (nc, m):
+            raise ValueError("contact directions must be (nc, m)")
+        if self.contacts.stiffness_cos.shape != (nc, H) or self.contacts.error_cos.shape != (nc, H):
+            raise ValueError("contact harmonics must be (nc, H) with H = forcing harmonics")
+        r = self.coupling.P.shape[0]
+        if self.coupling.P.shape != (r, m):
+            raise ValueError("coupling P must be (r, m)")
+        if nc and not 0 <= self.monitor < nc:
+            raise ValueError(f"monitor must index a contact (0..{nc - 1})")
+
+    @property
+    def n_modes(self) -> int:
+        return self.omega2.shape[0]
+
+    @property
+    def n_states(self) -> int:
+        return 2 * self.n_modes
+
+    @property
+    def n_harmonics(self) -> int:
+        return self.forcing.Fc.shape[0]
+
+    def excitation_frequency(self, param: float) -> float:
+        return self.omega_per_param * param
+
+    def excitation_period(self, param: float) -> float:
+        return 2.0 * np.pi / self.excitation_frequency(param)

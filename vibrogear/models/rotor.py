@@ -1,0 +1,237 @@
+"""Rotor FE model: a rotating Timoshenko shaft with discs, free gears and bearings.
+
+:func:`build_rotor_model` turns a :class:`~vibrogear.config.rotor.RotorConfig` into a frozen
+:class:`RotorModel` holding the sparse matrices of paper eq. (2),
+``M q'' + (B + w G) q' + (K + w C) q = f``, with ``w`` the shaft spin speed [rad/s].
+
+DOF numbering: node ``n`` owns DOFs ``6 n + k`` with ``k`` in ``u, v, w, phi, theta, psi``
+(see :mod:`vibrogear.models.rotor_elements`); free gear ``g`` owns the torsional DOF
+``6 n_nodes + g``.  Bearings to ground are kept apart (``K_bearings``, ``B_bearings``) so that
+the free shaft (``K``, ``B``) is what modal synthesis needs, and ``model.supported()`` adds
+them for an analysis of the rotor on its own.
+
+:func:`master_modes` gives the free, non-rotating, undamped modes (mass-normalised, the
+rigid-body modes included) that the gearbox modal synthesis uses.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..config.rotor import RotorConfig, node_positions
+from .rotor_elements import (DOF_NAMES, PHI, PSI, THETA, U, V, W, disc_inertia_from_geometry,
+                             shaft_element_matrices)
+
+__all__ = ["RotorModel", "build_rotor_model", "assemble_rotor", "master_modes",
+           "MasterModes", "DOF_NAMES", "dof_groups"]
+
+
+@dataclass(frozen=True, eq=False)
+class RotorModel:
+    """Sparse (CSR) matrices of one shaft and its DOF map.  ``K``/``B`` exclude bearings."""
+    M: sp.csr_matrix
+    K: sp.csr_matrix
+    B: sp.csr_matrix
+    G: sp.csr_matrix
+    C: sp.csr_matrix
+    K_bearings: sp.csr_matrix
+    B_bearings: sp.csr_matrix
+    node_z: np.ndarray                 # node positions along the axis [m]
+    free_gear_dofs: tuple[int, ...]    # torsional DOF index of each free gear
+    free_gear_nodes: tuple[int, ...]
+    disc_nodes: tuple[int, ...]
+    bearing_nodes: tuple[int, ...]
+    element_nodes: np.ndarray          # (elements, 2)
+    name: str = "rotor"
+    labels: dict = field(default_factory=dict)
+
+    @property
+    def n_nodes(self) -> int:
+        return int(self.node_z.size)
+
+    @property
+    def n_dofs(self) -> int:
+        return self.M.shape[0]
+
+    def dof(self, node: int, name: str) -> int:
+        """Global index of DOF ``name`` (u, v, w, phi, theta, psi) of ``node``."""
+        return 6 * int(node) + DOF_NAMES.index(name)
+
+    def node_dofs(self, node: int) -> np.ndarray:
+        """The six global DOF indices of ``node`` in the order u, v, w, phi, theta, psi."""
+        return 6 * int(node) + np.arange(6)
+
+    def node_at(self, z: float) -> int:
+        return int(np.argmin(np.abs(self.node_z - z)))
+
+    def supported(self) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """``(K + K_bearings, B + B_bearings)``: the rotor on its own linear bearings."""
+        return (self.K + self.K_bearings).tocsr(), (self.B + self.B_bearings).tocsr()
+
+
+def dof_groups(model: RotorModel) -> dict[str, np.ndarray]:
+    """Boolean masks of the lateral, axial and torsional DOFs (free gears are torsional)."""
+    n = model.n_dofs
+    k = np.full(n, -1)
+    k[: 6 * model.n_nodes] = np.tile(np.arange(6), model.n_nodes)
+    lateral = np.isin(k, (U, V, PHI, THETA))
+    axial = k == W
+    torsional = (k == PSI) | (k == -1)
+    return {"lateral": lateral, "axial": axial, "torsional": torsional}
+
+
+def _inertia(item, rho_default: float) -> tuple[float, float, float]:
+    if item.mass is not None:
+        return item.mass, item.Id, item.Ip
+    rho = item.density if item.density is not None else rho_default
+    return disc_inertia_from_geometry(item.outer_diameter, item.inner_diameter, item.width, rho)
+
+
+def assemble_rotor(*, node_z, elem_outer_d, elem_inner_d, elem_E, elem_G, elem_rho, elem_nu,
+                   elem_eta=0.0, discs=(), free_gears=(), bearings=(), name="rotor",
+                   labels: dict | None = None) -> RotorModel:
+    """Assemble a shaft from per-element arrays (elements join consecutive nodes).
+
+    ``discs``: ``(node, m, Id, Ip)``; ``free_gears``: ``(node, m, Id, Ip, k_t, c_t, ratio)``;
+    ``bearings``: ``(node, kxx, kyy, kxy, kyx, kzz, cxx, cyy, cxy, cyx, czz)``.
+    """
+    z = np.asarray(node_z, float)
+    ne = z.size - 1
+    el = shaft_element_matrices(np.diff(z), elem_outer_d, elem_inner_d, elem_E, elem_G,
+                                elem_rho, elem_nu, elem_eta)
+    n_free = len(free_gears)
+    n = 6 * z.size + n_free
+    dofs = 6 * np.arange(ne)[:, None] + np.arange(12)[None, :]
+    rows = np.broadcast_to(dofs[:, :, None], (ne, 12, 12)).ravel()
+    cols = np.broadcast_to(dofs[:, None, :], (ne, 12, 12)).ravel()
+
+    def coo(values, extra=()):
+        r = [rows] + [np.array([e[0] for e in extra], int)]
+        c = [cols] + [np.array([e[1] for e in extra], int)]
+        v = [values.ravel()] + [np.array([e[2] for e in extra], float)]
+        return sp.coo_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))),
+                             shape=(n, n)).tocsr()
+
+    m_extra, g_extra, k_extra, b_extra = [], [], [], []
+    for node, m, i_d, i_p in discs:
+        d = 6 * node
+        m_extra += [(d + U, d + U, m), (d + V, d + V, m), (d + W, d + W, m),
+                    (d + PHI, d + PHI, i_d), (d + THETA, d + THETA, i_d), (d + PSI, d + PSI, i_p)]
+        g_extra += [(d + PHI, d + THETA, i_p), (d + THETA, d + PHI, -i_p)]
+    gear_dofs = []
+    for g, (node, m, i_d, i_p, k_t, c_t, ratio) in enumerate(free_gears):
+        d, j = 6 * node, 6 * z.size + g
+        gear_dofs.append(j)
+        m_extra += [(d + U, d + U, m), (d + V, d + V, m), (d + W, d + W, m),
+                    (d + PHI, d + PHI, i_d), (d + THETA, d + THETA, i_d), (j, j, i_p)]
+        g_extra += [(d + PHI, d + THETA, ratio * i_p), (d + THETA, d + PHI, -ratio * i_p)]
+        for lst, val in ((k_extra, k_t), (b_extra, c_t)):
+            lst += [(d + PSI, d + PSI, val), (j, j, val), (d + PSI, j, -val), (j, d + PSI, -val)]
+    kb, bb = [], []
+    for node, kxx, kyy, kxy, kyx, kzz, cxx, cyy, cxy, cyx, czz in bearings:
+        d = 6 * node
+        kb += [(d + U, d + U, kxx), (d + V, d + V, kyy), (d + U, d + V, kxy),
+               (d + V, d + U, kyx), (d + W, d + W, kzz)]
+        bb += [(d + U, d + U, cxx), (d + V, d + V, cyy), (d + U, d + V, cxy),
+               (d + V, d + U, cyx), (d + W, d + W, czz)]
+
+    def small(entries):
+        if not entries:
+            return sp.csr_matrix((n, n))
+        r, c, v = zip(*entries)
+        return sp.coo_matrix((v, (r, c)), shape=(n, n)).tocsr()
+
+    return RotorModel(
+        M=coo(el.mass, m_extra), K=coo(el.stiffness, k_extra), B=coo(el.internal_damping, b_extra),
+        G=coo(el.gyroscopic, g_extra), C=coo(el.circulatory), K_bearings=small(kb),
+        B_bearings=small(bb), node_z=z, free_gear_dofs=tuple(gear_dofs),
+        free_gear_nodes=tuple(int(f[0]) for f in free_gears),
+        disc_nodes=tuple(int(d[0]) for d in discs), bearing_nodes=tuple(int(b[0]) for b in bearings),
+        element_nodes=np.stack([np.arange(ne), np.arange(1, ne + 1)], axis=1), name=name,
+        labels=dict(labels or {}))
+
+
+def build_rotor_model(cfg: RotorConfig) -> RotorModel:
+    """The FE model of the scene's ``[rotor]`` section."""
+    z = np.asarray(node_positions(cfg.sections))
+    props = {k: [] for k in ("do", "di", "E", "G", "rho", "nu", "eta")}
+    for s in cfg.sections:
+        mat = s.material if s.material is not None else cfg.material
+        for key, val in (("do", s.outer_diameter), ("di", s.inner_diameter), ("E", mat.E),
+                         ("G", mat.shear_modulus), ("rho", mat.rho), ("nu", mat.poisson),
+                         ("eta", mat.internal_damping)):
+            props[key].extend([val] * s.elements)
+    rho0 = cfg.material.rho
+    node = cfg.node_of
+    discs = [(node(d.position), *_inertia(d, rho0)) for d in cfg.discs]
+    gears = [(node(g.position), *_inertia(g, rho0), g.torsional_stiffness, g.torsional_damping,
+              g.speed_ratio) for g in cfg.free_gears]
+    bearings = [(node(b.position), b.kxx, b.kyy, b.kxy, b.kyx, b.kzz, b.cxx, b.cyy, b.cxy,
+                 b.cyx, b.czz) for b in cfg.bearings]
+    labels = {"discs": [d.name for d in cfg.discs], "free_gears": [g.name for g in cfg.free_gears],
+              "bearings": [b.name for b in cfg.bearings]}
+    return assemble_rotor(node_z=z, elem_outer_d=props["do"], elem_inner_d=props["di"],
+                          elem_E=props["E"], elem_G=props["G"], elem_rho=props["rho"],
+                          elem_nu=props["nu"], elem_eta=props["eta"], discs=discs,
+                          free_gears=gears, bearings=bearings, name=cfg.name, labels=labels)
+
+
+@dataclass(frozen=True, eq=False)
+class MasterModes:
+    """Free, non-rotating, undamped modes: ``V.T M V = I``, ``V.T K V = diag(omega^2)``."""
+    frequencies_hz: np.ndarray
+    vectors: np.ndarray           # (n_dofs, m)
+    n_rigid: int                  # modes with frequency below the rigid-body threshold
+
+
+#: dense generalized eigensolver below this many DOFs, shift-invert Lanczos above
+DENSE_LIMIT = 700
+
+
+def _lowest_modes(K, M, count: int | None, cutoff_hz: float | None):
+    n = K.shape[0]
+    want = n if count is None else min(count, n)
+    if n <= DENSE_LIMIT or want > n // 3:
+        hi = n - 1 if cutoff_hz is not None and count is None else want - 1
+        lam, vec = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, hi],
+                            driver="gvx" if hi < n - 1 else "gvd")
+    else:
+        # shift below zero: K may be singular (rigid-body modes)
+        sigma = -1.0
+        k = want
+        while True:
+            lam, vec = spla.eigsh(K.tocsc(), k=k, M=M.tocsc(), sigma=sigma, which="LM")
+            order = np.argsort(lam)
+            lam, vec = lam[order], vec[:, order]
+            top = np.sqrt(max(lam[-1], 0.0)) / (2 * np.pi)
+            if cutoff_hz is None or top > cutoff_hz or k >= n - 2:
+                break
+            k = min(2 * k, n - 2)
+    freqs = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+    if cutoff_hz is not None:
+        keep = freqs <= cutoff_hz
+        if count is not None:
+            keep &= np.arange(freqs.size) < count
+        freqs, vec = freqs[keep], vec[:, keep]
+    return freqs, vec
+
+
+def master_modes(model: RotorModel, count: int | None = None, cutoff_hz: float | None = None,
+                 *, rigid_tol_hz: float = 1e-3) -> MasterModes:
+    """Free, non-rotating, undamped modes of the shaft (no bearings), mass-normalised.
+
+    The six rigid-body modes (plus one per free gear with zero torsional stiffness) come
+    first.  Give ``count`` (number of modes), ``cutoff_hz`` (all modes up to it) or both
+    (at most ``count`` modes up to ``cutoff_hz``).
+    """
+    if count is None and cutoff_hz is None:
+        raise ValueError("give count or cutoff_hz")
+    freqs, vec = _lowest_modes(model.K, model.M, count, cutoff_hz)
+    # mass-normalise exactly (eigsh normalises already; guard against round-off)
+    mm = np.einsum("ij,ij->j", vec, model.M @ vec)
+    vec = vec / np.sqrt(mm)[None, :]
+    return MasterModes(freqs, vec, int(np.sum(freqs < rigid_tol_hz)))

@@ -1,0 +1,410 @@
+"""Compiled adaptive Dormand-Prince 5(4) loop with dense output, contact events and
+variational equations (monodromy + parameter sensitivity) with saltation matrices.
+
+The loop runs entirely in numba.  Contact modes switch only at located events:
+after an accepted step the switching functions are sampled on the dense output; the
+earliest crossing is located by bisection on the interpolant and the step is retaken
+to end exactly there, so each step integrates one smooth vector field and the method
+keeps its order.  All loops are bounded (max_steps, max consecutive events).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .kernels import accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times
+
+__all__ = ["dopri_loop", "STATUS_TEXT"]
+
+STATUS_TEXT = {
+    0: "ok",
+    -1: "maximum number of steps reached",
+    -2: "non-finite state (the solution blew up)",
+    -3: "too many events without progress (chattering / Zeno behaviour at a contact)",
+    -4: "step size underflow",
+    -5: "grazing switch with a jumping vector field: saltation undefined",
+}
+
+_C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+_A = np.zeros((7, 7))
+_A[1, :1] = [1 / 5]
+_A[2, :2] = [3 / 40, 9 / 40]
+_A[3, :3] = [44 / 45, -56 / 15, 32 / 9]
+_A[4, :4] = [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729]
+_A[5, :5] = [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656]
+_A[6, :6] = [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]
+_B = _A[6].copy()
+_E = np.array([-71 / 57600, 0, 71 / 16695, -71 / 1920, 17253 / 339200, -22 / 525, 1 / 40])
+_P = np.array([
+    [1, -8048581381 / 2820520608, 8663915743 / 2820520608, -12715105075 / 11282082432],
+    [0, 0, 0, 0],
+    [0, 131558114200 / 32700410799, -68118460800 / 10900136933, 87487479700 / 32700410799],
+    [0, -1754552775 / 470086768, 14199869525 / 1410260304, -10690763975 / 1880347072],
+    [0, 127303824393 / 49829197408, -318862633887 / 49829197408, 701980252875 / 199316789632],
+    [0, -282668133 / 205662961, 2019193451 / 616988883, -1453857185 / 822651844],
+    [0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
+])
+N_SAMPLES = 4  # dense-output samples per step for switch and extremum detection
+
+
+@njit(cache=True)
+def _bw(theta, b):
+    """Dense-output weights b_i(theta) (sum_i b_i K_i h gives y(theta) - y0)."""
+    t1 = theta
+    t2 = t1 * theta
+    t3 = t2 * theta
+    t4 = t3 * theta
+    for i in range(7):
+        b[i] = _P[i, 0] * t1 + _P[i, 1] * t2 + _P[i, 2] * t3 + _P[i, 3] * t4
+
+
+@njit(cache=True)
+def _proj(theta, h, p0, pk, b):
+    """Dense value of a projection: p0 + h sum_i b_i(theta) pk[i]."""
+    _bw(theta, b)
+    s = 0.0
+    for i in range(7):
+        s += b[i] * pk[i]
+    return p0 + h * s
+
+
+@njit(cache=True)
+def _delta(A, j, t, Om, cx, cs, sn):
+    harmonics(t, Om, cs, sn)
+    e, ed = error_and_rate(A, j, Om, cs, sn)
+    return cx - e
+
+
+@njit(cache=True)
+def _violation(A, j, md, delta):
+    """Largest violation of the current mode's region (> 0: the contact left it)."""
+    if md > 0:
+        return A.g_hi[j] - delta
+    if md < 0:
+        return delta - A.g_lo[j]
+    v1 = delta - A.g_hi[j]
+    v2 = A.g_lo[j] - delta
+    return v1 if v1 > v2 else v2
+
+
+@njit(cache=True)
+def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
+    """Fill stages 1..6 (stage 0 given), y1 and the FSAL stage 6."""
+    n = y.shape[0]
+    for s in range(1, 7):
+        for i in range(n):
+            acc = 0.0
+            for k in range(s):
+                acc += _A[s, k] * K[k, i]
+            Ys[s, i] = y[i] + h * acc
+        accel(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s], cdS[s], tmp)
+    for i in range(n):
+        y1[i] = Ys[6, i]
+
+
+@njit(cache=True)
+def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
+               max_events, variational, t_eval, rec_t0, mon, ev_cap):
+    n = y0.shape[0]
+    m = n // 2
+    nc = A.C.shape[0]
+    H = A.Fc.shape[0]
+    r = A.P.shape[0]
+    cs = np.empty(H)
+    sn = np.empty(H)
+    tmp = np.empty(2 * r + 1)
+    K = np.empty((7, n))
+    Ys = np.empty((7, n))
+    CxS = np.empty((7, nc))
+    CvS = np.empty((7, nc))
+    kdS = np.empty((7, nc))
+    cdS = np.empty((7, nc))
+    y = y0.copy()
+    y1 = np.empty(n)
+    mode = np.zeros(nc, np.int64)
+    contact_modes(A, t0, Om, y0[:m], mode)
+    ncol = n + 1
+    Phi = np.zeros((n, ncol))
+    if variational:
+        for i in range(n):
+            Phi[i, i] = 1.0
+    KP = np.empty((7, n, ncol)) if variational else np.empty((1, 1, 1))
+    Ph = np.empty((n, ncol)) if variational else np.empty((1, 1))
+    dfp = np.empty(n)
+    bw = np.empty(7)
+    pk = np.empty(7)
+    qk = np.empty(7)
+    ne = t_eval.shape[0]
+    u_eval = np.zeros((ne, n))
+    ie = 0
+    ev_t = np.zeros(ev_cap)
+    ev_j = np.zeros(ev_cap, np.int64)
+    ev_m = np.zeros(ev_cap, np.int64)
+    # counters: steps, rejected, rhs calls, events, losses of the monitored contact after rec_t0
+    steps = 0
+    rejected = 0
+    nfev = 0
+    nev = 0
+    losses = 0
+    qmin = np.inf
+    qmax = -np.inf
+    status = 0
+    consecutive = 0
+    t = t0
+    Ys[0, :] = y
+    accel(t, y, mode, A, Om, cs, sn, K[0], CxS[0], CvS[0], kdS[0], cdS[0], tmp)
+    nfev += 1
+    h = h0
+    while ie < ne and t_eval[ie] <= t0:
+        u_eval[ie] = y
+        ie += 1
+    while t < t1:
+        if steps >= max_steps:
+            status = -1
+            break
+        if h > hmax:
+            h = hmax
+        last = False
+        if t + h >= t1 or t + 1.01 * h >= t1:
+            h = t1 - t
+            last = True
+        if h <= 1e-14 * (abs(t) + 1.0) and not last:
+            status = -4
+            break
+        _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1)
+        nfev += 6
+        err = 0.0
+        finite = True
+        for i in range(n):
+            e = 0.0
+            for k in range(7):
+                e += _E[k] * K[k, i]
+            sc = atol + rtol * max(abs(y[i]), abs(y1[i]))
+            q = h * e / sc
+            err += q * q
+            if not np.isfinite(y1[i]):
+                finite = False
+        err = np.sqrt(err / n)
+        if not finite or not np.isfinite(err):
+            if h > 1e-12 * (abs(t) + 1.0):
+                h *= 0.1
+                rejected += 1
+                steps += 1
+                continue
+            status = -2
+            break
+        if err > 1.0:
+            h *= max(0.2, 0.9 * err ** -0.2)
+            rejected += 1
+            steps += 1
+            continue
+        fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** -0.2)
+        h_next = h * fac
+        # ---- event search on the dense output of this accepted step ----
+        theta_ev = 2.0
+        j_ev = -1
+        m_ev = 0
+        for j in range(nc):
+            md = mode[j]
+            pk[:] = CvS[:, j]  # C . x' = C . v at each stage
+            x0 = CxS[0, j]
+            th_prev = 0.0
+            for s in range(1, N_SAMPLES + 1):
+                th = s / N_SAMPLES
+                if th >= theta_ev:
+                    break
+                d = _delta(A, j, t + th * h, Om, _proj(th, h, x0, pk, bw), cs, sn)
+                v = _violation(A, j, md, d)
+                if v > 0.0:
+                    lo = th_prev
+                    hi = th
+                    for _ in range(60):
+                        mid = 0.5 * (lo + hi)
+                        dm = _delta(A, j, t + mid * h, Om, _proj(mid, h, x0, pk, bw), cs, sn)
+                        if _violation(A, j, md, dm) > 0.0:
+                            hi = mid
+                        else:
+                            lo = mid
+                        if hi - lo < 1e-15:
+                            break
+                        if (hi - lo) * h < 1e-15 * (abs(t) + 1.0):
+                            break
+                    if hi < theta_ev:
+                        theta_ev = hi
+                        j_ev = j
+                        if md != 0:
+                            m_ev = 0
+                        else:
+                            m_ev = 1 if d - A.g_hi[j] > A.g_lo[j] - d else -1
+                    break
+                th_prev = th
+        event = theta_ev <= 1.0
+        if event and theta_ev < 1.0:
+            hs = theta_ev * h
+            if hs > 0.0:
+                _stages(t, y, hs, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1)
+                nfev += 6
+            else:
+                for i in range(n):
+                    y1[i] = y[i]
+                    K[6, i] = K[0, i]
+            h_used = hs
+        else:
+            h_used = h
+        steps += 1
+        # ---- recording: dense output at t_eval, extrema of the monitored deformation ----
+        t_new = t + h_used if not (last and h_used == h) else t1
+        if h_used > 0.0:
+            while ie < ne and t_eval[ie] <= t_new:
+                th = (t_eval[ie] - t) / h_used
+                _bw(th, bw)
+                for i in range(n):
+                    s_ = 0.0
+                    for k in range(7):
+                        s_ += bw[k] * K[k, i]
+                    u_eval[ie, i] = y[i] + h_used * s_
+                ie += 1
+            if mon >= 0 and t_new > rec_t0:
+                pk[:] = CvS[:, mon]
+                for k in range(7):
+                    s_ = 0.0
+                    for i in range(m):
+                        s_ += A.C[mon, i] * K[k, m + i]
+                    qk[k] = s_
+                x0 = CxS[0, mon]
+                v0 = CvS[0, mon]
+                th_lo = 0.0 if t >= rec_t0 else (rec_t0 - t) / h_used
+                prev_rate = 0.0
+                prev_th = th_lo
+                for s in range(0, N_SAMPLES + 1):
+                    th = th_lo + (1.0 - th_lo) * s / N_SAMPLES
+                    tt = t + th * h_used
+                    harmonics(tt, Om, cs, sn)
+                    e, ed = error_and_rate(A, mon, Om, cs, sn)
+                    d = _proj(th, h_used, x0, pk, bw) - e
+                    rate = _proj(th, h_used, v0, qk, bw) - ed
+                    if d < qmin:
+                        qmin = d
+                    if d > qmax:
+                        qmax = d
+                    if s > 0 and prev_rate * rate < 0.0:
+                        lo = prev_th
+                        hi = th
+                        for _ in range(50):
+                            mid = 0.5 * (lo + hi)
+                            harmonics(t + mid * h_used, Om, cs, sn)
+                            e, ed = error_and_rate(A, mon, Om, cs, sn)
+                            rm = _proj(mid, h_used, v0, qk, bw) - ed
+                            if rm * prev_rate > 0.0:
+                                lo = mid
+                            else:
+                                hi = mid
+                            if hi - lo < 1e-13:
+                                break
+                        mid = 0.5 * (lo + hi)
+                        harmonics(t + mid * h_used, Om, cs, sn)
+                        e, ed = error_and_rate(A, mon, Om, cs, sn)
+                        d = _proj(mid, h_used, x0, pk, bw) - e
+                        if d < qmin:
+                            qmin = d
+                        if d > qmax:
+                            qmax = d
+                    prev_rate = rate
+                    prev_th = th
+        # ---- variational equations on the same stages ----
+        if variational and h_used > 0.0:
+            for s in range(7):
+                if s == 0:
+                    for i in range(n):
+                        for c in range(ncol):
+                            Ph[i, c] = Phi[i, c]
+                else:
+                    for i in range(n):
+                        for c in range(ncol):
+                            acc = 0.0
+                            for k in range(s):
+                                acc += _A[s, k] * KP[k, i, c]
+                            Ph[i, c] = Phi[i, c] + h_used * acc
+                jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], tmp)
+                ts = t + _C[s] * h_used
+                harmonics(ts, Om, cs, sn)
+                accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp)
+                for i in range(n):
+                    KP[s, i, n] += dfp[i]
+            for i in range(n):
+                for c in range(ncol):
+                    acc = 0.0
+                    for k in range(6):
+                        acc += _B[k] * KP[k, i, c]
+                    Phi[i, c] += h_used * acc
+        t = t_new
+        for i in range(n):
+            y[i] = y1[i]
+        # ---- apply the event: switch modes, saltation, fresh stage 0 ----
+        if event:
+            consecutive += 1
+            if consecutive > max_events:
+                status = -3
+                break
+            j = j_ev
+            newm = m_ev
+            harmonics(t, Om, cs, sn)
+            e, ed = error_and_rate(A, j, Om, cs, sn)
+            sv = 0.0
+            for i in range(m):
+                sv += A.C[j, i] * y[m + i]
+            rate = sv - ed
+            if nev < ev_cap:
+                ev_t[nev] = t
+                ev_j[nev] = j
+                ev_m[nev] = newm
+            nev += 1
+            if j == mon and newm == 0 and t >= rec_t0:
+                losses += 1
+            mode[j] = newm
+            if variational:
+                # f- = K[6] (old mode), f+ = K[0] (new mode): saltation where they differ
+                accel(t, y, mode, A, Om, cs, sn, K[0], CxS[0], CvS[0], kdS[0], cdS[0], tmp)
+                nfev += 1
+                jump = 0.0
+                for i in range(n):
+                    jump += abs(K[0, i] - K[6, i])
+                if jump > 0.0:
+                    if abs(rate) < 1e-14:
+                        status = -5
+                        break
+                    harmonics(t, Om, cs, sn)
+                    # d h / d param at fixed (t, x): h = c.x - e(t; Om) - gap
+                    dh = 0.0
+                    for hh in range(H):
+                        nn = hh + 1
+                        dh -= nn * t * (-A.ec[j, hh] * sn[hh] + A.es[j, hh] * cs[hh])
+                    dh *= dOm
+                    for c in range(ncol):
+                        g = 0.0
+                        for i in range(m):
+                            g += A.C[j, i] * Phi[i, c]
+                        if c == n:
+                            g += dh
+                        g /= rate
+                        for i in range(n):
+                            Phi[i, c] += (K[0, i] - K[6, i]) * g
+            if status != 0:
+                break
+            Ys[0, :] = y
+            accel(t, y, mode, A, Om, cs, sn, K[0], CxS[0], CvS[0], kdS[0], cdS[0], tmp)
+            nfev += 1
+            if h_next > h:
+                h_next = h
+        else:
+            consecutive = 0
+            Ys[0, :] = y
+            K[0, :] = K[6]
+            CxS[0, :] = CxS[6]
+            CvS[0, :] = CvS[6]
+            kdS[0, :] = kdS[6]
+            cdS[0, :] = cdS[6]
+        h = h_next
+    counters = np.array([steps, rejected, nfev, nev, losses])
+    f_end = K[0].copy()
+    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, qmin, qmax, mode, f_end)

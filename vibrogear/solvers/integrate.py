@@ -1,0 +1,118 @@
+"""Time integration of a ReducedModel: the Python face of the compiled DOPRI5 loop."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..models.reduced import ReducedModel
+from .dopri import STATUS_TEXT, dopri_loop
+from .kernels import model_arrays
+
+__all__ = ["IntegrationOptions", "Trajectory", "integrate"]
+
+
+@dataclass(frozen=True)
+class IntegrationOptions:
+    rtol: float = 1e-9
+    atol: float = 1e-11
+    max_steps: int = 5_000_000
+    max_events_per_step: int = 20
+    max_step_periods: float = 0.125   # largest step as a fraction of the excitation period
+    event_log: int = 10_000           # event times kept (all are counted)
+
+    def __post_init__(self):
+        if not (0 < self.rtol < 1 and self.atol > 0 and self.max_steps > 0):
+            raise ValueError("IntegrationOptions: need 0 < rtol < 1, atol > 0, max_steps > 0")
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    t: np.ndarray               # requested output times
+    u: np.ndarray               # (len(t), n) states there (dense output)
+    t_end: float
+    u_end: np.ndarray
+    status: int                 # 0 ok, < 0 failure (see message)
+    message: str
+    steps: int
+    rejected: int
+    rhs_calls: int
+    events: int
+    event_times: np.ndarray
+    event_contacts: np.ndarray
+    event_modes: np.ndarray
+    monitor_min: float          # extrema of the monitored contact deformation after record_from
+    monitor_max: float
+    monitor_losses: int         # contact losses of the monitored contact after record_from
+    final_modes: np.ndarray
+    f_end: np.ndarray           # u' at t_end
+    monodromy: np.ndarray | None = None   # d u_end / d u0
+    dparam: np.ndarray | None = None      # d u_end / d param at fixed t_end
+    wall_time: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+
+def _initial_step(model: ReducedModel, param: float, span: float, rtol: float) -> float:
+    ct = model.contacts
+    k_contact = 0.0
+    if ct.count:
+        k = np.maximum(np.abs(ct.k_hi), np.abs(ct.k_lo)) * np.sum(ct.directions ** 2, axis=1)
+        k_contact = float(np.max(k))
+    w_max = np.sqrt(max(float(np.max(model.omega2, initial=0.0)) + k_contact,
+                        model.excitation_frequency(param) ** 2, 1e-30))
+    return min(span, 0.1 * rtol ** 0.2 / w_max)
+
+
+def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
+              t_eval=None, options: IntegrationOptions = IntegrationOptions(),
+              variational: bool = False, record_from: float | None = None) -> Trajectory:
+    """Integrate u' = f(t, u; param) from (t0, u0) to t1.
+
+    ``t_eval``: sorted times for dense output.  ``variational``: also integrate the
+    monodromy d u / d u0 and the parameter sensitivity d u / d param (with saltation at
+    switches).  ``record_from``: start of the window in which the extrema and contact
+    losses of the monitored contact are recorded (default t0).
+    """
+    wall = time.perf_counter()
+    u0 = np.ascontiguousarray(u0, dtype=float)
+    if u0.shape != (model.n_states,):
+        raise ValueError(f"u0 must have {model.n_states} entries")
+    if not t1 > t0:
+        raise ValueError("t1 must be greater than t0")
+    t_eval = np.ascontiguousarray(np.zeros(0) if t_eval is None else t_eval, dtype=float)
+    if t_eval.size and (np.any(np.diff(t_eval) < 0) or t_eval[0] < t0 or t_eval[-1] > t1):
+        raise ValueError("t_eval must be sorted and inside [t0, t1]")
+    arrs, Om, spin, dOm, dspin = model_arrays(model, param)
+    span = t1 - t0
+    hmax = span
+    if Om > 0:
+        hmax = min(span, options.max_step_periods * 2 * np.pi / Om)
+    h0 = min(_initial_step(model, param, span, options.rtol), hmax)
+    mon = model.monitor if model.contacts.count else -1
+    rec = t0 if record_from is None else float(record_from)
+    (status, t_end, y, Phi, u_eval, cnt, ev_t, ev_j, ev_m, qmin, qmax, modes,
+     f_end) = dopri_loop(arrs, Om, dOm, dspin, u0, float(t0), float(t1), options.rtol,
+                         options.atol, h0, hmax, options.max_steps,
+                         options.max_events_per_step, variational, t_eval, rec, mon,
+                         options.event_log)
+    if status == 0 and not np.all(np.isfinite(y)):
+        status = -2
+    nev = int(cnt[3])
+    keep = min(nev, options.event_log)
+    n = model.n_states
+    return Trajectory(
+        t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=int(status),
+        message=STATUS_TEXT[int(status)] + (f" at t = {t_end:.6g}" if status else ""),
+        steps=int(cnt[0]), rejected=int(cnt[1]), rhs_calls=int(cnt[2]), events=nev,
+        event_times=ev_t[:keep], event_contacts=ev_j[:keep], event_modes=ev_m[:keep],
+        monitor_min=float(qmin), monitor_max=float(qmax), monitor_losses=int(cnt[4]),
+        final_modes=modes, f_end=f_end,
+        monodromy=Phi[:, :n].copy() if variational else None,
+        dparam=Phi[:, n].copy() if variational else None,
+        wall_time=time.perf_counter() - wall,
+    )
