@@ -1,11 +1,190 @@
-"""Housing scene schema (placeholder: filled in by the housing work)."""
+"""Housing scene schema: ``[housing]`` and its sub-tables (the stator of paper eq. (3)).
+
+Coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y <= width``,
+``0 <= z <= height`` (z up; the base plate or feet lie below z = 0).  Each
+``[[housing.bores]]`` entry is one shaft: a pair of coaxial bearing bosses through the two
+walls normal to y (the *front* wall at y = 0 and the *back* wall at y = width), with the shaft
+axis parallel to y at (x, z).  Bosses protrude ``boss_length`` outwards from the wall.
+"""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-__all__ = ["HousingConfig"]
+from .base import ConfigError, spec
+
+__all__ = ["HousingConfig", "BoreConfig", "MaterialConfig", "HousingMeshConfig",
+           "HousingModesConfig", "HousingSweepConfig", "HousingConvergenceConfig",
+           "MAX_SIZE_PER_WALL"]
+
+#: largest global mesh size, in wall thicknesses, that still puts an element across the wall
+MAX_SIZE_PER_WALL = 2.0
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
+class BoreConfig:
+    """One shaft: a bearing-boss pair with coaxial bores through the front and back walls."""
+    x: float = spec(gt=0.0, doc="bore axis position along the length, m")
+    z: float = spec(gt=0.0, doc="bore axis height above the box bottom, m")
+    bore_radius: float = spec(gt=0.0, doc="bore (bearing outer race) radius, m")
+    boss_radius: float = spec(gt=0.0, doc="outer radius of the boss, m")
+    boss_length: float = spec(0.02, ge=0.0, doc="protrusion of the boss outside the wall, m")
+    rolling_elements: int = spec(ge=3, le=200, doc="coupling points per bore (one per rolling element)")
+    name: str = spec("", doc="label, e.g. 'input shaft'")
+
+    def validate(self, path: str) -> None:
+        if not self.bore_radius < self.boss_radius:
+            raise ConfigError(f"{path}.boss_radius", f"must be greater than bore_radius = "
+                              f"{self.bore_radius:g}, got {self.boss_radius:g}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MaterialConfig:
+    """Isotropic linear elastic material; steel by default.  ``beta``: B_S = beta K_S."""
+    E: float = spec(210e9, gt=0.0, doc="Young's modulus, Pa")
+    nu: float = spec(0.3, gt=0.0, lt=0.5, doc="Poisson's ratio")
+    rho: float = spec(7850.0, gt=0.0, doc="density, kg/m^3")
+    beta: float = spec(0.0, ge=0.0, lt=1.0, doc="stiffness-proportional damping beta_S, s")
+
+
+@dataclass(frozen=True, kw_only=True)
+class HousingMeshConfig:
+    size: float | None = spec(None, gt=0.0, doc="global element size, m (default 1.3 x wall)")
+    bore_size: float | None = spec(None, gt=0.0, doc="element size at the bores, m (default size/2)")
+    degree: int = spec(2, ge=1, le=2, doc="Lagrange degree of the tetrahedra (2 for thin walls)")
+
+    def validate(self, path: str) -> None:
+        if self.size is not None and self.bore_size is not None and self.bore_size > self.size:
+            raise ConfigError(f"{path}.bore_size", f"must be <= size = {self.size:g}, got {self.bore_size:g}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class HousingModesConfig:
+    count: int = spec(20, ge=1, le=2000, doc="number of master modes (ignored with cutoff_hz)")
+    cutoff_hz: float | None = spec(None, gt=0.0, doc="all modes below this (paper: >= 2 x highest excitation)")
+    max_count: int = spec(400, ge=1, le=5000, doc="safety cap on the number of modes with cutoff_hz")
+    tol: float = spec(1e-10, gt=0.0, le=1e-4, doc="SLEPc relative tolerance")
+    shapes: int = spec(12, ge=0, le=5000, doc="mode shapes written to XDMF")
+
+
+@dataclass(frozen=True, kw_only=True)
 class HousingConfig:
-    pass
+    length: float = spec(gt=0.0, doc="outer box length (x), m")
+    width: float = spec(gt=0.0, doc="outer box width (y, along the shafts), m")
+    height: float = spec(gt=0.0, doc="outer box height (z), m")
+    wall_thickness: float = spec(gt=0.0, doc="wall thickness, m")
+    bores: tuple[BoreConfig, ...] = spec(min_len=1, max_len=16, doc="one bearing-boss pair per shaft")
+    base: str = spec("plate", choices=("plate", "feet", "none"), doc="what the housing stands on")
+    base_thickness: float = spec(0.02, gt=0.0, doc="thickness of the base plate or feet, m")
+    base_overhang: float = spec(0.03, ge=0.0, doc="plate overhang beyond the box, m")
+    foot_size: float = spec(0.06, gt=0.0, doc="edge of the square corner feet, m")
+    ribs: bool = spec(False, doc="a vertical rib under each boss, outside the wall")
+    rib_thickness: float | None = spec(None, gt=0.0, doc="rib thickness, m (default: wall)")
+    support: str = spec("fixed", choices=("fixed", "elastic"), doc="base clamped or on a foundation")
+    foundation_stiffness: float = spec(1e11, gt=0.0, doc="Winkler foundation stiffness, N/m^3")
+    material: MaterialConfig = spec(MaterialConfig())
+    mesh: HousingMeshConfig = spec(HousingMeshConfig())
+    modes: HousingModesConfig = spec(HousingModesConfig())
+
+    @property
+    def mesh_size(self) -> float:
+        return self.mesh.size if self.mesh.size is not None else 1.3 * self.wall_thickness
+
+    @property
+    def bore_mesh_size(self) -> float:
+        return self.mesh.bore_size if self.mesh.bore_size is not None else 0.5 * self.mesh_size
+
+    @property
+    def rib_t(self) -> float:
+        return self.rib_thickness if self.rib_thickness is not None else self.wall_thickness
+
+    def validate(self, path: str) -> None:
+        p = path or "housing"
+        t = self.wall_thickness
+        dims = {"length": self.length, "width": self.width, "height": self.height}
+        name, smallest = min(dims.items(), key=lambda kv: kv[1])
+        if not t < 0.5 * smallest:
+            raise ConfigError(f"{p}.wall_thickness", f"must be < half the smallest outer dimension "
+                              f"({name} = {smallest:g}, so < {0.5 * smallest:g}), got {t:g}")
+        if self.base == "feet" and not self.foot_size < 0.5 * min(self.length, self.width):
+            raise ConfigError(f"{p}.foot_size", f"must be < half of min(length, width) = "
+                              f"{0.5 * min(self.length, self.width):g}, got {self.foot_size:g}")
+        self._validate_bores(p)
+        size = self.mesh_size
+        if size > MAX_SIZE_PER_WALL * t:
+            raise ConfigError(f"{p}.mesh.size", f"too coarse to put an element across the wall: must be "
+                              f"<= {MAX_SIZE_PER_WALL:g} x wall_thickness = {MAX_SIZE_PER_WALL * t:g}, got {size:g}")
+        if self.mesh.bore_size is not None and self.mesh.size is None and self.mesh.bore_size > size:
+            raise ConfigError(f"{p}.mesh.bore_size", f"must be <= size = {size:g}, got {self.mesh.bore_size:g}")
+        if size < t / 50:
+            raise ConfigError(f"{p}.mesh.size", f"must be >= wall_thickness / 50 = {t / 50:g} "
+                              f"(millions of elements), got {size:g}")
+        m = self.modes
+        if m.cutoff_hz is None and m.count > m.max_count:
+            raise ConfigError(f"{p}.modes.count", f"must be <= max_count = {m.max_count}, got {m.count}")
+
+    def _validate_bores(self, p: str) -> None:
+        t, L, H = self.wall_thickness, self.length, self.height
+        for i, b in enumerate(self.bores):
+            bp = f"{p}.bores[{i}]"
+            R, r = b.boss_radius, b.bore_radius
+            if not (R <= b.x <= L - R):
+                raise ConfigError(f"{bp}.x", f"boss outside the wall: x must lie in [boss_radius, length - "
+                                  f"boss_radius] = [{R:g}, {L - R:g}], got {b.x:g}")
+            if not (R <= b.z <= H - R):
+                raise ConfigError(f"{bp}.z", f"boss outside the wall: z must lie in [boss_radius, height - "
+                                  f"boss_radius] = [{R:g}, {H - R:g}], got {b.z:g}")
+            if not (t + r < b.x < L - t - r):
+                raise ConfigError(f"{bp}.x", f"bore overlaps the box edge: x must lie in (wall_thickness + "
+                                  f"bore_radius, length - wall_thickness - bore_radius) = "
+                                  f"({t + r:g}, {L - t - r:g}), got {b.x:g}")
+            if not (t + r < b.z < H - t - r):
+                raise ConfigError(f"{bp}.z", f"bore overlaps the box edge: z must lie in (wall_thickness + "
+                                  f"bore_radius, height - wall_thickness - bore_radius) = "
+                                  f"({t + r:g}, {H - t - r:g}), got {b.z:g}")
+            if b.boss_length > 0 and b.boss_radius - b.bore_radius < 0.25 * t:
+                raise ConfigError(f"{bp}.boss_radius", f"boss ring too thin: boss_radius - bore_radius must be "
+                                  f">= wall_thickness / 4 = {0.25 * t:g}, got {R - r:g}")
+            for j in range(i):
+                o = self.bores[j]
+                d = math.hypot(b.x - o.x, b.z - o.z)
+                need = b.bore_radius + o.bore_radius + t
+                if d < need:
+                    raise ConfigError(bp, f"bores overlap bores[{j}]: centre distance must be >= the sum of "
+                                      f"the bore radii + wall_thickness = {need:g}, got {d:g}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class HousingSweepConfig:
+    """``[housing_sweep]``: first frequencies against one housing parameter."""
+    parameter: str = spec(doc="dotted key under housing, e.g. 'housing.wall_thickness'")
+    values: tuple[float, ...] | None = spec(None, min_len=1, doc="explicit parameter values")
+    min: float | None = spec(None, doc="range start (with max, n)")
+    max: float | None = spec(None)
+    n: int = spec(5, ge=2, le=1000)
+    n_freqs: int = spec(6, ge=1, le=1000)
+    processes: int = spec(2, ge=1, le=64)
+
+    def validate(self, path: str) -> None:
+        if not self.parameter.startswith("housing.") or len(self.parameter) <= len("housing."):
+            raise ConfigError(f"{path}.parameter", f"must be a dotted key under housing, e.g. "
+                              f"'housing.wall_thickness', got {self.parameter!r}")
+        if self.values is None and (self.min is None or self.max is None):
+            raise ConfigError(f"{path}.values", "give either values or min, max (and n)")
+        if self.values is None and not self.min < self.max:
+            raise ConfigError(f"{path}.max", f"must be greater than min = {self.min:g}, got {self.max:g}")
+
+    def points(self) -> tuple[float, ...]:
+        if self.values is not None:
+            return self.values
+        return tuple(self.min + (self.max - self.min) * k / (self.n - 1) for k in range(self.n))
+
+
+@dataclass(frozen=True, kw_only=True)
+class HousingConvergenceConfig:
+    """``[housing_convergence]``: frequency error vs DOF vs wall time for P1 and P2 meshes."""
+    size_factors: tuple[float, ...] = spec((2.0, 1.5, 1.2, 1.0), min_len=3, gt=0.0,
+                                           doc="mesh sizes in units of the housing's mesh size")
+    p1_size_factors: tuple[float, ...] = spec((1.5, 1.0, 0.75), min_len=1, gt=0.0)
+    n_freqs: int = spec(10, ge=1, le=500)
+    target_error: float = spec(0.01, gt=0.0, lt=1.0)

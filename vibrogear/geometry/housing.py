@@ -1,0 +1,288 @@
+"""Parametric gearbox housing (and a verification cantilever) with gmsh's OCC kernel.
+
+The only module that imports gmsh (inside the functions).  The contract with the FE model is
+:class:`HousingMesh`: the ``.msh`` file and the physical-group tags of the base and of each bore
+surface.  :func:`bore_layout` gives the bearing coupling points from the config alone (pure
+geometry, no gmsh), so the FE model and the gearbox synthesis agree on them.
+
+Coordinates: see :mod:`vibrogear.config.housing`.  Bores are ordered shaft by shaft, front wall
+(y = 0) before back wall (y = width): bore ``2 i`` and ``2 i + 1`` belong to ``bores[i]``.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from ..config.housing import HousingConfig
+
+__all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",
+           "build_beam_mesh", "housing_volume", "read_msh_arrays", "VOLUME_TAG", "BASE_TAG", "BORE_TAG0"]
+
+VOLUME_TAG = 1
+BASE_TAG = 1
+BORE_TAG0 = 101
+_TOL = 1e-5  # gmsh pads bounding boxes by 1e-7: select with a tolerance well above it
+
+
+class MeshingError(RuntimeError):
+    """gmsh failed; the message is gmsh's own."""
+
+
+class HousingMesh(NamedTuple):
+    path: Path                   # gmsh .msh (version 4.1), physical groups only
+    base_tag: int                # facet tag of the supported (base) surface
+    bore_tags: tuple[int, ...]   # facet tag of each bore surface, in bore_layout order
+    volume_tag: int
+    n_nodes: int
+    n_tets: int
+    seconds: float
+
+
+@dataclass(frozen=True)
+class BoreGeometry:
+    """One bore surface: a cylinder of ``radius`` about ``axis`` through ``center``."""
+    name: str
+    center: tuple[float, float, float]   # on the axis, at the middle of the bore length
+    axis: tuple[float, float, float]     # unit, pointing out of the housing
+    radius: float
+    y_range: tuple[float, float]
+    n_points: int
+
+    def points(self) -> np.ndarray:
+        """Coupling points (n_points, 3): theta_k = 2 pi k / n from +x towards +z."""
+        th = 2 * np.pi * np.arange(self.n_points) / self.n_points
+        cx, cy, cz = self.center
+        return np.column_stack([cx + self.radius * np.cos(th), np.full_like(th, cy),
+                                cz + self.radius * np.sin(th)])
+
+
+def bore_layout(cfg: HousingConfig) -> tuple[BoreGeometry, ...]:
+    """The bore surfaces and their coupling points, from the config alone."""
+    out = []
+    t, W = cfg.wall_thickness, cfg.width
+    for i, b in enumerate(cfg.bores):
+        label = b.name or f"shaft{i}"
+        for side, (y0, y1), ay in (("front", (-b.boss_length, t), -1.0),
+                                   ("back", (W - t, W + b.boss_length), 1.0)):
+            out.append(BoreGeometry(name=f"{label}/{side}", center=(b.x, 0.5 * (y0 + y1), b.z),
+                                    axis=(0.0, ay, 0.0), radius=b.bore_radius, y_range=(y0, y1),
+                                    n_points=b.rolling_elements))
+    return tuple(out)
+
+
+def housing_volume(cfg: HousingConfig) -> float:
+    """Closed-form solid volume of the housing (box shell + base + bosses + ribs - bores)."""
+    L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
+    v = L * W * H - (L - 2 * t) * (W - 2 * t) * (H - 2 * t)
+    if cfg.base == "plate":
+        v += (L + 2 * cfg.base_overhang) * (W + 2 * cfg.base_overhang) * cfg.base_thickness
+    elif cfg.base == "feet":
+        v += 4 * cfg.foot_size ** 2 * cfg.base_thickness
+    for b in cfg.bores:
+        R, r, lb = b.boss_radius, b.bore_radius, b.boss_length
+        v += 2 * math.pi * (R * R * lb - r * r * (lb + t))
+        if cfg.ribs and lb > 0:
+            rt = cfg.rib_t
+            # rib block x in [x - rt/2, x + rt/2], z in [0, zc], y in [-lb, 0]: minus its overlap with
+            # the boss disc (circular segment of half-width rt/2 below the centre, radius R)
+            seg = _segment_below(R, rt / 2)
+            v += 2 * lb * (rt * b.z - seg)
+    return v
+
+
+def _segment_below(R: float, a: float) -> float:
+    """Area of {|x| <= a, -R <= z <= 0, x^2 + z^2 <= R^2}."""
+    return a * math.sqrt(R * R - a * a) + R * R * math.asin(a / R)
+
+
+def _start(verbose: bool):
+    import gmsh
+    gmsh.initialize(readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+    gmsh.clear()
+    gmsh.option.setNumber("General.NumThreads", 1)
+    gmsh.logger.start()
+    return gmsh
+
+
+def _fail(gmsh, exc: Exception) -> MeshingError:
+    log = [m for m in gmsh.logger.get() if "rror" in m]
+    msg = "; ".join(log[-3:]) or str(exc) or gmsh.logger.getLastError()
+    return MeshingError(f"gmsh failed: {msg}")
+
+
+def _surfaces_in_box(gmsh, lo, hi) -> list[int]:
+    ents = gmsh.model.getEntitiesInBoundingBox(lo[0] - _TOL, lo[1] - _TOL, lo[2] - _TOL,
+                                               hi[0] + _TOL, hi[1] + _TOL, hi[2] + _TOL, 2)
+    return [tag for _, tag in ents]
+
+
+def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = False) -> HousingMesh:
+    """Build, mesh and write the housing to ``path`` (.msh).  Raises MeshingError."""
+    path = Path(path)
+    t0 = time.perf_counter()
+    gmsh = _start(verbose)
+    try:
+        gmsh.model.add("housing")
+        occ = gmsh.model.occ
+        L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
+        outer = occ.addBox(0, 0, 0, L, W, H)
+        inner = occ.addBox(t, t, t, L - 2 * t, W - 2 * t, H - 2 * t)
+        shell, _ = occ.cut([(3, outer)], [(3, inner)])
+        parts = []
+        if cfg.base == "plate":
+            o = cfg.base_overhang
+            parts.append((3, occ.addBox(-o, -o, -cfg.base_thickness, L + 2 * o, W + 2 * o, cfg.base_thickness)))
+        elif cfg.base == "feet":
+            f = cfg.foot_size
+            for x in (0.0, L - f):
+                for y in (0.0, W - f):
+                    parts.append((3, occ.addBox(x, y, -cfg.base_thickness, f, f, cfg.base_thickness)))
+        holes = []
+        for b in cfg.bores:
+            lb = b.boss_length
+            if lb > 0:
+                parts.append((3, occ.addCylinder(b.x, -lb, b.z, 0, lb, 0, b.boss_radius)))
+                parts.append((3, occ.addCylinder(b.x, W, b.z, 0, lb, 0, b.boss_radius)))
+                if cfg.ribs:
+                    rt = cfg.rib_t
+                    parts.append((3, occ.addBox(b.x - rt / 2, -lb, 0, rt, lb, b.z)))
+                    parts.append((3, occ.addBox(b.x - rt / 2, W, 0, rt, lb, b.z)))
+            holes.append((3, occ.addCylinder(b.x, -lb - 1e-3, b.z, 0, W + 2 * lb + 2e-3, 0, b.bore_radius)))
+        body = shell
+        if parts:
+            body, _ = occ.fuse(shell, parts)
+        body, _ = occ.cut(body, holes)
+        occ.synchronize()
+        vols = gmsh.model.getEntities(3)
+        if len(vols) != 1:
+            raise MeshingError(f"housing geometry is not one connected solid ({len(vols)} volumes)")
+        gmsh.model.addPhysicalGroup(3, [vols[0][1]], VOLUME_TAG)
+        gmsh.model.setPhysicalName(3, VOLUME_TAG, "housing")
+        zb = -cfg.base_thickness if cfg.base != "none" else 0.0
+        lo_x = -cfg.base_overhang if cfg.base == "plate" else 0.0
+        base = [s for s in _surfaces_in_box(gmsh, (lo_x, lo_x, zb), (L - lo_x, W - lo_x, zb))]
+        if not base:
+            raise MeshingError("could not find the base surface")
+        gmsh.model.addPhysicalGroup(2, base, BASE_TAG)
+        gmsh.model.setPhysicalName(2, BASE_TAG, "base")
+        bore_tags, bore_surfs = [], []
+        for k, g in enumerate(bore_layout(cfg)):
+            cx, _, cz = g.center
+            surfs = _surfaces_in_box(gmsh, (cx - g.radius, g.y_range[0], cz - g.radius),
+                                     (cx + g.radius, g.y_range[1], cz + g.radius))
+            if not surfs:
+                raise MeshingError(f"could not find the surface of bore {g.name}")
+            tag = BORE_TAG0 + k
+            gmsh.model.addPhysicalGroup(2, surfs, tag)
+            gmsh.model.setPhysicalName(2, tag, f"bore_{g.name.replace('/', '_')}")
+            bore_tags.append(tag)
+            bore_surfs += surfs
+        _size_field(gmsh, cfg, bore_surfs)
+        gmsh.model.mesh.generate(3)
+        n_nodes = len(gmsh.model.mesh.getNodes()[0])
+        types, tags, _ = gmsh.model.mesh.getElements(3)
+        n_tets = sum(len(x) for x in tags)
+        if n_tets == 0:
+            raise MeshingError("gmsh produced no tetrahedra")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.write(str(path))
+    except MeshingError:
+        raise
+    except Exception as exc:  # gmsh raises plain Exception carrying its last error
+        raise _fail(gmsh, exc) from None
+    finally:
+        gmsh.logger.stop()
+        gmsh.finalize()
+    return HousingMesh(path, BASE_TAG, tuple(bore_tags), VOLUME_TAG, n_nodes, n_tets,
+                       time.perf_counter() - t0)
+
+
+def _size_field(gmsh, cfg: HousingConfig, bore_surfs: list[int]) -> None:
+    h, hb = cfg.mesh_size, cfg.bore_mesh_size
+    gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", min(hb, h) * 0.5)
+    curves = gmsh.model.getBoundary([(2, s) for s in bore_surfs], combined=False, oriented=False)
+    fd = gmsh.model.mesh.field.add("Distance")  # gmsh 4.8 samples curves, not surfaces
+    gmsh.model.mesh.field.setNumbers(fd, "CurvesList", sorted({abs(c) for _, c in curves}))
+    gmsh.model.mesh.field.setNumber(fd, "NumPointsPerCurve", 80)
+    ft = gmsh.model.mesh.field.add("Threshold")
+    gmsh.model.mesh.field.setNumber(ft, "InField", fd)
+    gmsh.model.mesh.field.setNumber(ft, "SizeMin", hb)
+    gmsh.model.mesh.field.setNumber(ft, "SizeMax", h)
+    gmsh.model.mesh.field.setNumber(ft, "DistMin", 0.25 * max(b.boss_radius - b.bore_radius for b in cfg.bores))
+    gmsh.model.mesh.field.setNumber(ft, "DistMax", max(b.boss_radius for b in cfg.bores))
+    gmsh.model.mesh.field.setAsBackgroundMesh(ft)
+
+
+def build_beam_mesh(length: float, width: float, height: float, path: str | Path, *,
+                    size: float, verbose: bool = False) -> HousingMesh:
+    """A solid cantilever along x, clamped at x = 0 (group BASE_TAG); no bores."""
+    path = Path(path)
+    t0 = time.perf_counter()
+    gmsh = _start(verbose)
+    try:
+        gmsh.model.add("beam")
+        vol = gmsh.model.occ.addBox(0, 0, 0, length, width, height)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [vol], VOLUME_TAG)
+        clamp = _surfaces_in_box(gmsh, (0, 0, 0), (0, width, height))
+        gmsh.model.addPhysicalGroup(2, clamp, BASE_TAG)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+        gmsh.option.setNumber("Mesh.MeshSizeMin", 0.5 * size)
+        gmsh.model.mesh.generate(3)
+        n_nodes = len(gmsh.model.mesh.getNodes()[0])
+        n_tets = sum(len(x) for x in gmsh.model.mesh.getElements(3)[1])
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+        gmsh.write(str(path))
+    except Exception as exc:
+        raise _fail(gmsh, exc) from None
+    finally:
+        gmsh.logger.stop()
+        gmsh.finalize()
+    return HousingMesh(path, BASE_TAG, (), VOLUME_TAG, n_nodes, n_tets, time.perf_counter() - t0)
+
+
+def read_msh_arrays(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(x (N, 3), tets (n, 4), facets (k, 3), facet physical tags (k,)) of a linear tet .msh.
+
+    Node indices are 0-based rows of ``x``; the vertex order is gmsh's, which for linear
+    tetrahedra and triangles is also dolfinx's.
+    """
+    gmsh = _start(False)
+    try:
+        gmsh.merge(str(path))
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+        index[tags.astype(np.int64)] = np.arange(len(tags))
+        x = coords.reshape(-1, 3)
+        tets = []
+        for _, ent in gmsh.model.getEntities(3):
+            for etype, _, nodes in zip(*gmsh.model.mesh.getElements(3, ent)):
+                if etype != 4:
+                    raise MeshingError(f"{path}: expected linear tetrahedra, got gmsh element type {etype}")
+                tets.append(index[nodes.astype(np.int64)].reshape(-1, 4))
+        facets, values = [], []
+        for dim, ptag in gmsh.model.getPhysicalGroups(2):
+            for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, ptag):
+                for etype, _, nodes in zip(*gmsh.model.mesh.getElements(2, ent)):
+                    f = index[nodes.astype(np.int64)].reshape(-1, 3)
+                    facets.append(f)
+                    values.append(np.full(len(f), ptag, dtype=np.int32))
+    except Exception as exc:
+        raise _fail(gmsh, exc) from None
+    finally:
+        gmsh.logger.stop()
+        gmsh.finalize()
+    return (x, np.vstack(tets), np.vstack(facets) if facets else np.zeros((0, 3), np.int64),
+            np.concatenate(values) if values else np.zeros(0, np.int32))

@@ -1,0 +1,437 @@
+"""Housing FE model: dolfinx 0.5.2 elasticity, SLEPc master modes, bore coupling values, cache.
+
+The only module of vibrogear that imports dolfinx, PETSc or SLEPc, always inside functions, so
+importing it costs nothing and a cached result never loads dolfinx.  Under ``mpirun`` the mesh is
+read on rank 0 and partitioned by dolfinx; K and M are assembled and solved distributed; every
+rank returns the same :class:`HousingModes`; only rank 0 writes cache entries.  An exception on
+one rank aborts all of them (no hang).
+
+    K = int sigma(u) : eps(v) dx (+ k_f int u . v ds_base),  M = int rho u . v dx,
+    K x = omega^2 M x,  x^T M x = 1,  B_S = beta K_S  (paper eq. (3)).
+"""
+from __future__ import annotations
+
+import dataclasses
+import os
+import resource
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+
+import numpy as np
+
+from ..config.housing import HousingConfig, MaterialConfig
+from ..geometry.housing import (BoreGeometry, HousingMesh, bore_layout, build_housing_mesh,
+                                read_msh_arrays)
+from ..pipeline.cache import cache_key, entry_dir
+from .housing_result import HousingModes, load_modes, publish, save_modes
+
+__all__ = ["HousingModes", "HousingSolveError", "housing_modes", "solve_mesh_modes",
+           "housing_cache_keys", "under_mpi"]
+
+_PREVIEW_MODES = 6
+_PREVIEW_POINTS = 4000
+
+
+class HousingSolveError(RuntimeError):
+    """The eigen-solve failed or converged too few modes."""
+
+
+def under_mpi() -> bool:
+    return int(os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))) > 1
+
+
+def _comm():
+    if not under_mpi():
+        return None
+    from mpi4py import MPI
+    return MPI.COMM_WORLD
+
+
+def _bcast(comm, value):
+    return value if comm is None else comm.bcast(value, root=0)
+
+
+def _rank(comm) -> int:
+    return 0 if comm is None else comm.rank
+
+
+def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
+    """(mesh key, modes key): the mesh depends on geometry and mesh sizes only."""
+    geo = dataclasses.asdict(cfg)
+    for k in ("material", "modes", "support", "foundation_stiffness"):
+        geo.pop(k)
+    geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size}
+    return cache_key("housing-mesh", geo), cache_key("housing-modes", dataclasses.asdict(cfg))
+
+
+def housing_modes(cfg: HousingConfig, *, cache: bool = True) -> HousingModes:
+    """Mesh -> assemble -> solve, with the on-disk cache (a hit does no FE work)."""
+    comm = _comm()
+    mesh_key, modes_key = housing_cache_keys(cfg)
+    final = entry_dir(modes_key)
+    if cache and _bcast(comm, (final / "meta.json").is_file() if _rank(comm) == 0 else None):
+        t0 = time.perf_counter()
+        res = load_modes(final, key=modes_key)
+        return dataclasses.replace(res, timings={**res.timings, "cache_load": time.perf_counter() - t0})
+    try:
+        return _compute(cfg, comm, mesh_key, modes_key, cache)
+    except Exception:
+        if comm is not None and comm.size > 1:
+            sys.stderr.write(f"[rank {comm.rank}] housing FE failed; aborting all ranks\n")
+            traceback.print_exc()
+            sys.stderr.flush()
+            comm.Abort(1)
+        raise
+
+
+def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
+    rank = _rank(comm)
+    root = (entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir()))
+    work = _bcast(comm, Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root)) if rank == 0 else None)
+    mesh_dir = entry_dir(mesh_key)
+    t_mesh = 0.0
+    if rank == 0:
+        if cache and (mesh_dir / "mesh.msh").is_file():
+            hm = _load_mesh_meta(mesh_dir)
+        else:
+            tmp = Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
+            hm = build_housing_mesh(cfg, tmp / "mesh.msh")
+            t_mesh = hm.seconds
+            _save_mesh_meta(hm, tmp)
+            if cache:
+                publish(tmp, mesh_dir)
+                hm = hm._replace(path=mesh_dir / "mesh.msh")
+            if not (hm.path.is_file()):
+                hm = _load_mesh_meta(mesh_dir)
+        msg = hm
+    else:
+        msg = None
+    hm = _bcast(comm, msg)
+    m = cfg.modes
+    res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bore_layout(cfg),
+                           count=m.count, cutoff_hz=m.cutoff_hz, max_count=m.max_count, tol=m.tol,
+                           support=cfg.support, foundation_stiffness=cfg.foundation_stiffness,
+                           shapes=m.shapes, shapes_dir=work)
+    res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key)
+    if rank == 0:
+        save_modes(res, work)
+        if cache:
+            final = publish(work, entry_dir(modes_key))
+            res = dataclasses.replace(res, shapes_path=(final / res.shapes_path.name)
+                                      if res.shapes_path is not None else None)
+    return _bcast(comm, res) if comm is not None else res
+
+
+def _save_mesh_meta(hm: HousingMesh, folder: Path) -> None:
+    import json
+    d = hm._asdict()
+    d["path"] = hm.path.name
+    (folder / "mesh.json").write_text(json.dumps(d))
+
+
+def _load_mesh_meta(folder: Path) -> HousingMesh:
+    import json
+    d = json.loads((folder / "mesh.json").read_text())
+    d["path"] = folder / d["path"]
+    d["bore_tags"] = tuple(d["bore_tags"])
+    return HousingMesh(**d)
+
+
+def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int = 2,
+                     bores: tuple[BoreGeometry, ...] = (), count: int = 20,
+                     cutoff_hz: float | None = None, max_count: int = 400, tol: float = 1e-10,
+                     support: str = "fixed", foundation_stiffness: float = 0.0, shapes: int = 0,
+                     shapes_dir: Path | None = None) -> HousingModes:
+    """Master modes of the solid in ``mesh`` with its ``base_tag`` facets clamped (or on springs)."""
+    os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
+    from mpi4py import MPI
+    import dolfinx
+    import dolfinx.fem.petsc  # noqa: F401  (explicit import needed in 0.5.2)
+    import ufl
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    comm = MPI.COMM_WORLD
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    dmesh, facet_tags = _read_mesh(mesh.path, comm)
+    timings["mesh_read"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    V = fem.VectorFunctionSpace(dmesh, ("Lagrange", degree))
+    E, nu, rho = material.E, material.nu, material.rho
+    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+    sig = lambda w: 2 * mu * eps(w) + lmbda * ufl.tr(eps(w)) * ufl.Identity(3)  # noqa: E731
+    a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx
+    fdim = dmesh.topology.dim - 1
+    dmesh.topology.create_connectivity(fdim, dmesh.topology.dim)
+    base_facets = facet_tags.indices[facet_tags.values == mesh.base_tag]
+    bcs = []
+    if support == "elastic":
+        ds = ufl.Measure("ds", domain=dmesh, subdomain_data=facet_tags)
+        a_ufl = a_ufl + foundation_stiffness * ufl.inner(u, v) * ds(mesh.base_tag)
+    else:
+        dofs = fem.locate_dofs_topological(V, fdim, base_facets)
+        bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), dofs, V)]
+    rho_c = fem.Constant(dmesh, PETSc.ScalarType(rho))
+    a = fem.form(a_ufl)
+    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx)
+    mass_form = fem.form(rho_c * ufl.dx)
+    timings["form_compilation"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    K = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
+    K.assemble()
+    M = dolfinx.fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
+    M.assemble()
+    mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
+    n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    timings["assembly"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    lam, X, reason, nconv, status, message = _eigensolve(K, M, count=count, cutoff_hz=cutoff_hz,
+                                                         max_count=max_count, tol=tol, comm=comm)
+    timings["eigensolve"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    nmode = len(X)
+    resid = np.empty(nmode)
+    n_own = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    Vloc = np.empty((n_own, nmode))
+    MVloc = np.empty((n_own, nmode))
+    y1, y2 = K.createVecLeft(), M.createVecLeft()
+    for i, x in enumerate(X):
+        M.mult(x, y2)
+        x.scale(1.0 / np.sqrt(x.dot(y2)))
+        M.mult(x, y2)
+        K.mult(x, y1)
+        kn = y1.norm()
+        y1.axpy(-lam[i], y2)
+        resid[i] = y1.norm() / kn
+        Vloc[:, i] = x.array
+        MVloc[:, i] = y2.array
+    gram = comm.allreduce(Vloc.T @ MVloc, op=MPI.SUM)
+    ortho = float(np.max(np.abs(gram - np.eye(nmode)))) if nmode else 0.0
+    uh = fem.Function(V)
+    pts, pvals, cvals, n_fallback = _bore_values(dmesh, uh, Vloc, bores, comm)
+    prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
+    timings["postprocess"] = time.perf_counter() - t0
+
+    shapes_path = None
+    if shapes > 0 and shapes_dir is not None and nmode:
+        t0 = time.perf_counter()
+        shapes_path = _write_shapes(dmesh, uh, Vloc[:, :shapes], Path(shapes_dir) / "shapes.xdmf", comm)
+        timings["xdmf"] = time.perf_counter() - t0
+    for mat in (K, M):
+        mat.destroy()
+    peak = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, op=MPI.SUM)
+    return HousingModes(
+        freqs_hz=np.sqrt(np.maximum(lam, 0.0)) / (2 * np.pi), bore_values=pvals, bore_points=pts,
+        bore_n_points=tuple(b.n_points for b in bores),
+        bore_centers=np.array([b.center for b in bores], dtype=float).reshape(-1, 3),
+        bore_axes=np.array([b.axis for b in bores], dtype=float).reshape(-1, 3),
+        bore_center_values=cvals, bore_names=tuple(b.name for b in bores), beta=material.beta,
+        n_dofs=int(n_dofs), degree=degree, residuals=resid, orthogonality_error=ortho, mass_kg=float(mass),
+        n_fallback_points=int(n_fallback), status=status, message=message, converged_reason=reason,
+        n_converged=int(nconv), timings=timings, peak_memory_mb=float(peak), n_processes=comm.size,
+        shapes_path=shapes_path, preview_points=prev_pts, preview_values=prev_vals,
+    )
+
+
+def _read_mesh(path: Path, comm):
+    """Distributed dolfinx mesh + facet tags (Debian's gmshio.read_from_msh is broken in 0.5.2)."""
+    import ufl
+    from dolfinx import cpp, mesh as dmesh_mod
+
+    if comm.rank == 0:
+        x, cells, facets, values = read_msh_arrays(path)
+    else:
+        x, cells = np.zeros((0, 3)), np.zeros((0, 4), dtype=np.int64)
+        facets, values = np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int32)
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.tetrahedron, 1))
+    msh = dmesh_mod.create_mesh(comm, cells, x, domain)
+    tdim = msh.topology.dim
+    ents, vals = cpp.io.distribute_entity_data(msh._mesh if hasattr(msh, "_mesh") else msh, tdim - 1,
+                                               facets, values)
+    msh.topology.create_connectivity(tdim - 1, tdim)
+    msh.topology.create_connectivity(tdim - 1, 0)
+    adj = cpp.graph.AdjacencyList_int32(ents)
+    ft = dmesh_mod.meshtags_from_entities(msh, tdim - 1, adj, vals.astype(np.int32))
+    return msh, ft
+
+
+def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm):
+    """Shift-and-invert Krylov-Schur at sigma = 0 with a MUMPS Cholesky of K."""
+    from petsc4py import PETSc
+    from slepc4py import SLEPc
+
+    K.setOption(PETSc.Mat.Option.SPD, True)
+    opts = PETSc.Options()
+    prefix = "vghousing_"
+    opts[f"{prefix}st_mat_mumps_icntl_14"] = 50
+    eps = SLEPc.EPS().create(comm)
+    eps.setOptionsPrefix(prefix)
+    eps.setOperators(K, M)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setTarget(0.0)
+    eps.setPurify(False)  # Dirichlet rows are 1 in K, 0 in M: no leakage onto clamped DOF
+    eps.setTolerances(tol, 500)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    st.setShift(0.0)
+    ksp = st.getKSP()
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    pc = ksp.getPC()
+    pc.setType(PETSc.PC.Type.CHOLESKY)
+    if PETSc.Sys.hasExternalPackage("mumps"):
+        pc.setFactorSolverType("mumps")
+    eps.setFromOptions()
+    nev = count if cutoff_hz is None else min(20, max_count)
+    lam_cut = None if cutoff_hz is None else (2 * np.pi * cutoff_hz) ** 2
+    status, message = "ok", ""
+    while True:
+        eps.setDimensions(nev, PETSc.DECIDE, PETSc.DECIDE)
+        eps.solve()
+        nconv = eps.getConverged()
+        lam = np.array([eps.getEigenvalue(i).real for i in range(nconv)])
+        if lam_cut is None or nconv < nev or (lam.size and lam.max() >= lam_cut):
+            break
+        if nev >= max_count:
+            status, message = "truncated", (f"max_count = {max_count} modes all lie below cutoff_hz = "
+                                            f"{cutoff_hz:g}; raise housing.modes.max_count")
+            break
+        nev = min(2 * nev, max_count)
+    reason = SLEPc.EPS.ConvergedReason
+    rname = {getattr(reason, k): k for k in dir(reason) if not k.startswith("_")}.get(
+        eps.getConvergedReason(), str(eps.getConvergedReason()))
+    order = np.argsort(lam)
+    want = order[:nev] if lam_cut is None else [i for i in order if lam[i] < lam_cut][:max_count]
+    if lam_cut is None and nconv < count:
+        eps.destroy()
+        raise HousingSolveError(f"SLEPc converged {nconv} of {count} modes ({rname})")
+    X = []
+    for i in want:
+        x = K.createVecRight()
+        eps.getEigenpair(int(i), x)
+        X.append(x)
+    eps.destroy()
+    opts.delValue(f"{prefix}st_mat_mumps_icntl_14")
+    return lam[list(want)], X, rname, nconv, status, message
+
+
+def _locate(dmesh, points, comm):
+    """For each point, (local cell or -1, owning rank); fallback to the closest cell."""
+    from mpi4py import MPI
+    import dolfinx.geometry as geo
+
+    tdim = dmesh.topology.dim
+    tree = geo.BoundingBoxTree(dmesh, tdim)
+    cand = geo.compute_collisions(tree, points)
+    coll = geo.compute_colliding_cells(dmesh, cand, points)
+    n_local_cells = dmesh.topology.index_map(tdim).size_local
+    cells = np.full(len(points), -1, dtype=np.int32)
+    for k in range(len(points)):
+        c = [c for c in coll.links(k) if c < n_local_cells]
+        if len(c):
+            cells[k] = c[0]
+    found = np.where(cells >= 0, comm.rank, comm.size).astype(np.int32)
+    owner = np.empty_like(found)
+    comm.Allreduce(found, owner, op=MPI.MIN)
+    missing = np.flatnonzero(owner == comm.size)
+    n_fallback = len(missing)
+    if n_fallback:
+        entities = np.arange(n_local_cells, dtype=np.int32)
+        mid = geo.create_midpoint_tree(dmesh, tdim, entities)
+        closest = geo.compute_closest_entity(tree, mid, dmesh, points[missing])
+        x = dmesh.geometry.x
+        dist = np.full(len(missing), np.inf)
+        for j, c in enumerate(closest):
+            if c >= 0:
+                verts = dmesh.geometry.dofmap.links(c)
+                dist[j] = np.min(np.linalg.norm(x[verts] - points[missing[j]], axis=1))
+        best = np.empty_like(dist)
+        comm.Allreduce(dist, best, op=MPI.MIN)
+        for j, k in enumerate(missing):
+            mine = dist[j] == best[j] and np.isfinite(dist[j])
+            cand_rank = comm.rank if mine else comm.size
+            owner[k] = comm.allreduce(cand_rank, op=MPI.MIN)
+            if owner[k] == comm.rank:
+                cells[k] = closest[j]
+    return cells, owner, n_fallback
+
+
+def _bore_values(dmesh, uh, Vloc, bores, comm):
+    from mpi4py import MPI
+
+    nb, m = len(bores), Vloc.shape[1]
+    P = max((b.n_points for b in bores), default=0)
+    pts = np.full((nb, P, 3), np.nan)
+    vals = np.full((nb, P, 3, m), np.nan)
+    cvals = np.zeros((nb, 3, m))
+    if nb == 0:
+        return pts, vals, cvals, 0
+    flat = np.vstack([b.points() for b in bores])
+    cells, owner, n_fallback = _locate(dmesh, flat, comm)
+    mine = np.flatnonzero(owner == comm.rank)
+    local = np.zeros((len(flat), 3, m))
+    for i in range(m):
+        uh.vector.array[:] = Vloc[:, i]
+        uh.x.scatter_forward()
+        if len(mine):
+            local[mine, :, i] = uh.eval(flat[mine], cells[mine])
+    allv = np.zeros_like(local)
+    comm.Allreduce(local, allv, op=MPI.SUM)
+    k = 0
+    for j, b in enumerate(bores):
+        n = b.n_points
+        pts[j, :n] = flat[k:k + n]
+        vals[j, :n] = allv[k:k + n]
+        cvals[j] = allv[k:k + n].mean(axis=0)
+        k += n
+    return pts, vals, cvals, n_fallback
+
+
+def _preview(dmesh, V, uh, Vloc, comm):
+    """Boundary dof coordinates and the first modes there, subsampled, for plots."""
+    import dolfinx.mesh
+    from dolfinx import fem
+
+    fdim = dmesh.topology.dim - 1
+    facets = dolfinx.mesh.exterior_facet_indices(dmesh.topology)
+    blocks = fem.locate_dofs_topological(V, fdim, facets)
+    blocks = blocks[blocks < V.dofmap.index_map.size_local]
+    xyz = V.tabulate_dof_coordinates()[blocks]
+    vals = np.stack([Vloc[:, i].reshape(-1, 3)[blocks] for i in range(Vloc.shape[1])], axis=-1)
+    all_xyz = comm.gather(xyz, root=0)
+    all_vals = comm.gather(vals, root=0)
+    if comm.rank != 0:
+        return np.zeros((0, 3)), np.zeros((0, 3, Vloc.shape[1]))
+    xyz, vals = np.vstack(all_xyz), np.concatenate(all_vals, axis=0)
+    order = np.lexsort(np.round(xyz, 9).T)
+    step = max(1, len(order) // _PREVIEW_POINTS)
+    sel = order[::step]
+    return xyz[sel], vals[sel]
+
+
+def _write_shapes(dmesh, uh, Vloc, path: Path, comm) -> Path:
+    from dolfinx import fem
+    from dolfinx.io import XDMFFile
+
+    V1 = fem.VectorFunctionSpace(dmesh, ("Lagrange", 1))
+    u1 = fem.Function(V1)
+    u1.name = "mode_shape"
+    with XDMFFile(comm, str(path), "w") as f:
+        f.write_mesh(dmesh)
+        for i in range(Vloc.shape[1]):
+            uh.vector.array[:] = Vloc[:, i]
+            uh.x.scatter_forward()
+            u1.interpolate(uh)
+            f.write_function(u1, t=float(i + 1))
+    return path
