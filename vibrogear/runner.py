@@ -29,6 +29,11 @@ ANALYSIS_TABLE: dict[tuple[str, str], str] = {
     ("impact_pair", "sweep"): "vibrogear.analyses.impact:run_sweep",
     ("impact_pair", "continuation"): "vibrogear.analyses.impact:run_continuation",
     ("impact_pair", "report"): "vibrogear.analyses.impact:run_report",
+    ("rotor", "modes"): "vibrogear.analyses.rotor:run_modes",
+    ("rotor", "campbell"): "vibrogear.analyses.rotor:run_campbell",
+    ("housing", "modes"): "vibrogear.analyses.housing:run_modes",
+    ("housing", "housing_sweep"): "vibrogear.analyses.housing_sweep:run_sweep",
+    ("housing", "housing_convergence"): "vibrogear.analyses.housing_study:run_convergence",
 }
 
 
@@ -75,6 +80,8 @@ def _finite_json(obj: Any) -> Any:
 
 
 def write_summary(out: Path, summary: dict) -> None:
+    if os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) != "0":
+        return  # under mpirun only rank 0 writes files
     tmp = out / "summary.json.tmp"
     tmp.write_text(json.dumps(_finite_json(summary), indent=2, sort_keys=False))
     tmp.replace(out / "summary.json")

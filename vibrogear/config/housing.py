@@ -179,6 +179,41 @@ class HousingSweepConfig:
             return self.values
         return tuple(self.min + (self.max - self.min) * k / (self.n - 1) for k in range(self.n))
 
+    def housing_points(self, housing: "HousingConfig", path: str = "housing_sweep") -> tuple["HousingConfig", ...]:
+        """The validated housing of each sweep point (ConfigError names the point and field)."""
+        import dataclasses
+
+        from .base import build, set_path
+
+        keys = self.parameter.split(".")[1:]
+        base = _strip_none(dataclasses.asdict(housing))
+        node = base
+        try:
+            for k in keys:
+                node = node[int(k)] if isinstance(node, list) else node[k]
+        except (KeyError, IndexError, ValueError, TypeError):
+            raise ConfigError(f"{path}.parameter", f"{self.parameter!r} names no housing value") from None
+        if isinstance(node, (dict, list, str, bool)):
+            raise ConfigError(f"{path}.parameter", f"{self.parameter!r} is not a number")
+        out = []
+        for i, v in enumerate(self.points()):
+            data = _strip_none(dataclasses.asdict(housing))
+            set_path(data, keys, int(round(v)) if isinstance(node, int) else float(v))
+            try:
+                out.append(build(HousingConfig, data, "housing"))
+            except ConfigError as exc:
+                raise ConfigError(f"{path}.values[{i}]", f"{self.parameter} = {v:g} gives an invalid "
+                                  f"housing: {exc}") from None
+        return tuple(out)
+
+
+def _strip_none(obj):
+    if isinstance(obj, dict):
+        return {k: _strip_none(v) for k, v in obj.items() if v is not None}
+    if isinstance(obj, (list, tuple)):
+        return [_strip_none(v) for v in obj]
+    return obj
+
 
 @dataclass(frozen=True, kw_only=True)
 class HousingConvergenceConfig:

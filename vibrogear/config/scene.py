@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, build, parse_override, set_path, spec
-from .housing import HousingConfig
+from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, ImpactPairConfig, IntegrationConfig, ReportConfig,
                        SceneInfo, ShootingConfig, SweepConfig, TimeResponseConfig)
@@ -26,6 +26,8 @@ ANALYSIS_SECTION = {
     "report": "report",
     "modes": None,
     "campbell": None,
+    "housing_sweep": "housing_sweep",
+    "housing_convergence": "housing_convergence",
 }
 
 #: analysis -> model sections that support it
@@ -36,6 +38,8 @@ ANALYSIS_MODELS = {
     "report": ("impact_pair",),
     "modes": ("rotor", "housing"),
     "campbell": ("rotor",),
+    "housing_sweep": ("housing",),
+    "housing_convergence": ("housing",),
 }
 
 
@@ -45,6 +49,8 @@ class Scene:
     impact_pair: ImpactPairConfig | None = spec(None)
     rotor: RotorConfig | None = spec(None)
     housing: HousingConfig | None = spec(None)
+    housing_sweep: HousingSweepConfig | None = spec(None)
+    housing_convergence: HousingConvergenceConfig | None = spec(None)
     integration: IntegrationConfig = spec(IntegrationConfig())
     shooting: ShootingConfig = spec(ShootingConfig())
     sweep: SweepConfig | None = spec(None)
@@ -72,6 +78,11 @@ class Scene:
             section = ANALYSIS_SECTION[analysis]
             if section is not None and getattr(self, section) is None:
                 raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
+            if analysis == "campbell" and self.rotor is not None and self.rotor.campbell is None:
+                raise ConfigError("rotor.campbell", "missing section: analysis 'campbell' needs "
+                                  "[rotor.campbell] (rpm_max, ...)")
+        if self.housing_sweep is not None and self.housing is not None:
+            self.housing_sweep.housing_points(self.housing, "housing_sweep")
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

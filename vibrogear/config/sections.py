@@ -17,6 +17,8 @@ ANALYSES = {
     "report": "work-precision study: integrator tolerance and shooting residual against run time",
     "modes": "modal analysis (rotor or housing)",
     "campbell": "Campbell diagram of a rotor",
+    "housing_sweep": "housing geometry sweep: first frequencies against one housing parameter",
+    "housing_convergence": "housing mesh convergence: frequency error vs DOF vs wall time, P1 and P2",
 }
 
 
