@@ -27,7 +27,7 @@ from .rotor_elements import (DOF_NAMES, PHI, PSI, THETA, U, V, W, disc_inertia_f
                              shaft_element_matrices)
 
 __all__ = ["RotorModel", "build_rotor_model", "assemble_rotor", "master_modes",
-           "MasterModes", "DOF_NAMES", "dof_groups"]
+           "MasterModes", "DOF_NAMES", "dof_groups", "lowest_modes"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,20 +185,24 @@ class MasterModes:
     """Free, non-rotating, undamped modes: ``V.T M V = I``, ``V.T K V = diag(omega^2)``."""
     frequencies_hz: np.ndarray
     vectors: np.ndarray           # (n_dofs, m)
-    n_rigid: int                  # modes with frequency below the rigid-body threshold
+    n_rigid: int                  # rigid-body modes (frequency set to exactly 0)
 
 
 #: dense generalized eigensolver below this many DOFs, shift-invert Lanczos above
 DENSE_LIMIT = 700
 
 
-def _lowest_modes(K, M, count: int | None, cutoff_hz: float | None):
+def lowest_modes(K, M, count: int | None = None, cutoff_hz: float | None = None):
+    """Lowest undamped modes of ``(K, M)`` (K may be singular): ``(freqs_hz, vectors)``,
+    vectors mass-normalised.  Dense below :data:`DENSE_LIMIT` DOFs, else shift-invert."""
     n = K.shape[0]
     want = n if count is None else min(count, n)
     if n <= DENSE_LIMIT or want > n // 3:
         hi = n - 1 if cutoff_hz is not None and count is None else want - 1
-        lam, vec = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, hi],
-                            driver="gvx" if hi < n - 1 else "gvd")
+        if hi < n - 1:
+            lam, vec = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, hi], driver="gvx")
+        else:
+            lam, vec = sla.eigh(K.toarray(), M.toarray(), driver="gvd")
     else:
         # shift below zero: K may be singular (rigid-body modes)
         sigma = -1.0
@@ -212,6 +216,8 @@ def _lowest_modes(K, M, count: int | None, cutoff_hz: float | None):
                 break
             k = min(2 * k, n - 2)
     freqs = np.sqrt(np.clip(lam, 0.0, None)) / (2.0 * np.pi)
+    mm = np.einsum("ij,ij->j", vec, M @ vec)        # exact mass normalisation
+    vec = vec / np.sqrt(mm)[None, :]
     if cutoff_hz is not None:
         keep = freqs <= cutoff_hz
         if count is not None:
@@ -220,8 +226,8 @@ def _lowest_modes(K, M, count: int | None, cutoff_hz: float | None):
     return freqs, vec
 
 
-def master_modes(model: RotorModel, count: int | None = None, cutoff_hz: float | None = None,
-                 *, rigid_tol_hz: float = 1e-3) -> MasterModes:
+def master_modes(model: RotorModel, count: int | None = None,
+                 cutoff_hz: float | None = None) -> MasterModes:
     """Free, non-rotating, undamped modes of the shaft (no bearings), mass-normalised.
 
     The six rigid-body modes (plus one per free gear with zero torsional stiffness) come
@@ -230,8 +236,9 @@ def master_modes(model: RotorModel, count: int | None = None, cutoff_hz: float |
     """
     if count is None and cutoff_hz is None:
         raise ValueError("give count or cutoff_hz")
-    freqs, vec = _lowest_modes(model.K, model.M, count, cutoff_hz)
-    # mass-normalise exactly (eigsh normalises already; guard against round-off)
-    mm = np.einsum("ij,ij->j", vec, model.M @ vec)
-    vec = vec / np.sqrt(mm)[None, :]
-    return MasterModes(freqs, vec, int(np.sum(freqs < rigid_tol_hz)))
+    freqs, vec = lowest_modes(model.K, model.M, count, cutoff_hz)
+    # rigid-body modes: eigenvalues at round-off level of the stiffness scale
+    scale = np.max(model.K.diagonal() / np.maximum(model.M.diagonal(), 1e-300))
+    rigid = (2 * np.pi * freqs) ** 2 < 1e-9 * scale
+    freqs = np.where(rigid, 0.0, freqs)
+    return MasterModes(freqs, vec, int(np.sum(rigid)))

@@ -1,0 +1,414 @@
+"""Complex modal analysis of a rotor at spin speed and its Campbell diagram.
+
+The equation of motion is paper eq. (2) with the rotor on its own bearings,
+``M q'' + (B + W G) q' + (K + W C) q = 0`` (``W`` spin speed in rad/s).  Two methods:
+
+- ``"reduced"`` (default): the speed-independent matrices are projected once onto the lowest
+  undamped, non-rotating modes of the supported rotor (``n_basis`` of them, mass-normalised),
+  and each speed solves the small ``2 n_basis`` state-space eigenproblem.  Every mode's
+  relative residual in the full model is reported as its error estimate.
+- ``"full"``: dense eigen-decomposition of the full ``2 n`` state matrix (small models, checks).
+
+Solvers return frozen results; they never print or plot.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.optimize import linear_sum_assignment
+
+from ..models.rotor import RotorModel, dof_groups, lowest_modes
+from ..models.rotor_elements import PHI, THETA, U, V
+
+__all__ = ["RotorModes", "CampbellResult", "CriticalSpeed", "ReducedRotor", "reduce_rotor",
+           "rotor_modes", "campbell_diagram", "classify_whirl", "modal_energy_share", "RPM",
+           "MODE_TYPES"]
+
+RPM = np.pi / 30.0          # rad/s per rpm
+MODE_TYPES = ("lateral", "axial", "torsional")
+
+
+@dataclass(frozen=True, eq=False)
+class ReducedRotor:
+    """Speed-independent matrices of the supported rotor in a modal basis.
+
+    Lateral DOFs are the only ones the speed couples (G and C act on ``u, v, phi, theta``);
+    they never couple structurally to the axial and torsional DOFs.  So the basis is built per
+    group: ``lateral`` modes (projected K, B, G, C; one small eigenproblem per speed) and
+    ``other`` (axial + torsional) modes whose complex modes do not depend on the speed and
+    are solved once.
+    """
+    basis: np.ndarray          # (n, m_lat + m_other), mass-normalised undamped modes
+    n_lateral: int
+    K: np.ndarray              # lateral block, (m_lat, m_lat)
+    B: np.ndarray
+    G: np.ndarray
+    C: np.ndarray
+    other_lam: np.ndarray      # oscillatory eigenvalues of the axial/torsional block
+    other_q: np.ndarray        # their eigenvectors in basis coordinates (m_lat + m_other, k)
+    other_rigid: int
+    basis_hz: np.ndarray
+
+    def state_matrix(self, omega: float) -> np.ndarray:
+        m = self.K.shape[0]
+        a = np.zeros((2 * m, 2 * m))
+        a[:m, m:] = np.eye(m)
+        a[m:, :m] = -(self.K + omega * self.C)
+        a[m:, m:] = -(self.B + omega * self.G)
+        return a
+
+
+def default_basis_size(n_dofs: int, count: int) -> int:
+    return int(min(n_dofs, max(3 * count + 16, 40)))
+
+
+def _block_modes(kk, bb, m_bb, idx, nb):
+    """Undamped basis of the DOF subset ``idx`` embedded in the full space."""
+    if idx.size == 0 or nb == 0:
+        return np.zeros((m_bb.shape[0], 0)), np.zeros(0)
+    sub = np.ix_(idx, idx)
+    hz, v = lowest_modes(kk.tocsr()[sub], m_bb.tocsr()[sub], count=min(nb, idx.size))
+    full = np.zeros((m_bb.shape[0], v.shape[1]))
+    full[idx] = v
+    return full, hz
+
+
+def reduce_rotor(model: RotorModel, n_basis: int | None = None, *, count: int = 12) -> ReducedRotor:
+    """Project the supported rotor on its lowest undamped non-rotating modes: ``n_basis``
+    lateral ones and ``count + 8`` axial/torsional ones (those are solved once, exactly
+    enough for any speed since the speed does not act on them)."""
+    k_s, b_s = model.supported()
+    groups = dof_groups(model)
+    lat = np.nonzero(groups["lateral"])[0]
+    oth = np.nonzero(~groups["lateral"])[0]
+    nb = default_basis_size(lat.size, count) if n_basis is None else min(n_basis, lat.size)
+    v_l, hz_l = _block_modes(k_s, b_s, model.M, lat, nb)
+    v_o, hz_o = _block_modes(k_s, b_s, model.M, oth, min(count + 8, oth.size))
+    proj = lambda a, v: v.T @ (a @ v)  # noqa: E731
+    ml, mo = v_l.shape[1], v_o.shape[1]
+    # axial/torsional block: speed-independent complex modes, solved once
+    a = np.zeros((2 * mo, 2 * mo))
+    a[:mo, mo:] = np.eye(mo)
+    a[mo:, :mo] = -proj(k_s, v_o)
+    a[mo:, mo:] = -proj(b_s, v_o)
+    lam, q = sla.eig(a)
+    scale = np.sqrt(max(hz_o.max() * 2 * np.pi, 1.0) ** 2) if mo else 1.0
+    lam, q, n_rigid = _select(lam, q[:mo], scale)
+    q_full = np.zeros((ml + mo, q.shape[1]), complex)
+    q_full[ml:] = q
+    return ReducedRotor(np.hstack([v_l, v_o]), ml, proj(k_s, v_l), proj(b_s, v_l),
+                        proj(model.G, v_l), proj(model.C, v_l), lam, q_full, n_rigid,
+                        np.concatenate([hz_l, hz_o]))
+
+
+@dataclass(frozen=True, eq=False)
+class RotorModes:
+    """Oscillatory modes at one speed, sorted by damped frequency."""
+    speed_rpm: float
+    eigenvalues: np.ndarray            # lambda = -zeta w_n + i w_d, Im >= 0
+    frequencies_hz: np.ndarray         # damped natural frequency Im(lambda) / 2 pi
+    natural_frequencies_hz: np.ndarray  # |lambda| / 2 pi
+    damping_ratios: np.ndarray         # -Re(lambda) / |lambda|
+    whirl: tuple[str, ...]             # forward / backward / mixed / - (not lateral)
+    whirl_ratio: np.ndarray            # (F - B) / (F + B) of the lateral orbit, in [-1, 1]
+    mode_type: tuple[str, ...]         # lateral / axial / torsional by kinetic-energy share
+    energy_share: np.ndarray           # (modes, 3) lateral, axial, torsional
+    shapes: np.ndarray                 # (n_dofs, modes) complex, displacement part
+    residuals: np.ndarray              # relative residual of each mode in the full model
+    n_rigid: int                       # zero eigenvalues (free axial / torsional motion)
+    method: str
+    n_basis: int
+    status: str = "ok"
+    message: str = ""
+    timings: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CriticalSpeed:
+    order: float
+    line: int
+    speed_rpm: float
+    frequency_hz: float
+    whirl: str
+    mode_type: str
+
+
+@dataclass(frozen=True, eq=False)
+class CampbellResult:
+    speeds_rpm: np.ndarray             # (s,)
+    frequencies_hz: np.ndarray         # (s, lines), lines tracked by MAC across speeds
+    damping_ratios: np.ndarray
+    whirl: np.ndarray                  # (s, lines) str
+    mode_type: np.ndarray              # (s, lines) str
+    orders: tuple[float, ...]
+    critical_speeds: tuple[CriticalSpeed, ...]
+    max_residual: float
+    n_basis: int
+    status: str = "ok"
+    message: str = ""
+    timings: dict = field(default_factory=dict)
+
+
+def classify_whirl(model: RotorModel, shapes: np.ndarray, *, tol: float = 0.02):
+    """Whirl direction of complex mode shapes (columns, for ``e^{i w t}``, w > 0).
+
+    Each node's orbit ``(u, v)`` (and slope orbit ``(theta, -phi)``) splits into a forward
+    circle ``|U + iV|/2`` and a backward one ``|U - iV|/2``; spin is about ``+z`` (x to y).
+    Returns (labels, ratio) with ratio = (F - B)/(F + B) summed over nodes; a mode is forward
+    (backward) when every node with a visible orbit whirls forward (backward), else mixed.
+    """
+    nn = model.n_nodes
+    idx = 6 * np.arange(nn)
+    pairs = [(shapes[idx + U], shapes[idx + V]), (shapes[idx + THETA], -shapes[idx + PHI])]
+    labels, ratios = [], []
+    for j in range(shapes.shape[1]):
+        f_tot = b_tot = 0.0
+        signs = []
+        for a, b in pairs:
+            f = np.abs(a[:, j] + 1j * b[:, j]) ** 2
+            bk = np.abs(a[:, j] - 1j * b[:, j]) ** 2
+            f_tot += f.sum()
+            b_tot += bk.sum()
+            amp = f + bk
+            vis = amp > tol * amp.max() if amp.max() > 0 else np.zeros_like(amp, bool)
+            diff = (f - bk)[vis] / amp[vis]
+            signs.append(diff[np.abs(diff) > tol])
+        s = np.concatenate(signs)
+        ratio = (f_tot - b_tot) / (f_tot + b_tot) if f_tot + b_tot > 0 else 0.0
+        if s.size and np.all(s > 0):
+            labels.append("forward")
+        elif s.size and np.all(s < 0):
+            labels.append("backward")
+        else:
+            labels.append("mixed")
+        ratios.append(ratio)
+    return labels, np.array(ratios)
+
+
+def modal_energy_share(model: RotorModel, shapes: np.ndarray) -> np.ndarray:
+    """Kinetic-energy share (modes, 3) of the lateral, axial and torsional DOFs."""
+    groups = dof_groups(model)
+    mx = model.M @ shapes
+    e = np.real(np.conj(shapes) * mx)
+    share = np.stack([e[groups[g]].sum(axis=0) for g in MODE_TYPES], axis=1)
+    tot = share.sum(axis=1, keepdims=True)
+    return share / np.where(tot > 0, tot, 1.0)
+
+
+def _residuals(model: RotorModel, omega: float, lam: np.ndarray, x: np.ndarray) -> np.ndarray:
+    k_s, b_s = model.supported()
+    d = b_s + omega * model.G
+    kk = k_s + omega * model.C
+    mx, dx, kx = model.M @ x, d @ x, kk @ x
+    r = lam ** 2 * mx + lam * dx + kx
+    scale = (np.abs(lam) ** 2 * np.linalg.norm(mx, axis=0) + np.abs(lam)
+             * np.linalg.norm(dx, axis=0) + np.linalg.norm(kx, axis=0))
+    return np.linalg.norm(r, axis=0) / np.where(scale > 0, scale, 1.0)
+
+
+#: relative residual above which a reduced result is flagged; the eigenvalue error of a
+#: projected (Rayleigh-Ritz) mode is of the order of the residual squared
+RESIDUAL_LIMIT = 3e-2
+
+#: modes with a damping ratio above this are overdamped (not oscillatory) and left out
+MAX_DAMPING_RATIO = 0.95
+
+
+def _select(lam: np.ndarray, vec: np.ndarray, scale: float):
+    """Oscillatory half (Im > 0, damping ratio below :data:`MAX_DAMPING_RATIO`) sorted by
+    Im, and the number of (near-)zero eigenvalues."""
+    tiny = 1e-7 * scale
+    n_rigid = int(np.sum(np.abs(lam) < tiny))
+    keep = (lam.imag > tiny) & (-lam.real < MAX_DAMPING_RATIO * np.abs(lam))
+    lam, vec = lam[keep], vec[:, keep]
+    order = np.argsort(lam.imag, kind="stable")
+    return lam[order], vec[:, order], n_rigid
+
+
+def _solve_reduced(red: ReducedRotor, omega: float):
+    """Oscillatory modes at ``omega`` in basis coordinates, sorted by frequency."""
+    m = red.n_lateral
+    lam, vec = sla.eig(red.state_matrix(omega))
+    scale = np.sqrt(max(np.max(np.diag(red.K)), 1.0)) if m else 1.0
+    lam, vec, n_rigid = _select(lam, vec[:m], scale)
+    q = np.zeros((red.basis.shape[1], lam.size), complex)
+    q[:m] = vec
+    lam = np.concatenate([lam, red.other_lam])
+    q = np.hstack([q, red.other_q])
+    order = np.argsort(lam.imag, kind="stable")
+    return lam[order], q[:, order], n_rigid + red.other_rigid
+
+
+def _solve_full(model: RotorModel, omega: float):
+    k_s, b_s = model.supported()
+    n = model.n_dofs
+    a = np.zeros((2 * n, 2 * n))
+    a[:n, n:] = np.eye(n)
+    a[n:, :n] = -(k_s + omega * model.C).toarray()
+    a[n:, n:] = -(b_s + omega * model.G).toarray()
+    bm = np.eye(2 * n)
+    bm[n:, n:] = model.M.toarray()
+    lam, vec = sla.eig(a, bm)
+    scale = np.sqrt(max(np.max(k_s.diagonal() / model.M.diagonal()), 1.0))
+    return _select(lam, vec[:n], scale)
+
+
+def _trim(lam, x, count, cutoff_hz):
+    f = lam.imag / (2 * np.pi)
+    keep = np.ones(f.size, bool) if cutoff_hz is None else f <= cutoff_hz
+    if cutoff_hz is None or count is not None:
+        keep &= np.arange(f.size) < (count if count is not None else f.size)
+    return lam[keep], x[:, keep]
+
+
+def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None = 12,
+                cutoff_hz: float | None = None, method: str = "reduced",
+                n_basis: int | None = None, reduced: ReducedRotor | None = None) -> RotorModes:
+    """Complex modes of the supported rotor at ``speed_rpm``: the lowest ``count`` oscillatory
+    modes (or all up to ``cutoff_hz``), with whirl, mode type and residual error estimates."""
+    t0 = time.perf_counter()
+    omega = speed_rpm * RPM
+    timings = {}
+    if method == "full":
+        lam, x, n_rigid = _solve_full(model, omega)
+        nb = model.n_dofs
+    elif method == "reduced":
+        want = count if count is not None else 12
+        red = reduced if reduced is not None else reduce_rotor(model, n_basis, count=want)
+        timings["reduce_s"] = time.perf_counter() - t0
+        lam, q, n_rigid = _solve_reduced(red, omega)
+        x = red.basis @ q
+        nb = red.basis.shape[1]
+    else:
+        raise ValueError(f"method must be 'reduced' or 'full', got {method!r}")
+    lam, x = _trim(lam, x, count, cutoff_hz)
+    timings["eigen_s"] = time.perf_counter() - t0 - timings.get("reduce_s", 0.0)
+    # normalise shapes: largest component real and 1
+    big = x[np.argmax(np.abs(x), axis=0), np.arange(x.shape[1])]
+    x = x / np.where(big != 0, big, 1.0)
+    share = modal_energy_share(model, x)
+    types = tuple(MODE_TYPES[i] for i in np.argmax(share, axis=1))
+    wl, ratio = classify_whirl(model, x)
+    whirl = tuple(w if t == "lateral" else "-" for w, t in zip(wl, types))
+    res = _residuals(model, omega, lam, x)
+    timings["total_s"] = time.perf_counter() - t0
+    wn = np.abs(lam)
+    worst = float(res.max()) if res.size else 0.0
+    status, msg = "ok", ""
+    if method == "reduced" and worst > RESIDUAL_LIMIT:
+        status, msg = "inaccurate", (f"largest modal residual {worst:.2e} > {RESIDUAL_LIMIT:g}: "
+                                     "increase n_basis or use method='full'")
+    return RotorModes(speed_rpm=float(speed_rpm), eigenvalues=lam, frequencies_hz=lam.imag / (2 * np.pi),
+                      natural_frequencies_hz=wn / (2 * np.pi),
+                      damping_ratios=-lam.real / np.where(wn > 0, wn, 1.0), whirl=whirl,
+                      whirl_ratio=ratio, mode_type=types, energy_share=share, shapes=x,
+                      residuals=res, n_rigid=n_rigid, method=method, n_basis=nb, status=status,
+                      message=msg, timings=timings)
+
+
+def _mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    num = np.abs(np.conj(a).T @ b) ** 2
+    den = np.outer(np.sum(np.abs(a) ** 2, axis=0), np.sum(np.abs(b) ** 2, axis=0))
+    return num / np.where(den > 0, den, 1.0)
+
+
+def campbell_diagram(model: RotorModel, speeds_rpm, *, n_modes: int = 8,
+                     orders: tuple[float, ...] = (1.0,), n_basis: int | None = None,
+                     callback: Callable[[int, float], None] | None = None) -> CampbellResult:
+    """Frequencies of the lowest ``n_modes`` oscillatory modes over ``speeds_rpm`` (lines
+    followed across crossings by MAC), and the critical speeds where the lines cross the
+    order lines ``f = order * rpm / 60`` (refined by the secant method)."""
+    t0 = time.perf_counter()
+    speeds = np.asarray(speeds_rpm, float)
+    red = reduce_rotor(model, n_basis, count=n_modes)
+    t_red = time.perf_counter() - t0
+    extra = n_modes + 4
+    freqs = np.full((speeds.size, n_modes), np.nan)
+    zetas = np.full_like(freqs, np.nan)
+    vecs_prev = None
+    lams = []
+    lines_q = []
+    for i, rpm in enumerate(speeds):
+        lam, q, _ = _solve_reduced(red, rpm * RPM)
+        lam, q = lam[:extra], q[:, :extra]
+        if vecs_prev is None:
+            pick = np.arange(min(n_modes, lam.size))
+        else:
+            cost = 1.0 - _mac(vecs_prev, q)
+            # favour small frequency jumps when shapes are alike (degenerate pairs)
+            df = np.abs(lam.imag[None, :] - lams[-1].imag[:, None]) / max(lam.imag.max(), 1.0)
+            r, c = linear_sum_assignment(cost + 0.1 * df)
+            pick = c[np.argsort(r)]
+        lam_i, q_i = lam[pick], q[:, pick]
+        k = lam_i.size
+        freqs[i, :k] = lam_i.imag / (2 * np.pi)
+        zetas[i, :k] = -lam_i.real / np.abs(lam_i)
+        lams.append(lam_i)
+        lines_q.append(q_i)
+        vecs_prev = q_i
+        if callback is not None:
+            callback(i, float(rpm))
+    t_sweep = time.perf_counter() - t0 - t_red
+    whirl = np.empty(freqs.shape, dtype=object)
+    types = np.empty(freqs.shape, dtype=object)
+    max_res = 0.0
+    for i, q_i in enumerate(lines_q):
+        x = red.basis @ q_i
+        share = modal_energy_share(model, x)
+        ty = [MODE_TYPES[j] for j in np.argmax(share, axis=1)]
+        wl, _ = classify_whirl(model, x)
+        k = q_i.shape[1]
+        types[i, :k] = ty
+        whirl[i, :k] = [w if t == "lateral" else "-" for w, t in zip(wl, ty)]
+        if i in (0, len(lines_q) - 1):
+            max_res = max(max_res, float(_residuals(model, speeds[i] * RPM, lams[i], x).max()))
+    crit = _critical_speeds(red, speeds, freqs, lines_q, whirl, types, orders)
+    timings = {"reduce_s": t_red, "sweep_s": t_sweep,
+               "total_s": time.perf_counter() - t0}
+    status, msg = "ok", ""
+    if max_res > RESIDUAL_LIMIT:
+        status, msg = "inaccurate", (f"largest modal residual {max_res:.2e} > {RESIDUAL_LIMIT:g}:"
+                                     " increase n_basis")
+    return CampbellResult(speeds, freqs, zetas, whirl, types, tuple(orders), tuple(crit), max_res,
+                          red.basis.shape[1], status, msg, timings)
+
+
+def _critical_speeds(red, speeds, freqs, lines_q, whirl, types, orders):
+    out = []
+    for order in orders:
+        for line in range(freqs.shape[1]):
+            g = freqs[:, line] - order * speeds / 60.0
+            for i in np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) < 0)[0]:
+                rpm = _refine(red, speeds[i], speeds[i + 1], g[i], g[i + 1], lines_q[i][:, line],
+                              order)
+                j = i if abs(rpm - speeds[i]) <= abs(rpm - speeds[i + 1]) else i + 1
+                out.append(CriticalSpeed(float(order), line, float(rpm), float(order * rpm / 60.0),
+                                         str(whirl[j, line]), str(types[j, line])))
+    out.sort(key=lambda c: c.speed_rpm)
+    return out
+
+
+def _line_freq(red, rpm, ref):
+    lam, q, _ = _solve_reduced(red, rpm * RPM)
+    j = int(np.argmax(_mac(ref[:, None], q)[0]))
+    return lam[j].imag / (2 * np.pi)
+
+
+def _refine(red, s0, s1, g0, g1, ref, order, iters=6):
+    """Secant/regula-falsi on g(rpm) = f_line(rpm) - order rpm / 60 within [s0, s1]."""
+    a, b, ga, gb = s0, s1, g0, g1
+    x = a - ga * (b - a) / (gb - ga)
+    for _ in range(iters):
+        gx = _line_freq(red, x, ref) - order * x / 60.0
+        if abs(gx) < 1e-9 * max(1.0, order * x / 60.0):
+            break
+        if np.sign(gx) == np.sign(ga):
+            a, ga = x, gx
+        else:
+            b, gb = x, gx
+        x = a - ga * (b - a) / (gb - ga)
+    return x
