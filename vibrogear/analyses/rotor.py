@@ -67,7 +67,8 @@ def run_modes(scene, ctx) -> dict:
         "n_rigid_supported": res.n_rigid, "method": res.method, "n_basis": res.n_basis,
         "master_modes": {"count": int(master.frequencies_hz.size), "n_rigid": master.n_rigid,
                          "max_frequency_hz": float(master.frequencies_hz.max())},
-        "error_estimates": {"max_modal_residual": float(res.residuals.max(initial=0.0))},
+        "error_estimates": {"max_modal_residual": float(res.residuals.max(initial=0.0)),
+                            "reduction_relative_eigenvalue_error": res.error_estimate},
         "timings_s": {"build": t_build, **res.timings, "master_modes": t_master},
         "files": ["modes.csv", "master_modes.csv", "master_modes.npz",
                   *(p.name for p in plots)],
@@ -112,7 +113,8 @@ def run_campbell(scene, ctx) -> dict:
         "critical_speeds": [{"order": c.order, "speed_rpm": c.speed_rpm, "frequency_hz":
                              c.frequency_hz, "whirl": c.whirl, "mode_type": c.mode_type}
                             for c in res.critical_speeds],
-        "error_estimates": {"max_modal_residual": res.max_residual},
+        "error_estimates": {"max_modal_residual": res.max_residual,
+                            "reduction_relative_eigenvalue_error": res.error_estimate},
         "timings_s": {"build": t_build, **res.timings},
         "files": ["campbell.csv", "critical_speeds.csv", *(p.name for p in plots)],
     }
