@@ -7,7 +7,7 @@ OUT    ?= out
 export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
-.PHONY: setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean
+.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean
 
 setup: $(STAMP)
 
@@ -37,6 +37,11 @@ fig5: $(STAMP)
 
 fig7: $(STAMP)
 	$(VG) run configs/impact_pair.toml --set impact_pair.zeta=0.05 --out $(OUT)/fig7_zeta0.05
+
+## rotor scenes: Friswell Example 5.9.1 and a stepped hollow shaft with a free gear
+rotor: $(STAMP)
+	$(VG) run configs/rotor_friswell_5_9_1.toml --out $(OUT)/rotor_friswell_5_9_1
+	$(VG) run configs/rotor_stepped_free_gear.toml --out $(OUT)/rotor_stepped_free_gear
 
 clean:
 	rm -rf $(OUT)
