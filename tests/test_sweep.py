@@ -1,0 +1,230 @@
+"""Sequential continuation (sweep): classification, linear limit, period 2 against scipy,
+hysteresis, failed points, resume, files and plots."""
+from __future__ import annotations
+
+import csv
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from vibrogear.models.impact_pair import impact_pair_model
+from vibrogear.report.sweep_io import (PartialWriter, read_partial, read_sweep_npz,
+                                       sweep_signature, write_sweep)
+from vibrogear.solvers.integrate import IntegrationOptions
+from vibrogear.solvers.sweep import classify_period, count_clusters, sweep
+
+# impact pair with a stiff outer spring (hardening): a resonance that bends to the
+# right, coexisting large / small responses for Omega ~ 0.7-0.9, period 2 near 0.45-0.5
+HYST = dict(zeta=0.015, kappa=0.2, f_m=0.1, f_p=0.2, b_r=1.0)
+HYST_GRID = np.round(np.arange(0.65, 0.951, 0.05), 10)
+OPTS = IntegrationOptions(rtol=1e-9, atol=1e-11)
+SWEEP_KW = dict(transient_periods=120, record_periods=12, max_period=4, period_tol=1e-5)
+
+
+def _eq(a, b) -> bool:
+    a, b = np.asarray(a), np.asarray(b)
+    return np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+
+
+@pytest.fixture(scope="module")
+def hyst_result():
+    return sweep(impact_pair_model(**HYST), HYST_GRID, options=OPTS, **SWEEP_KW)
+
+
+# ---------------------------------------------------------------- classifier (synthetic)
+
+def test_classify_synthetic_periods():
+    rng = np.random.default_rng(1)
+    cycle = rng.normal(size=(3, 4))
+    for n in (1, 2, 3):
+        samples = np.tile(cycle[:n], (12 // n + 1, 1))[:12]
+        samples = samples + 1e-9 * rng.normal(size=samples.shape)
+        got, defect = classify_period(samples, 8, 1e-6, split=2)
+        assert got == n and defect < 1e-6
+        assert count_clusters(samples, 1e-3, split=2) == n
+    # quasi-periodic: rotation by an irrational angle never repeats
+    k = np.arange(40)
+    qp = np.column_stack([np.cos(2 * np.pi * k * (np.sqrt(5) - 1) / 2),
+                          np.sin(2 * np.pi * k * (np.sqrt(5) - 1) / 2)])
+    assert classify_period(qp, 8, 1e-5)[0] == 0
+    assert count_clusters(qp, 1e-3) > 20
+    # a slowly decaying transient must not pass as period 3 by aliasing
+    decaying = 1.0 + 3e-5 * np.cos(2.1 * k[:12]) * 0.97 ** k[:12]
+    assert classify_period(decaying, 8, 1e-5)[0] == 0
+    n_nan, d_nan = classify_period(np.full((5, 2), np.nan), 4, 1e-5)
+    assert n_nan == 0 and math.isnan(d_nan)
+
+
+# ---------------------------------------------------------------- linear limit
+
+def test_linear_limit_matches_frf():
+    zeta, kappa, f_p = 0.05, 0.5, 0.2
+    model = impact_pair_model(zeta, kappa, 0.0, f_p, 1e6)
+    W = np.array([0.4, 0.7, 0.9])
+    r = sweep(model, W, directions=("up",), transient_periods=100, record_periods=6,
+              max_period=3, period_tol=1e-6, options=OPTS)
+    amp = f_p / np.sqrt((kappa - W ** 2) ** 2 + (2 * zeta * W) ** 2)
+    np.testing.assert_allclose(r.qmax - r.qmin, 2 * amp, rtol=1e-6)
+    np.testing.assert_allclose(r.qmax, amp, rtol=1e-6)
+    assert np.all(r.period_n == 1) and np.all(r.impacts == 0) and np.all(r.clusters == 1)
+    assert r.status_code == 0 and np.all(r.defect < 1e-6)
+    assert r.error_estimate["rtol"] == OPTS.rtol
+
+
+# ---------------------------------------------------------------- period 2 vs scipy
+
+def _scipy_impact_flow(u, t0, t1, W, zeta, kappa, f_m, f_p, b_r):
+    """Piecewise-linear impact pair with DOP853 (tight tolerances), restarted at every
+    switch located by a terminal event: independent of vibrogear."""
+    def region(q):
+        return 1 if q > b_r else (-1 if q < -b_r else 0)
+
+    t, u, reg = t0, np.array(u, float), region(u[0])
+    for _ in range(100_000):
+        def rhs(tt, y, reg=reg):
+            g = (1 - kappa) * (y[0] - reg * b_r) if reg else 0.0
+            return [y[1], f_m + f_p * np.cos(W * tt) - 2 * zeta * y[1] - kappa * y[0] - g]
+        events = []
+        for side in (1, -1):
+            if reg in (0, side):
+                ev = (lambda tt, y, s=side: y[0] - s * b_r)
+                ev.terminal = True
+                ev.direction = -side if reg == side else side
+                events.append(ev)
+        s = solve_ivp(rhs, (t, t1), u, method="DOP853", rtol=1e-11, atol=1e-12,
+                      events=events)
+        t, u = s.t[-1], s.y[:, -1]
+        if s.status != 1:
+            return u
+        reg = (1 if u[1] > 0 else -1) if reg == 0 else 0
+    raise RuntimeError("too many switches")
+
+
+def test_period_two_confirmed_by_scipy():
+    W, n_tr, R = 0.5, 100, 8
+    model = impact_pair_model(**HYST)
+    r = sweep(model, [W], directions=("up",), transient_periods=n_tr, record_periods=R,
+              max_period=4, period_tol=1e-6, options=IntegrationOptions(rtol=1e-10,
+                                                                         atol=1e-12))
+    assert r.period_n[0] == 2 and r.clusters[0] == 2 and r.impacts[0] > 0
+    T = 2 * np.pi / W
+    u = _scipy_impact_flow(np.zeros(2), 0.0, n_tr * T, W, **HYST)
+    P = []
+    for k in range(R):
+        u = _scipy_impact_flow(u, (n_tr + k) * T, (n_tr + k + 1) * T, W, **HYST)
+        P.append(u.copy())
+    P = np.array(P)
+    assert np.max(np.abs(P[2:] - P[:-2])) < 1e-7          # period 2 ...
+    assert np.max(np.abs(P[1:] - P[:-1])) > 0.1           # ... and not period 1
+    np.testing.assert_allclose(r.poincare[0], P[:, 0], atol=1e-6)
+    assert r.qmin[0] <= P[:, 0].min() and r.qmax[0] >= P[:, 0].max()
+
+
+# ---------------------------------------------------------------- hysteresis
+
+def test_up_and_down_jump_at_different_parameters(hyst_result):
+    r = hyst_result
+    up = r.direction == "up"
+    dn = r.direction == "down"
+    a_up = dict(zip(r.param[up], (r.qmax - r.qmin)[up]))
+    a_dn = dict(zip(r.param[dn], (r.qmax - r.qmin)[dn]))
+    grid = sorted(a_up)
+    jumps_up = [grid[i + 1] for i in range(len(grid) - 1)
+                if a_up[grid[i + 1]] < 0.5 * a_up[grid[i]]]
+    jumps_dn = [grid[i] for i in range(len(grid) - 1)
+                if a_dn[grid[i]] > 2.0 * a_dn[grid[i + 1]]]
+    assert len(jumps_up) == 1 and len(jumps_dn) == 1
+    assert jumps_up[0] > jumps_dn[0] + 0.1             # up jumps down later than down jumps up
+    coexist = [w for w in grid if a_up[w] > 2.0 * a_dn[w]]
+    assert len(coexist) >= 2                            # two stable responses there
+    assert r.status_code == 0 and r.steps > 0 and r.rhs_calls > r.steps
+
+
+# ---------------------------------------------------------------- failures
+
+def test_failed_point_reported_and_sweep_goes_on(tmp_path, hyst_result):
+    steps = np.array([rec.steps for rec in hyst_result.records])
+    limit = int(0.5 * (steps.min() + steps.max()))
+    assert steps.min() < limit < steps.max()
+    opts = IntegrationOptions(rtol=OPTS.rtol, atol=OPTS.atol, max_steps=limit)
+    r = sweep(impact_pair_model(**HYST), HYST_GRID, options=opts, **SWEEP_KW)
+    bad = r.status != 0
+    assert np.any(bad) and np.any(~bad) and r.status_code == 1
+    assert np.all(r.status[bad] == -1)
+    assert all("maximum number of steps" in r.message[i] for i in np.flatnonzero(bad))
+    assert np.all(np.isnan(r.qmin[bad])) and np.all(r.period_n[bad] == 0)
+    assert np.all(np.isfinite(r.qmin[~bad]))
+    first_bad = int(np.flatnonzero(bad)[0])
+    assert np.any(~bad[first_bad + 1:])                 # the sweep went on
+    paths = write_sweep(r, tmp_path)
+    z = read_sweep_npz(paths["npz"])
+    for k, v in z.items():
+        if v.dtype.kind == "f":
+            assert np.all(np.isfinite(v)), k
+    assert not np.any(z["ok"][bad]) and np.all(z["status"] == r.status)
+    text = paths["csv"].read_text()
+    assert "nan" not in text.lower() and "inf" not in text.lower()
+    rows = list(csv.DictReader(paths["csv"].open()))
+    assert len(rows) == r.param.size
+    assert all(rows[i]["qmin"] == "" for i in np.flatnonzero(bad))
+
+
+def test_bad_parameter_is_a_failed_point_not_an_exception():
+    r = sweep(impact_pair_model(**HYST), [0.0, 0.9], directions=("up",),
+              transient_periods=5, record_periods=2, max_period=1, options=OPTS)
+    assert r.status[0] < 0 and r.status[1] == 0 and r.status_code == 1
+
+
+# ---------------------------------------------------------------- resume
+
+def test_resume_gives_identical_results(tmp_path, hyst_result):
+    model = impact_pair_model(**HYST)
+    sig = sweep_signature(model, HYST_GRID, **SWEEP_KW, rtol=OPTS.rtol)
+    part = tmp_path / "sweep.partial.jsonl"
+    writer = PartialWriter(part, sig)
+    half = HYST_GRID.size + 2                           # into the down sweep
+
+    def killed_after_half(rec, seen=[]):
+        writer(rec)
+        seen.append(rec)
+        return len(seen) < half                         # False: stop ("kill")
+
+    first = sweep(model, HYST_GRID, options=OPTS, callback=killed_after_half, **SWEEP_KW)
+    assert first.status_code == 2 and first.param.size == half
+    with part.open("a") as fh:                          # a torn line from the kill
+        fh.write('{"kind":"point","direction":"do')
+    done = read_partial(part, sig)
+    assert len(done) == half
+    with pytest.raises(ValueError):
+        read_partial(part, {**sig, "model": "other"})
+    new = []
+    writer2 = PartialWriter(part, sig)
+    resumed = sweep(model, HYST_GRID, options=OPTS, done=done,
+                    callback=lambda rec: (writer2(rec), new.append(rec)), **SWEEP_KW)
+    assert len(new) == 2 * HYST_GRID.size - half
+    ref = hyst_result
+    for name in ("param", "direction", "index", "qmin", "qmax", "poincare", "period_n",
+                 "impacts", "defect", "clusters", "status", "u_end"):
+        assert _eq(getattr(resumed, name), getattr(ref, name)), name
+    assert len(read_partial(part, sig)) == 2 * HYST_GRID.size
+
+
+# ---------------------------------------------------------------- files and plot
+
+def test_files_and_plot(tmp_path, hyst_result):
+    from vibrogear.report.sweep_plots import plot_bifurcation
+
+    paths = write_sweep(hyst_result, tmp_path)
+    z = read_sweep_npz(paths["npz"])
+    for key in ("param", "direction", "qmin", "qmax", "poincare", "period_n", "impacts"):
+        assert key in z
+    assert z["poincare"].shape == (2 * HYST_GRID.size, SWEEP_KW["record_periods"])
+    assert set(z["direction"].tolist()) == {"up", "down"}
+    assert np.array_equal(z["period_n"], hyst_result.period_n)
+    assert not list(tmp_path.glob(".*.tmp"))            # atomic writes leave no temp files
+    out = plot_bifurcation(z, tmp_path / "bifurcation", bounds=(-1.0, 1.0))
+    assert [p.suffix for p in out] == [".png", ".svg"]
+    assert all(p.stat().st_size > 1000 for p in out)
+    assert math.isfinite(float(hyst_result.wall_time))
