@@ -165,8 +165,8 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
         gmsh.model.addPhysicalGroup(3, [vols[0][1]], VOLUME_TAG)
         gmsh.model.setPhysicalName(3, VOLUME_TAG, "housing")
         zb = -cfg.base_thickness if cfg.base != "none" else 0.0
-        lo_x = -cfg.base_overhang if cfg.base == "plate" else 0.0
-        base = [s for s in _surfaces_in_box(gmsh, (lo_x, lo_x, zb), (L - lo_x, W - lo_x, zb))]
+        pad = max([cfg.base_overhang] + [b.boss_length for b in cfg.bores])
+        base = _surfaces_in_box(gmsh, (-pad, -pad, zb), (L + pad, W + pad, zb))
         if not base:
             raise MeshingError("could not find the base surface")
         gmsh.model.addPhysicalGroup(2, base, BASE_TAG)
@@ -185,6 +185,9 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
             bore_surfs += surfs
         _size_field(gmsh, cfg, bore_surfs)
         gmsh.model.mesh.generate(3)
+        gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # split at straight midpoints: nested
+        for _ in range(cfg.mesh.refine):
+            gmsh.model.mesh.refine()
         n_nodes = len(gmsh.model.mesh.getNodes()[0])
         types, tags, _ = gmsh.model.mesh.getElements(3)
         n_tets = sum(len(x) for x in tags)

@@ -63,7 +63,7 @@ def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
     geo = dataclasses.asdict(cfg)
     for k in ("material", "modes", "support", "foundation_stiffness"):
         geo.pop(k)
-    geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size}
+    geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
     return cache_key("housing-mesh", geo), cache_key("housing-modes", dataclasses.asdict(cfg))
 
 
