@@ -110,6 +110,8 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     else:
         msg = None
     hm = _bcast(comm, msg)
+    if comm is not None and os.environ.get("VIBROGEAR_HOUSING_FAIL_RANK") == str(comm.rank):
+        raise RuntimeError("injected failure (VIBROGEAR_HOUSING_FAIL_RANK, for the MPI abort test)")
     m = cfg.modes
     res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bore_layout(cfg),
                            count=m.count, cutoff_hz=m.cutoff_hz, max_count=m.max_count, tol=m.tol,

@@ -1,0 +1,108 @@
+"""Housing geometry sweep (``housing_sweep``): first N frequencies against one parameter.
+
+Points run in parallel worker processes (spawned, OPENBLAS_NUM_THREADS=1), each through the
+housing cache.  Every finished point is appended to ``housing_sweep_points.jsonl`` at once, so
+a killed sweep resumes where it stopped; ``housing_sweep.csv`` and ``housing_sweep.png`` are
+written at the end.
+"""
+from __future__ import annotations
+
+import concurrent.futures as cf
+import csv
+import dataclasses
+import json
+import multiprocessing as mp
+import os
+import time
+
+import numpy as np
+
+from ..runner import NumericalFailure
+from .housing import is_root
+
+__all__ = ["run_sweep", "sweep_point"]
+
+POINTS_FILE = "housing_sweep_points.jsonl"
+
+
+def sweep_point(housing: dict, n_freqs: int) -> dict:
+    """Worker: one sweep point from a plain housing dict (picklable)."""
+    from ..config.base import build
+    from ..config.housing import HousingConfig
+    from ..geometry.housing import MeshingError
+    from ..models.housing import HousingSolveError, housing_modes
+
+    cfg = build(HousingConfig, housing, "housing")
+    t0 = time.perf_counter()
+    try:
+        res = housing_modes(cfg, cache=True)
+    except (MeshingError, HousingSolveError) as exc:
+        return {"status": "failed", "message": str(exc)}
+    return {"status": "ok", "freqs_hz": [float(f) for f in res.freqs_hz[:n_freqs]], "n_dofs": res.n_dofs,
+            "cached": res.cached, "seconds": time.perf_counter() - t0}
+
+
+def _done(path) -> dict[float, dict]:
+    out = {}
+    if path.is_file():
+        for line in path.read_text().splitlines():
+            try:
+                row = json.loads(line)
+                out[float(row["value"])] = row
+            except (ValueError, KeyError):
+                continue  # a line cut by a kill: recompute that point
+    return out
+
+
+def run_sweep(scene, ctx) -> dict:
+    from ..config.housing import _strip_none
+
+    opts = scene.housing_sweep
+    cfgs = opts.housing_points(scene.housing, "housing_sweep")
+    values = opts.points()
+    if not is_root():
+        raise NumericalFailure("housing_sweep runs its points in worker processes: start it without mpirun")
+    ctx.out.mkdir(parents=True, exist_ok=True)
+    pfile = ctx.out / POINTS_FILE
+    done = _done(pfile)
+    todo = [(v, c) for v, c in zip(values, cfgs) if float(v) not in done]
+    n = opts.n_freqs
+    t0 = time.perf_counter()
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+    failures = []
+    with ctx.progress(len(todo), "housing sweep") as bar, pfile.open("a") as fh:
+        with cf.ProcessPoolExecutor(max_workers=min(opts.processes, max(len(todo), 1)),
+                                    mp_context=mp.get_context("spawn")) as pool:
+            futs = {}
+            for v, c in todo:
+                d = _strip_none(dataclasses.asdict(c))
+                d["modes"] = {**d["modes"], "count": max(n, c.modes.count)}
+                futs[pool.submit(sweep_point, d, n)] = v
+            for fut in cf.as_completed(futs):
+                v = futs[fut]
+                row = {"value": float(v), **fut.result()}
+                if row["status"] != "ok":
+                    failures.append(row)
+                    continue
+                fh.write(json.dumps(row) + "\n")
+                fh.flush()
+                done[float(v)] = row
+                bar.update(1, f"{opts.parameter}={v:g}")
+    rows = [done[float(v)] for v in values if float(v) in done]
+    freqs = np.full((len(rows), n), np.nan)
+    for i, r in enumerate(rows):
+        freqs[i, :len(r["freqs_hz"])] = r["freqs_hz"][:n]
+    with (ctx.out / "housing_sweep.csv").open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow([opts.parameter, "n_dofs"] + [f"f{j + 1}_hz" for j in range(n)])
+        for r, fr in zip(rows, freqs):
+            w.writerow([f"{r['value']:.6g}", r["n_dofs"]] + [f"{x:.6g}" for x in fr])
+    from ..report.housing_plots import plot_sweep
+    plot_sweep(opts.parameter, [r["value"] for r in rows], freqs, ctx.out / "housing_sweep.png")
+    if failures:
+        raise NumericalFailure(f"housing_sweep: {len(failures)} point(s) failed, first: "
+                               f"{opts.parameter}={failures[0]['value']:g}: {failures[0]['message']}")
+    return {"status": "ok", "parameter": opts.parameter, "values": [r["value"] for r in rows],
+            "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
+            "points_computed": len(todo), "points_resumed": len(values) - len(todo),
+            "seconds": time.perf_counter() - t0}
