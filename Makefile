@@ -7,7 +7,7 @@ OUT    ?= out
 export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
-.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean
+.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
 
@@ -42,6 +42,22 @@ fig7: $(STAMP)
 rotor: $(STAMP)
 	$(VG) run configs/rotor_friswell_5_9_1.toml --out $(OUT)/rotor_friswell_5_9_1
 	$(VG) run configs/rotor_stepped_free_gear.toml --out $(OUT)/rotor_stepped_free_gear
+
+## housing master modes + bore coupling values (docs/housing.md)
+housing: $(STAMP)
+	$(VG) run configs/housing.toml --out $(OUT)/housing
+
+## first frequencies against the wall thickness, points in parallel processes (resumable)
+housing-sweep: $(STAMP)
+	$(VG) run configs/housing_sweep.toml --out $(OUT)/housing_sweep
+
+## frequency error vs DOF vs wall time, P1 and P2 (heavy: tens of minutes)
+housing-convergence: $(STAMP)
+	$(VG) run configs/housing_convergence.toml --out $(OUT)/housing_convergence
+
+## 100 modes of a >= 150k-DOF P2 housing, serial and mpirun -n 2; cached rerun
+housing-bench: $(STAMP)
+	$(PY) benchmarks/bench_housing.py
 
 clean:
 	rm -rf $(OUT)

@@ -1,0 +1,38 @@
+"""Geometry sweep through the CLI: table + plot, parallel points, resume after a kill, and
+plate-bending physics (a thicker wall raises the first frequency: f ~ t / a^2)."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+VG = Path(sys.executable).parent / "vibrogear"
+
+
+def test_wall_thickness_sweep_resumes(tmp_path):
+    out = tmp_path / "sweep"
+    out.mkdir()
+    # a point "finished before the kill": must be kept, not recomputed; plus a torn last line
+    (out / "housing_sweep_points.jsonl").write_text(
+        json.dumps({"value": 0.015, "status": "ok", "freqs_hz": [1.0, 2.0, 3.0], "n_dofs": 7}) + "\n{\"val")
+    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
+    args = [str(VG), "run", str(ROOT / "configs" / "housing_sweep.toml"), "--out", str(out), "--quiet",
+            "--set", "housing.mesh.size=0.03", "--set", "housing_sweep.values=[0.015, 0.018, 0.022]",
+            "--set", "housing_sweep.n_freqs=3"]
+    r = subprocess.run(args, env=env, cwd=ROOT, capture_output=True, text=True, timeout=400)
+    assert r.returncode == 0, r.stderr[-3000:]
+    summ = json.loads((out / "summary.json").read_text())["results"]["housing_sweep"]
+    assert summ["points_resumed"] == 1 and summ["points_computed"] == 2
+    with (out / "housing_sweep.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert [float(r["housing.wall_thickness"]) for r in rows] == [0.015, 0.018, 0.022]
+    assert float(rows[0]["f1_hz"]) == 1.0                       # the resumed row, untouched
+    f1 = [float(r["f1_hz"]) for r in rows[1:]]
+    assert f1[1] > f1[0] > 100.0
+    assert (out / "housing_sweep.png").stat().st_size > 1000
