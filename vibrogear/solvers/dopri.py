@@ -47,7 +47,7 @@ _P = np.array([
 N_SAMPLES = 4  # dense-output samples per step for switch and extremum detection
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _bw(theta, b):
     """Dense-output weights b_i(theta) (sum_i b_i K_i h gives y(theta) - y0)."""
     t1 = theta
@@ -58,7 +58,7 @@ def _bw(theta, b):
         b[i] = _P[i, 0] * t1 + _P[i, 1] * t2 + _P[i, 2] * t3 + _P[i, 3] * t4
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _proj(theta, h, p0, pk, b):
     """Dense value of a projection: p0 + h sum_i b_i(theta) pk[i]."""
     _bw(theta, b)
@@ -68,14 +68,14 @@ def _proj(theta, h, p0, pk, b):
     return p0 + h * s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _delta(A, j, t, Om, cx, cs, sn):
     harmonics(t, Om, cs, sn)
     e, ed = error_and_rate(A, j, Om, cs, sn)
     return cx - e
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _violation(A, j, md, delta):
     """Largest violation of the current mode's region (> 0: the contact left it)."""
     if md > 0:

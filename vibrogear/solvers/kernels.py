@@ -38,7 +38,7 @@ def model_arrays(model, param: float) -> tuple:
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def harmonics(t, Om, cs, sn):
     """cs[h] = cos((h+1) Om t), sn[h] = sin((h+1) Om t)."""
     for h in range(cs.shape[0]):
@@ -47,7 +47,7 @@ def harmonics(t, Om, cs, sn):
         sn[h] = np.sin(a)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def error_and_rate(A, j, Om, cs, sn):
     """Kinematic error e_j(t) and its rate e_j'(t) from precomputed harmonics."""
     e = 0.0

@@ -1,0 +1,49 @@
+"""Floquet multipliers and the bifurcation test functions of periodic orbits.
+
+Test functions are evaluated through signs and distances rather than raw products,
+so they neither overflow nor underflow for hundreds of multipliers:
+
+- LP (fold): the parameter component of the branch tangent.
+- PD (period doubling): sign(det(M + I)) = prod over real mu of sign(mu + 1),
+  magnitude min |mu + 1|.
+- NS (Neimark-Sacker): sign of prod_{i<j}(mu_i mu_j - 1) (the bialternate product),
+  magnitude min over complex pairs of ||mu| - 1|; valid only with a complex pair.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["floquet_multipliers", "test_functions", "stability"]
+
+_IMAG_TOL = 1e-9
+
+
+def floquet_multipliers(monodromy: np.ndarray) -> np.ndarray:
+    return np.linalg.eigvals(monodromy)
+
+
+def stability(multipliers: np.ndarray, margin: float = 0.0) -> bool:
+    """Stable when every multiplier lies inside the unit circle (by ``margin``)."""
+    return bool(np.all(np.abs(multipliers) < 1.0 - margin))
+
+
+def test_functions(monodromy: np.ndarray, tangent: np.ndarray) -> dict:
+    mu = floquet_multipliers(monodromy)
+    scale = max(1.0, float(np.max(np.abs(mu))))
+    is_real = np.abs(mu.imag) <= _IMAG_TOL * scale
+    real = mu.real[is_real]
+    pairs = mu[(~is_real) & (mu.imag > 0)]
+    pd_sign = float(np.prod(np.sign(real + 1.0))) if real.size else 1.0
+    pd_mag = float(np.min(np.abs(real + 1.0))) if real.size else 1.0
+    ns_sign = float(np.prod(np.sign(np.abs(pairs) ** 2 - 1.0))) if pairs.size else 1.0
+    if real.size > 1:
+        prod = np.outer(real, real)[np.triu_indices(real.size, 1)] - 1.0
+        ns_sign *= float(np.prod(np.sign(prod)))
+    ns_mag = float(np.min(np.abs(np.abs(pairs) - 1.0))) if pairs.size else 1.0
+    return {
+        "LP": float(tangent[-1]),
+        "PD": pd_sign * max(pd_mag, 1e-300),
+        "NS": ns_sign * max(ns_mag, 1e-300),
+        "NS_valid": bool(pairs.size) and ns_mag < 0.05,
+        "multipliers": mu,
+    }

@@ -1,0 +1,129 @@
+"""Shooting for periodic orbits of a harmonically forced ReducedModel.
+
+The orbit of period T = n 2 pi / W (period-n) starting at t = 0 (phase cos(W t) = 1)
+solves G(u0) = u(T; u0) - u0 = 0.  The monodromy d u(T)/d u0 comes from the
+variational equations integrated with the orbit (saltation at switches), so Newton
+uses the exact Jacobian of the discretised flow; its eigenvalues are the Floquet
+multipliers.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..models.reduced import ReducedModel
+from .integrate import IntegrationOptions, Trajectory, integrate
+
+__all__ = ["PeriodicFlow", "periodic_flow", "ShootingResult", "shoot", "residual_norm"]
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicFlow:
+    """G = u(T) - u0 and its derivatives with respect to u0 and the parameter."""
+    G: np.ndarray
+    dG_du0: np.ndarray       # monodromy - I
+    dG_dparam: np.ndarray    # includes the change of the period T with the parameter
+    monodromy: np.ndarray
+    trajectory: Trajectory
+    period: float
+
+    @property
+    def ok(self) -> bool:
+        return self.trajectory.ok
+
+
+def residual_norm(G: np.ndarray, u0: np.ndarray) -> float:
+    """Periodicity residual, relative to the size of the orbit's state."""
+    return float(np.linalg.norm(G) / (1.0 + np.linalg.norm(u0)))
+
+
+def periodic_flow(model: ReducedModel, param: float, u0, *, n_periods: int = 1,
+                  options: IntegrationOptions = IntegrationOptions()) -> PeriodicFlow:
+    u0 = np.asarray(u0, dtype=float)
+    T = n_periods * model.excitation_period(param)
+    tr = integrate(model, param, u0, 0.0, T, options=options, variational=True)
+    n = u0.size
+    dT_dp = -T / param if param != 0 else 0.0
+    if model.omega_per_param == 0.0:
+        dT_dp = 0.0
+    dG_dp = tr.dparam + tr.f_end * dT_dp
+    return PeriodicFlow(G=tr.u_end - u0, dG_du0=tr.monodromy - np.eye(n), dG_dparam=dG_dp,
+                        monodromy=tr.monodromy, trajectory=tr, period=T)
+
+
+@dataclass(frozen=True, eq=False)
+class ShootingResult:
+    u0: np.ndarray
+    converged: bool
+    residual: float
+    iterations: int
+    floquet: np.ndarray          # complex Floquet multipliers
+    monodromy: np.ndarray
+    period: float
+    n_periods: int
+    status: int                  # 0 converged, 1 not converged, < 0 integrator failure
+    message: str
+    wall_time: float
+    monitor_min: float
+    monitor_max: float
+    impacts: int                 # contact losses of the monitored contact per orbit
+    rhs_calls: int
+
+    @property
+    def stable(self) -> bool:
+        return bool(np.all(np.abs(self.floquet) < 1.0))
+
+
+def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
+          options: IntegrationOptions = IntegrationOptions(), tol: float = 1e-10,
+          max_iter: int = 25) -> ShootingResult:
+    """Newton on u(T; u0) - u0 with backtracking; bounded iterations."""
+    wall = time.perf_counter()
+    u = np.array(u0_guess, dtype=float)
+    n = u.size
+    calls = 0
+    flow = periodic_flow(model, param, u, n_periods=n_periods, options=options)
+    calls += flow.trajectory.rhs_calls
+    it = 0
+    status, message = 1, "maximum Newton iterations reached"
+    res = residual_norm(flow.G, u) if flow.ok else np.inf
+    while True:
+        if not flow.ok:
+            status, message = flow.trajectory.status, flow.trajectory.message
+            break
+        if res < tol:
+            status, message = 0, "converged"
+            break
+        if it >= max_iter:
+            break
+        it += 1
+        try:
+            du = np.linalg.solve(flow.dG_du0, -flow.G)
+        except np.linalg.LinAlgError:
+            status, message = 1, "singular shooting Jacobian (monodromy has a multiplier 1)"
+            break
+        lam = 1.0
+        accepted = False
+        for _ in range(8):
+            trial = u + lam * du
+            f2 = periodic_flow(model, param, trial, n_periods=n_periods, options=options)
+            calls += f2.trajectory.rhs_calls
+            r2 = residual_norm(f2.G, trial) if f2.ok else np.inf
+            if r2 < res or r2 < tol:
+                u, flow, res, accepted = trial, f2, r2, True
+                break
+            lam *= 0.5
+        if not accepted:
+            status, message = 1, "Newton line search failed"
+            break
+    tr = flow.trajectory
+    floq = np.linalg.eigvals(flow.monodromy) if flow.ok else np.full(n, np.nan + 0j)
+    return ShootingResult(
+        u0=u, converged=status == 0, residual=res, iterations=it, floquet=floq,
+        monodromy=flow.monodromy, period=flow.period, n_periods=n_periods, status=status,
+        message=message, wall_time=time.perf_counter() - wall,
+        monitor_min=tr.monitor_min, monitor_max=tr.monitor_max, impacts=tr.monitor_losses,
+        rhs_calls=calls,
+    )
