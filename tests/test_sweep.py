@@ -10,6 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from vibrogear.models.impact_pair import impact_pair_model
+from vibrogear.models.reduced import ContactSet, ReducedModel
 from vibrogear.report.sweep_io import (PartialWriter, read_partial, read_sweep_npz,
                                        sweep_signature, write_sweep)
 from vibrogear.solvers.integrate import IntegrationOptions
@@ -71,6 +72,19 @@ def test_linear_limit_matches_frf():
     assert np.all(r.period_n == 1) and np.all(r.impacts == 0) and np.all(r.clusters == 1)
     assert r.status_code == 0 and np.all(r.defect < 1e-6)
     assert r.error_estimate["rtol"] == OPTS.rtol
+
+
+def test_model_without_contacts_uses_the_samples():
+    zeta, kappa, f_p, W = 0.05, 0.5, 0.2, 0.6
+    base = impact_pair_model(zeta, kappa, 0.0, f_p, 1.0)
+    model = ReducedModel(base.omega2, base.damping, base.coupling, base.forcing,
+                         ContactSet.empty(1, 1))
+    r = sweep(model, [W], directions=("up",), transient_periods=100, record_periods=4,
+              max_period=2, options=OPTS)
+    X = f_p / (kappa - W ** 2 + 2j * zeta * W)           # q = Re(X exp(i W t))
+    assert r.status_code == 0 and r.period_n[0] == 1 and r.impacts[0] == 0
+    np.testing.assert_allclose(r.poincare[0], X.real, rtol=1e-6)
+    assert X.real * (1 - 1e-6) <= r.qmax[0] <= abs(X) * (1 + 1e-6)
 
 
 # ---------------------------------------------------------------- period 2 vs scipy

@@ -212,8 +212,10 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
     if tr.status < 0:
         return _failed(direction, index, param, R, tr.status, tr.message, u_seed, tr, wall)
     states = tr.u
+    has_monitor = model.contacts.count > 0   # else the extrema come from the samples only
     ok = (np.all(np.isfinite(states)) and np.all(np.isfinite(tr.u_end))
-          and math.isfinite(tr.monitor_min) and math.isfinite(tr.monitor_max))
+          and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                   and math.isfinite(tr.monitor_max))))
     if not ok:
         return _failed(direction, index, param, R, -2,
                        "non-finite state or monitor values", u_seed, tr, wall)
@@ -221,8 +223,8 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
     m = model.n_modes
     n, defect = classify_period(states, max_period, period_tol, split=m)
     clusters = count_clusters(states, cluster_tol, split=m)
-    qmin = min(tr.monitor_min, float(delta.min()))
-    qmax = max(tr.monitor_max, float(delta.max()))
+    qmin = min(tr.monitor_min, float(delta.min())) if has_monitor else float(delta.min())
+    qmax = max(tr.monitor_max, float(delta.max())) if has_monitor else float(delta.max())
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
                        tr.monitor_losses / R, defect, clusters, 0, "ok", tr.u_end.copy(),
                        steps=tr.steps, rejected=tr.rejected, rhs_calls=tr.rhs_calls,
