@@ -1,0 +1,67 @@
+"""Write continuation branches as ``branch.npz`` / ``branch.csv`` (DESIGN.md)."""
+from __future__ import annotations
+
+import csv
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .sweep_io import atomic_write_bytes
+
+__all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
+
+CSV_COLUMNS = ("branch", "n_periods", "param", "period", "stable", "label", "qmin", "qmax",
+               "impacts", "max_abs_multiplier", "residual")
+
+
+def branch_arrays(branches, omega_per_param: float) -> dict:
+    """Concatenate the points of all branches (period-1 first) into flat arrays."""
+    rows = [(b_i, b, p) for b_i, b in enumerate(branches) for p in b.points]
+    n = rows[0][2].u0.size if rows else 0
+    param = np.array([p.param for _, _, p in rows], dtype=float)
+    nper = np.array([b.n_periods for _, b, _ in rows], dtype=np.int64)
+    return {
+        "param": param,
+        "period": 2 * np.pi * nper / (omega_per_param * param) if rows else np.zeros(0),
+        "u0": np.array([p.u0 for _, _, p in rows]).reshape(len(rows), n),
+        "floquet": np.array([p.floquet for _, _, p in rows], dtype=complex).reshape(len(rows), n),
+        "stable": np.array([p.stable for _, _, p in rows], dtype=bool),
+        "label": np.array([p.label for _, _, p in rows], dtype="<U2"),
+        "branch": np.array([i for i, _, _ in rows], dtype=np.int64),
+        "n_periods": nper,
+        "qmin": np.array([p.qmin for _, _, p in rows], dtype=float),
+        "qmax": np.array([p.qmax for _, _, p in rows], dtype=float),
+        "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
+        "residual": np.array([p.residual for _, _, p in rows], dtype=float),
+    }
+
+
+def _cell(x) -> str:
+    if isinstance(x, (float, np.floating)):
+        return repr(float(x)) if math.isfinite(x) else ""
+    return str(x)
+
+
+def write_branches(branches, omega_per_param: float, out_dir) -> dict:
+    arrays = branch_arrays(branches, omega_per_param)
+    for key, a in arrays.items():
+        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            raise ValueError(f"branch array {key!r} holds non-finite values")
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    out_dir = Path(out_dir)
+    npz = atomic_write_bytes(out_dir / "branch.npz", buf.getvalue())
+    text = io.StringIO()
+    w = csv.writer(text, lineterminator="\n")
+    w.writerow(CSV_COLUMNS)
+    for k in range(arrays["param"].size):
+        mu = np.abs(arrays["floquet"][k])
+        w.writerow([_cell(v) for v in (
+            int(arrays["branch"][k]), int(arrays["n_periods"][k]), float(arrays["param"][k]),
+            float(arrays["period"][k]), bool(arrays["stable"][k]), str(arrays["label"][k]),
+            float(arrays["qmin"][k]), float(arrays["qmax"][k]), int(arrays["impacts"][k]),
+            float(mu.max()) if mu.size else 0.0, float(arrays["residual"][k]))])
+    csv_path = atomic_write_bytes(out_dir / "branch.csv", text.getvalue().encode())
+    return {"npz": npz, "csv": csv_path}

@@ -1,0 +1,48 @@
+"""Time response: table and plots (time trace, phase trajectory)."""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from .sweep_io import atomic_write_bytes
+
+__all__ = ["write_time_response", "plot_time_response"]
+
+
+def write_time_response(out_dir, t, u, names=()) -> Path:
+    names = list(names) or [f"u{i}" for i in range(u.shape[1])]
+    buf = io.StringIO()
+    np.savetxt(buf, np.column_stack([t, u]), delimiter=",", header=",".join(["t", *names]),
+               comments="", fmt="%.10g")
+    return atomic_write_bytes(Path(out_dir) / "time_response.csv", buf.getvalue().encode())
+
+
+def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str = "",
+                       formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(10.0, 4.2))
+    FigureCanvasAgg(fig)
+    ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
+    ax1.plot(t / period, q, lw=0.8)
+    ax1.set_xlabel("time / excitation period")
+    ax1.set_ylabel("q")
+    half = t >= 0.5 * t[-1]
+    ax2.plot(q[half], dq[half], lw=0.6)
+    ax2.set_xlabel("q")
+    ax2.set_ylabel("dq/dt")
+    ax2.set_title("phase trajectory (second half)", fontsize=8)
+    for b in bounds:
+        ax1.axhline(b, color="0.6", ls=":", lw=0.8)
+        ax2.axvline(b, color="0.6", ls=":", lw=0.8)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    out = []
+    for fmt in formats:
+        p = Path(path).with_suffix("." + fmt)
+        fig.savefig(p, dpi=dpi)
+        out.append(p)
+    return out
