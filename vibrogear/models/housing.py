@@ -209,8 +209,9 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     y1, y2 = K.createVecLeft(), M.createVecLeft()
     for i, x in enumerate(X):
         M.mult(x, y2)
-        x.scale(1.0 / np.sqrt(x.dot(y2)))
-        M.mult(x, y2)
+        s = 1.0 / np.sqrt(x.dot(y2))
+        x.scale(s)
+        y2.scale(s)
         K.mult(x, y1)
         kn = y1.norm()
         y1.axpy(-lam[i], y2)
