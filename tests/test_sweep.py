@@ -242,3 +242,19 @@ def test_files_and_plot(tmp_path, hyst_result):
     assert [p.suffix for p in out] == [".png", ".svg"]
     assert all(p.stat().st_size > 1000 for p in out)
     assert math.isfinite(float(hyst_result.wall_time))
+
+
+def test_resumable_sweep_helper(tmp_path):
+    from vibrogear.report.sweep_io import PARTIAL_NAME, resumable_sweep
+
+    model = impact_pair_model(**HYST)
+    grid = HYST_GRID[:3]
+    kw = dict(directions=("up",), transient_periods=20, record_periods=4, max_period=2,
+              options=OPTS)
+    stop = iter([True, False])                           # stop after the second point
+    r1, _ = resumable_sweep(model, grid, tmp_path, callback=lambda rec: next(stop), **kw)
+    assert r1.status_code == 2 and (tmp_path / PARTIAL_NAME).exists()
+    r2, paths = resumable_sweep(model, grid, tmp_path, **kw)
+    full = sweep(model, grid, **kw)
+    assert _eq(r2.qmax, full.qmax) and _eq(r2.u_end, full.u_end)
+    assert not (tmp_path / PARTIAL_NAME).exists() and paths["npz"].exists()

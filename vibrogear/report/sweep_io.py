@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..solvers.sweep import PointRecord, SweepResult
+from ..solvers.sweep import PointRecord, SweepResult, sweep
 
 __all__ = ["write_sweep", "read_sweep_npz", "PartialWriter", "read_partial",
-           "sweep_signature", "atomic_write_bytes", "PARTIAL_NAME"]
+           "sweep_signature", "atomic_write_bytes", "PARTIAL_NAME", "resumable_sweep"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
@@ -251,3 +251,30 @@ def read_partial(path, signature: dict | None = None) -> dict:
         r = _record_from_json(d)
         out[(r.direction, r.index)] = r
     return out
+
+
+def resumable_sweep(model, params, out_dir, *, callback=None, keep_partial: bool = False,
+                    **sweep_kw) -> tuple[SweepResult, dict]:
+    """Run :func:`~vibrogear.solvers.sweep.sweep` writing each finished point to
+    ``out_dir/sweep.partial.jsonl``, resuming from it if present (same signature), then
+    write ``sweep.npz`` / ``sweep.csv`` and drop the partial file.  Returns
+    (result, {kind: path}).  ``callback(record)`` is called after the point is saved.
+    """
+    opts = sweep_kw.get("options")
+    settings = {k: v for k, v in sweep_kw.items() if k not in ("options", "u0")}
+    if opts is not None:
+        settings.update(rtol=opts.rtol, atol=opts.atol, max_steps=opts.max_steps)
+    sig = sweep_signature(model, params, **settings)
+    part = Path(out_dir) / PARTIAL_NAME
+    done = read_partial(part, sig)
+    writer = PartialWriter(part, sig)
+
+    def on_point(rec):
+        writer(rec)
+        return None if callback is None else callback(rec)
+
+    result = sweep(model, params, callback=on_point, done=done, **sweep_kw)
+    paths = write_sweep(result, out_dir)
+    if not keep_partial and result.status_code != 2:
+        writer.remove()
+    return result, paths
