@@ -23,6 +23,7 @@ import argparse
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -174,6 +175,19 @@ def run_scipy(model, u0, t1, t_eval, rtol):
     return mesh_deformation(model, t_eval, sol.y.T), wall, rhs.calls
 
 
+def code_version() -> dict:
+    """HEAD and whether the compiled solver sources differ from it (timings depend on it)."""
+    def git(*args):
+        try:
+            return subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True,
+                                  timeout=10).stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return ""
+    dirty = git("status", "--porcelain", "--", "vibrogear/solvers/dopri.py",
+                "vibrogear/solvers/kernels.py", "vibrogear/solvers/integrate.py")
+    return {"head": git("rev-parse", "--short", "HEAD"), "solver_sources_modified": bool(dirty)}
+
+
 def rel_err(d, ref):
     return float(np.max(np.abs(d - ref)) / (ref.max() - ref.min()))
 
@@ -189,6 +203,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--ref-rtol", type=float, default=1e-12)
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/bench_integrator.json"))
     a = ap.parse_args(argv)
+    version = code_version()          # before the (long) run: the sources it imported
     model = build_model()
     T = 1.0 / F_MESH
     u0 = static_state(model)
@@ -279,7 +294,7 @@ def main(argv=None) -> dict:
                first_call_one_period_s=first_call, warm_call_one_period_s=warm_call,
                ours=ours, scipy_rk45_dense=sp, speedup=ratio,
                speedup_same_window=ratio_window, ours_window_time_s=our_short,
-               blas_threads=os.environ.get("OPENBLAS_NUM_THREADS"),
+               blas_threads=os.environ.get("OPENBLAS_NUM_THREADS"), code=version,
                machine=dict(python=platform.python_version(), node=platform.node(),
                             processor=platform.processor() or platform.machine()))
     out = Path(a.out)
