@@ -47,7 +47,7 @@ _P = np.array([
 N_SAMPLES = 4  # dense-output samples per step for switch and extremum detection
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _bw(theta, b):
     """Dense-output weights b_i(theta) (sum_i b_i K_i h gives y(theta) - y0)."""
     t1 = theta
@@ -58,7 +58,7 @@ def _bw(theta, b):
         b[i] = _P[i, 0] * t1 + _P[i, 1] * t2 + _P[i, 2] * t3 + _P[i, 3] * t4
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _proj(theta, h, p0, pk, b):
     """Dense value of a projection: p0 + h sum_i b_i(theta) pk[i]."""
     _bw(theta, b)
@@ -68,14 +68,14 @@ def _proj(theta, h, p0, pk, b):
     return p0 + h * s
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _delta(A, j, t, Om, cx, cs, sn):
     harmonics(t, Om, cs, sn)
     e, ed = error_and_rate(A, j, Om, cs, sn)
     return cx - e
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def _violation(A, j, md, delta):
     """Largest violation of the current mode's region (> 0: the contact left it)."""
     if md > 0:
@@ -87,7 +87,7 @@ def _violation(A, j, md, delta):
     return v1 if v1 > v2 else v2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
     """Fill stages 1..6 (stage 0 given), y1 and the FSAL stage 6."""
     n = y.shape[0]
@@ -100,6 +100,182 @@ def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
         accel(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s], cdS[s], tmp)
     for i in range(n):
         y1[i] = Ys[6, i]
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _error_norm(K, y, y1, h, rtol, atol):
+    n = y.shape[0]
+    err = 0.0
+    finite = True
+    for i in range(n):
+        e = 0.0
+        for k in range(7):
+            e += _E[k] * K[k, i]
+        sc = atol + rtol * max(abs(y[i]), abs(y1[i]))
+        q = h * e / sc
+        err += q * q
+        if not np.isfinite(y1[i]):
+            finite = False
+    return np.sqrt(err / n), finite
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _fsal(y, K, Ys, CxS, CvS, kdS, cdS):
+    """First stage of the next step = last stage of this one."""
+    for i in range(y.shape[0]):
+        Ys[0, i] = y[i]
+        K[0, i] = K[6, i]
+    for j in range(CxS.shape[1]):
+        CxS[0, j] = CxS[6, j]
+        CvS[0, j] = CvS[6, j]
+        kdS[0, j] = kdS[6, j]
+        cdS[0, j] = cdS[6, j]
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk):
+    """Earliest switch in the accepted step: (theta in (0, 1] or 2, contact, new mode)."""
+    nc = A.C.shape[0]
+    theta_ev = 2.0
+    j_ev = -1
+    m_ev = 0
+    for j in range(nc):
+        md = mode[j]
+        for k in range(7):
+            pk[k] = CvS[k, j]  # C . x' = C . v at each stage
+        x0 = CxS[0, j]
+        th_prev = 0.0
+        for s in range(1, N_SAMPLES + 1):
+            th = s / N_SAMPLES
+            if th >= theta_ev:
+                break
+            d = _delta(A, j, t + th * h, Om, _proj(th, h, x0, pk, bw), cs, sn)
+            v = _violation(A, j, md, d)
+            if v > 0.0:
+                lo = th_prev
+                hi = th
+                for _ in range(60):
+                    mid = 0.5 * (lo + hi)
+                    dm = _delta(A, j, t + mid * h, Om, _proj(mid, h, x0, pk, bw), cs, sn)
+                    if _violation(A, j, md, dm) > 0.0:
+                        hi = mid
+                    else:
+                        lo = mid
+                    if hi - lo < 1e-15:
+                        break
+                    if (hi - lo) * h < 1e-15 * (abs(t) + 1.0):
+                        break
+                if hi < theta_ev:
+                    theta_ev = hi
+                    j_ev = j
+                    if md != 0:
+                        m_ev = 0
+                    else:
+                        m_ev = 1 if d - A.g_hi[j] > A.g_lo[j] - d else -1
+                break
+            th_prev = th
+    return theta_ev, j_ev, m_ev
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _dense_eval(t, h_used, t_new, y, K, t_eval, ie, u_eval, bw):
+    """Dense output at the requested times inside the step; returns the next index."""
+    n = y.shape[0]
+    ne = t_eval.shape[0]
+    while ie < ne and t_eval[ie] <= t_new:
+        th = (t_eval[ie] - t) / h_used
+        _bw(th, bw)
+        for i in range(n):
+            s_ = 0.0
+            for k in range(7):
+                s_ += bw[k] * K[k, i]
+            u_eval[ie, i] = y[i] + h_used * s_
+        ie += 1
+    return ie
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext):
+    """Update ext = [min, max] of the monitored deformation over the step (after rec_t0):
+    samples of the dense output plus the located zeros of its rate."""
+    m = A.w2.shape[0]
+    for k in range(7):
+        pk[k] = CvS[k, mon]
+        s_ = 0.0
+        for i in range(m):
+            s_ += A.C[mon, i] * K[k, m + i]
+        qk[k] = s_
+    x0 = CxS[0, mon]
+    v0 = CvS[0, mon]
+    th_lo = 0.0 if t >= rec_t0 else (rec_t0 - t) / h_used
+    prev_rate = 0.0
+    prev_th = th_lo
+    for s in range(0, N_SAMPLES + 1):
+        th = th_lo + (1.0 - th_lo) * s / N_SAMPLES
+        harmonics(t + th * h_used, Om, cs, sn)
+        e, ed = error_and_rate(A, mon, Om, cs, sn)
+        d = _proj(th, h_used, x0, pk, bw) - e
+        rate = _proj(th, h_used, v0, qk, bw) - ed
+        if d < ext[0]:
+            ext[0] = d
+        if d > ext[1]:
+            ext[1] = d
+        if s > 0 and prev_rate * rate < 0.0:
+            lo = prev_th
+            hi = th
+            for _ in range(50):
+                mid = 0.5 * (lo + hi)
+                harmonics(t + mid * h_used, Om, cs, sn)
+                e, ed = error_and_rate(A, mon, Om, cs, sn)
+                rm = _proj(mid, h_used, v0, qk, bw) - ed
+                if rm * prev_rate > 0.0:
+                    lo = mid
+                else:
+                    hi = mid
+                if hi - lo < 1e-13:
+                    break
+            mid = 0.5 * (lo + hi)
+            harmonics(t + mid * h_used, Om, cs, sn)
+            e, ed = error_and_rate(A, mon, Om, cs, sn)
+            d = _proj(mid, h_used, x0, pk, bw) - e
+            if d < ext[0]:
+                ext[0] = d
+            if d > ext[1]:
+                ext[1] = d
+        prev_rate = rate
+        prev_th = th
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS, cs, sn,
+                      dfp, tmp):
+    """Advance Phi = [d u / d u0, d u / d param] with the stages of the accepted step."""
+    n = Phi.shape[0]
+    ncol = Phi.shape[1]
+    for s in range(7):
+        if s == 0:
+            for i in range(n):
+                for c in range(ncol):
+                    Ph[i, c] = Phi[i, c]
+        else:
+            for i in range(n):
+                for c in range(ncol):
+                    acc = 0.0
+                    for k in range(s):
+                        acc += _A[s, k] * KP[k, i, c]
+                    Ph[i, c] = Phi[i, c] + h_used * acc
+        jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], tmp)
+        ts = t + _C[s] * h_used
+        harmonics(ts, Om, cs, sn)
+        accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp)
+        for i in range(n):
+            KP[s, i, n] += dfp[i]
+    for i in range(n):
+        for c in range(ncol):
+            acc = 0.0
+            for k in range(6):
+                acc += _B[k] * KP[k, i, c]
+            Phi[i, c] += h_used * acc
 
 
 @njit(cache=True)
@@ -146,8 +322,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
     nfev = 0
     nev = 0
     losses = 0
-    qmin = np.inf
-    qmax = -np.inf
+    ext = np.array([np.inf, -np.inf])
     status = 0
     consecutive = 0
     t = t0
@@ -173,18 +348,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             break
         _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1)
         nfev += 6
-        err = 0.0
-        finite = True
-        for i in range(n):
-            e = 0.0
-            for k in range(7):
-                e += _E[k] * K[k, i]
-            sc = atol + rtol * max(abs(y[i]), abs(y1[i]))
-            q = h * e / sc
-            err += q * q
-            if not np.isfinite(y1[i]):
-                finite = False
-        err = np.sqrt(err / n)
+        err, finite = _error_norm(K, y, y1, h, rtol, atol)
         if not finite or not np.isfinite(err):
             if h > 1e-12 * (abs(t) + 1.0):
                 h *= 0.1
@@ -201,43 +365,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
         fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** -0.2)
         h_next = h * fac
         # ---- event search on the dense output of this accepted step ----
-        theta_ev = 2.0
-        j_ev = -1
-        m_ev = 0
-        for j in range(nc):
-            md = mode[j]
-            pk[:] = CvS[:, j]  # C . x' = C . v at each stage
-            x0 = CxS[0, j]
-            th_prev = 0.0
-            for s in range(1, N_SAMPLES + 1):
-                th = s / N_SAMPLES
-                if th >= theta_ev:
-                    break
-                d = _delta(A, j, t + th * h, Om, _proj(th, h, x0, pk, bw), cs, sn)
-                v = _violation(A, j, md, d)
-                if v > 0.0:
-                    lo = th_prev
-                    hi = th
-                    for _ in range(60):
-                        mid = 0.5 * (lo + hi)
-                        dm = _delta(A, j, t + mid * h, Om, _proj(mid, h, x0, pk, bw), cs, sn)
-                        if _violation(A, j, md, dm) > 0.0:
-                            hi = mid
-                        else:
-                            lo = mid
-                        if hi - lo < 1e-15:
-                            break
-                        if (hi - lo) * h < 1e-15 * (abs(t) + 1.0):
-                            break
-                    if hi < theta_ev:
-                        theta_ev = hi
-                        j_ev = j
-                        if md != 0:
-                            m_ev = 0
-                        else:
-                            m_ev = 1 if d - A.g_hi[j] > A.g_lo[j] - d else -1
-                    break
-                th_prev = th
+        theta_ev, j_ev, m_ev = _event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk)
         event = theta_ev <= 1.0
         if event and theta_ev < 1.0:
             hs = theta_ev * h
@@ -255,88 +383,12 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
         # ---- recording: dense output at t_eval, extrema of the monitored deformation ----
         t_new = t + h_used if not (last and h_used == h) else t1
         if h_used > 0.0:
-            while ie < ne and t_eval[ie] <= t_new:
-                th = (t_eval[ie] - t) / h_used
-                _bw(th, bw)
-                for i in range(n):
-                    s_ = 0.0
-                    for k in range(7):
-                        s_ += bw[k] * K[k, i]
-                    u_eval[ie, i] = y[i] + h_used * s_
-                ie += 1
+            ie = _dense_eval(t, h_used, t_new, y, K, t_eval, ie, u_eval, bw)
             if mon >= 0 and t_new > rec_t0:
-                pk[:] = CvS[:, mon]
-                for k in range(7):
-                    s_ = 0.0
-                    for i in range(m):
-                        s_ += A.C[mon, i] * K[k, m + i]
-                    qk[k] = s_
-                x0 = CxS[0, mon]
-                v0 = CvS[0, mon]
-                th_lo = 0.0 if t >= rec_t0 else (rec_t0 - t) / h_used
-                prev_rate = 0.0
-                prev_th = th_lo
-                for s in range(0, N_SAMPLES + 1):
-                    th = th_lo + (1.0 - th_lo) * s / N_SAMPLES
-                    tt = t + th * h_used
-                    harmonics(tt, Om, cs, sn)
-                    e, ed = error_and_rate(A, mon, Om, cs, sn)
-                    d = _proj(th, h_used, x0, pk, bw) - e
-                    rate = _proj(th, h_used, v0, qk, bw) - ed
-                    if d < qmin:
-                        qmin = d
-                    if d > qmax:
-                        qmax = d
-                    if s > 0 and prev_rate * rate < 0.0:
-                        lo = prev_th
-                        hi = th
-                        for _ in range(50):
-                            mid = 0.5 * (lo + hi)
-                            harmonics(t + mid * h_used, Om, cs, sn)
-                            e, ed = error_and_rate(A, mon, Om, cs, sn)
-                            rm = _proj(mid, h_used, v0, qk, bw) - ed
-                            if rm * prev_rate > 0.0:
-                                lo = mid
-                            else:
-                                hi = mid
-                            if hi - lo < 1e-13:
-                                break
-                        mid = 0.5 * (lo + hi)
-                        harmonics(t + mid * h_used, Om, cs, sn)
-                        e, ed = error_and_rate(A, mon, Om, cs, sn)
-                        d = _proj(mid, h_used, x0, pk, bw) - e
-                        if d < qmin:
-                            qmin = d
-                        if d > qmax:
-                            qmax = d
-                    prev_rate = rate
-                    prev_th = th
-        # ---- variational equations on the same stages ----
+                _extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext)
         if variational and h_used > 0.0:
-            for s in range(7):
-                if s == 0:
-                    for i in range(n):
-                        for c in range(ncol):
-                            Ph[i, c] = Phi[i, c]
-                else:
-                    for i in range(n):
-                        for c in range(ncol):
-                            acc = 0.0
-                            for k in range(s):
-                                acc += _A[s, k] * KP[k, i, c]
-                            Ph[i, c] = Phi[i, c] + h_used * acc
-                jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], tmp)
-                ts = t + _C[s] * h_used
-                harmonics(ts, Om, cs, sn)
-                accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp)
-                for i in range(n):
-                    KP[s, i, n] += dfp[i]
-            for i in range(n):
-                for c in range(ncol):
-                    acc = 0.0
-                    for k in range(6):
-                        acc += _B[k] * KP[k, i, c]
-                    Phi[i, c] += h_used * acc
+            _variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS,
+                              cs, sn, dfp, tmp)
         t = t_new
         for i in range(n):
             y[i] = y1[i]
@@ -398,13 +450,8 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
                 h_next = h
         else:
             consecutive = 0
-            Ys[0, :] = y
-            K[0, :] = K[6]
-            CxS[0, :] = CxS[6]
-            CvS[0, :] = CvS[6]
-            kdS[0, :] = kdS[6]
-            cdS[0, :] = cdS[6]
+            _fsal(y, K, Ys, CxS, CvS, kdS, cdS)
         h = h_next
     counters = np.array([steps, rejected, nfev, nev, losses])
     f_end = K[0].copy()
-    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, qmin, qmax, mode, f_end)
+    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end)

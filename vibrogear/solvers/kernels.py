@@ -38,7 +38,7 @@ def model_arrays(model, param: float) -> tuple:
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def harmonics(t, Om, cs, sn):
     """cs[h] = cos((h+1) Om t), sn[h] = sin((h+1) Om t)."""
     for h in range(cs.shape[0]):
@@ -47,7 +47,7 @@ def harmonics(t, Om, cs, sn):
         sn[h] = np.sin(a)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", _nrt=False)
 def error_and_rate(A, j, Om, cs, sn):
     """Kinematic error e_j(t) and its rate e_j'(t) from precomputed harmonics."""
     e = 0.0
@@ -81,7 +81,7 @@ def contact_modes(A, t, Om, x, mode):
             mode[j] = 0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     """out[:m] = x', out[m:] = x'' at state y = [x, v] with contact modes ``mode``.
 
@@ -99,20 +99,18 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
         out[m + i] = a
     r = A.P.shape[0]
     if r > 0:
-        px = tmp[:r]
-        pv = tmp[r:2 * r]
         for k in range(r):
             sx = 0.0
             sv = 0.0
             for i in range(m):
                 sx += A.P[k, i] * y[i]
                 sv += A.P[k, i] * y[m + i]
-            px[k] = sx
-            pv[k] = sv
+            tmp[k] = sx
+            tmp[r + k] = sv
         for k in range(r):
             z = 0.0
             for l in range(r):
-                z += A.Kc[k, l] * px[l] + A.Bc[k, l] * pv[l]
+                z += A.Kc[k, l] * tmp[l] + A.Bc[k, l] * tmp[r + l]
             if z != 0.0:
                 for i in range(m):
                     out[m + i] -= A.P[k, i] * z
@@ -163,7 +161,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
                 out[m + i] -= A.C[j, i] * f
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False, inline="always")
 def jac_times(Phi, mode, A, kd, cd, out, tmp):
     """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``."""
     m = A.w2.shape[0]
@@ -174,8 +172,6 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
             out[m + i, c] = -A.w2[i] * Phi[i, c] - A.damp[i] * Phi[m + i, c]
     r = A.P.shape[0]
     if r > 0:
-        px = np.empty(r)
-        pv = np.empty(r)
         for c in range(ncol):
             for k in range(r):
                 sx = 0.0
@@ -183,12 +179,12 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
                 for i in range(m):
                     sx += A.P[k, i] * Phi[i, c]
                     sv += A.P[k, i] * Phi[m + i, c]
-                px[k] = sx
-                pv[k] = sv
+                tmp[k] = sx
+                tmp[r + k] = sv
             for k in range(r):
                 z = 0.0
                 for l in range(r):
-                    z += A.Kc[k, l] * px[l] + A.Bc[k, l] * pv[l]
+                    z += A.Kc[k, l] * tmp[l] + A.Bc[k, l] * tmp[r + l]
                 if z != 0.0:
                     for i in range(m):
                         out[m + i, c] -= A.P[k, i] * z
@@ -207,7 +203,7 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
                     out[m + i, c] -= A.C[j, i] * z
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False, inline="always")
 def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
     """out = d f / d param at fixed (t, y): forcing, transmission error, mesh stiffness, spin."""
     m = A.w2.shape[0]
