@@ -28,7 +28,7 @@ ANALYSIS_TABLE: dict[tuple[str, str], str] = {
     ("impact_pair", "time_response"): "vibrogear.analyses.impact:run_time_response",
     ("impact_pair", "sweep"): "vibrogear.analyses.impact:run_sweep",
     ("impact_pair", "continuation"): "vibrogear.analyses.impact:run_continuation",
-    ("impact_pair", "report"): "vibrogear.analyses.impact:run_report",
+    ("impact_pair", "report"): "vibrogear.analyses.impact_report:run_report",
     ("rotor", "modes"): "vibrogear.analyses.rotor:run_modes",
     ("rotor", "campbell"): "vibrogear.analyses.rotor:run_campbell",
     ("housing", "modes"): "vibrogear.analyses.housing:run_modes",

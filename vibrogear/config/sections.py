@@ -117,3 +117,6 @@ class ReportConfig:
     omega: float = spec(gt=0.0, doc="parameter at which the work-precision study runs")
     rtols: tuple[float, ...] = spec((1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10), min_len=2, gt=0.0, lt=1.0)
     periods: float = spec(20.0, gt=0.0)
+    shooting_tols: tuple[float, ...] = spec((1e-4, 1e-6, 1e-8, 1e-10, 1e-12), min_len=2, gt=0.0,
+                                            lt=1.0, doc="shooting tolerances (integrator rtol matched)")
+    repeats: int = spec(5, ge=1, le=100, doc="timing repeats per point (best time is reported)")

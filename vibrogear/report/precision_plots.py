@@ -1,0 +1,136 @@
+"""Work-precision views of the ``report`` analysis (CSV tables and log-log plots).
+
+``plot_work_precision``: integrator error against wall time and against rtol, each point
+annotated with its tolerance, the fitted slopes in the legend.
+``plot_shooting_precision``: shooting residual, u0 error and Floquet-multiplier error
+against wall time and against the shooting tolerance.
+Matplotlib ``Figure`` objects with the Agg canvas: no pyplot state.
+"""
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["write_table", "plot_work_precision", "plot_shooting_precision"]
+
+
+def write_table(path, table: dict, columns) -> Path:
+    """Write the named columns of ``table`` (equal-length arrays) as CSV."""
+    path = Path(path)
+    cols = [np.asarray(table[c]) for c in columns]
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(columns)
+        for row in zip(*cols):
+            w.writerow([_fmt(v) for v in row])
+    return path
+
+
+def _fmt(v) -> str:
+    v = v.item() if hasattr(v, "item") else v
+    if isinstance(v, bool):
+        return str(int(v))
+    if isinstance(v, float):
+        return f"{v:.6e}"
+    return str(v)
+
+
+def _figure(ncols: int):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5.0 * ncols, 4.6))
+    FigureCanvasAgg(fig)
+    return fig, [fig.add_subplot(1, ncols, k + 1) for k in range(ncols)]
+
+
+def _save(fig, path, formats, dpi) -> list[Path]:
+    fig.tight_layout()
+    out = []
+    for fmt in formats:
+        p = Path(path).with_suffix("." + fmt)
+        fig.savefig(p, dpi=dpi)
+        out.append(p)
+    return out
+
+
+def _annotate(ax, xs, ys, labels, color="0.25") -> None:
+    for x, y, lab in zip(xs, ys, labels):
+        if np.isfinite(x) and np.isfinite(y) and x > 0 and y > 0:
+            ax.annotate(lab, (x, y), textcoords="offset points", xytext=(5, 3), fontsize=7,
+                        color=color)
+
+
+def _guide(ax, x, y, slope: float, label: str, **kw) -> None:
+    """A line of the given log-log slope through the geometric centre of (x, y)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    ok = (x > 0) & (y > 0)
+    if np.count_nonzero(ok) < 2 or not np.isfinite(slope):
+        return
+    lx, ly = np.log(x[ok]), np.log(y[ok])
+    xs = np.array([lx.min(), lx.max()])
+    ax.plot(np.exp(xs), np.exp(ly.mean() + slope * (xs - lx.mean())), label=label, **kw)
+
+
+def plot_work_precision(table: dict, slopes: dict, path, *, title: str = "",
+                        formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+    """Left: error vs wall time; right: error vs rtol (with the fitted slope)."""
+    fig, (a1, a2) = _figure(2)
+    rtol = np.asarray(table["rtol"], float)
+    err = np.asarray(table["error"], float)
+    wall = np.asarray(table["wall_s"], float)
+    steps = np.asarray(table["steps"])
+    tags = [f"rtol {r:.0e}" for r in rtol]
+
+    a1.loglog(wall * 1e3, err, "o-", color="tab:blue", label="DOPRI5 + event location")
+    _annotate(a1, wall * 1e3, err, [f"{t}, {s} steps" for t, s in zip(tags, steps)])
+    a1.set_xlabel("wall time [ms] (best of repeats)")
+    a1.set_ylabel("max |q - q_exact| on the sample grid")
+    a1.set_title(f"error vs work: order {slopes.get('order', np.nan):.2f} (vs steps)", fontsize=9)
+
+    a2.loglog(rtol, err, "s-", color="tab:red", label="measured")
+    _guide(a2, rtol, err, slopes.get("error_vs_rtol", np.nan),
+           f"fit: slope {slopes.get('error_vs_rtol', np.nan):.2f}", color="0.3", ls="--", lw=1)
+    a2.loglog(rtol, rtol, ":", color="0.6", lw=1, label="error = rtol")
+    _annotate(a2, rtol, err, [f"{e:.1e}" for e in err])
+    a2.set_xlabel("rtol (atol = rtol * 1e-2)")
+    a2.set_ylabel("max |q - q_exact|")
+    a2.set_title("tolerance proportionality", fontsize=9)
+    for ax in (a1, a2):
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7, loc="best")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return _save(fig, path, formats, dpi)
+
+
+def plot_shooting_precision(table: dict, path, *, title: str = "",
+                            formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+    """Left: residual / errors vs wall time; right: the same vs the shooting tolerance."""
+    fig, (a1, a2) = _figure(2)
+    tol = np.asarray(table["tol"], float)
+    wall = np.asarray(table["wall_s"], float) * 1e3
+    its = np.asarray(table["iterations"])
+    curves = (("residual", "o-", "tab:blue", "periodicity residual"),
+              ("u0_error", "s-", "tab:red", "|u0 - u0_exact|"),
+              ("floquet_error", "^-", "tab:green", "|mu - mu_exact|"))
+    for key, mk, col, lab in curves:
+        y = np.asarray(table[key], float)
+        a1.loglog(wall, y, mk, color=col, label=lab)
+        a2.loglog(tol, y, mk, color=col, label=lab)
+    _annotate(a1, wall, np.asarray(table["u0_error"], float),
+              [f"tol {t:.0e}, {i} it" for t, i in zip(tol, its)])
+    a2.loglog(tol, tol, ":", color="0.6", lw=1, label="= tol")
+    a1.set_xlabel("wall time [ms] (best of repeats)")
+    a1.set_ylabel("residual / error")
+    a1.set_title("shooting: accuracy vs work", fontsize=9)
+    a2.set_xlabel("shooting tol (integrator rtol = tol)")
+    a2.set_title("shooting: accuracy vs tolerance", fontsize=9)
+    for ax in (a1, a2):
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7, loc="best")
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return _save(fig, path, formats, dpi)
