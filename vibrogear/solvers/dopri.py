@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times
+from .kernels import FAST, accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times
 
 __all__ = ["dopri_loop", "STATUS_TEXT"]
 
@@ -87,7 +87,7 @@ def _violation(A, j, md, delta):
     return v1 if v1 > v2 else v2
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=FAST)
 def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
     """Fill stages 1..6 (stage 0 given), y1 and the FSAL stage 6."""
     n = y.shape[0]
@@ -140,6 +140,8 @@ def _event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk):
     j_ev = -1
     m_ev = 0
     for j in range(nc):
+        if A.smooth[j] != 0.0:
+            continue
         md = mode[j]
         for k in range(7):
             pk[k] = CvS[k, j]  # C . x' = C . v at each stage

@@ -13,13 +13,16 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-__all__ = ["ModelArrays", "model_arrays", "accel", "jac_times", "accel_dparam",
+__all__ = ["ModelArrays", "model_arrays", "FAST", "effective_mode", "accel", "jac_times", "accel_dparam",
            "contact_modes", "harmonics", "error_and_rate"]
 
 ModelArrays = namedtuple("ModelArrays", [
     "w2", "damp", "P", "Kc", "Bc", "Kc1", "Bc1", "F0", "Fc", "Fs",
-    "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es",
+    "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es", "smooth",
 ])
+
+#: safe fast-math: reassociation (vectorised reductions) but no finite-math assumptions
+FAST = {"reassoc", "contract", "arcp", "nsz"}
 
 
 def model_arrays(model, param: float) -> tuple:
@@ -34,6 +37,8 @@ def model_arrays(model, param: float) -> tuple:
         f64(ct.directions), f64(ct.k_hi), f64(ct.k_lo), f64(ct.gap_hi), f64(ct.gap_lo),
         f64(ct.exponent), f64(ct.damping), f64(ct.stiffness_cos), f64(ct.stiffness_sin),
         f64(ct.error_cos), f64(ct.error_sin),
+        # C1 contacts (Hertzian exponent > 1, no damping) switch without located events
+        f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
     )
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
@@ -59,6 +64,26 @@ def error_and_rate(A, j, Om, cs, sn):
     return e, ed
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def power(s, p):
+    """s**p for s > 0, with the common contact exponents done without pow()."""
+    if p == 1.5:
+        return s * np.sqrt(s)
+    if p == 2.0:
+        return s * s
+    return np.exp(p * np.log(s))
+
+
+@njit(cache=True, inline="always", _nrt=False)
+def effective_mode(A, j, delta):
+    """Contact mode from the sign of delta - gap."""
+    if delta > A.g_hi[j]:
+        return 1
+    if delta < A.g_lo[j]:
+        return -1
+    return 0
+
+
 @njit(cache=True)
 def contact_modes(A, t, Om, x, mode):
     """Contact modes from the sign of delta - gap (used for the initial state only)."""
@@ -81,7 +106,7 @@ def contact_modes(A, t, Om, x, mode):
             mode[j] = 0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, fastmath=FAST)
 def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     """out[:m] = x', out[m:] = x'' at state y = [x, v] with contact modes ``mode``.
 
@@ -101,9 +126,10 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     if r > 0:
         for k in range(r):
             sx = 0.0
-            sv = 0.0
             for i in range(m):
                 sx += A.P[k, i] * y[i]
+            sv = 0.0
+            for i in range(m):
                 sv += A.P[k, i] * y[m + i]
             tmp[k] = sx
             tmp[r + k] = sv
@@ -116,44 +142,49 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
                     out[m + i] -= A.P[k, i] * z
     for j in range(A.C.shape[0]):
         sx = 0.0
-        sv = 0.0
         for i in range(m):
             sx += A.C[j, i] * y[i]
+        sv = 0.0
+        for i in range(m):
             sv += A.C[j, i] * y[m + i]
         Cx[j] = sx
         Cv[j] = sv
         md = mode[j]
-        if md == 0:
+        if md == 0 and A.smooth[j] == 0.0:
             kd[j] = 0.0
             cd[j] = 0.0
             continue
         e, ed = error_and_rate(A, j, Om, cs, sn)
+        if A.smooth[j] != 0.0:
+            md = effective_mode(A, j, sx - e)
+            if md == 0:
+                kd[j] = 0.0
+                cd[j] = 0.0
+                continue
         mod = 1.0
         for h in range(H):
             mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
         delta = sx - e
         ddot = sv - ed
-        p = A.expo[j]
         if md > 0:
+            sgn = 1.0
             s = delta - A.g_hi[j]
             kt = A.k_hi[j] * mod
-            if p == 1.0:
-                f = kt * s
-                kd[j] = kt
-            else:
-                sp = s if s > 0.0 else 0.0
-                f = kt * sp ** p
-                kd[j] = kt * p * sp ** (p - 1.0) if sp > 0.0 else 0.0
         else:
+            sgn = -1.0
             s = A.g_lo[j] - delta
             kt = A.k_lo[j] * mod
-            if p == 1.0:
-                f = -kt * s
-                kd[j] = kt
-            else:
-                sp = s if s > 0.0 else 0.0
-                f = -kt * sp ** p
-                kd[j] = kt * p * sp ** (p - 1.0) if sp > 0.0 else 0.0
+        p = A.expo[j]
+        if p == 1.0:
+            f = sgn * kt * s
+            kd[j] = kt
+        elif s > 0.0:
+            fs = kt * power(s, p)
+            f = sgn * fs
+            kd[j] = p * fs / s
+        else:
+            f = 0.0
+            kd[j] = 0.0
         f += A.cdamp[j] * ddot
         cd[j] = A.cdamp[j]
         if f != 0.0:
@@ -161,7 +192,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
                 out[m + i] -= A.C[j, i] * f
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
 def jac_times(Phi, mode, A, kd, cd, out, tmp):
     """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``."""
     m = A.w2.shape[0]
@@ -189,7 +220,7 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
                     for i in range(m):
                         out[m + i, c] -= A.P[k, i] * z
     for j in range(A.C.shape[0]):
-        if mode[j] == 0 or (kd[j] == 0.0 and cd[j] == 0.0):
+        if kd[j] == 0.0 and cd[j] == 0.0:
             continue
         for c in range(ncol):
             sx = 0.0
@@ -203,7 +234,7 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
                     out[m + i, c] -= A.C[j, i] * z
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
 def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
     """out = d f / d param at fixed (t, y): forcing, transmission error, mesh stiffness, spin."""
     m = A.w2.shape[0]
@@ -232,6 +263,14 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
         return
     for j in range(A.C.shape[0]):
         md = mode[j]
+        if A.smooth[j] != 0.0:
+            sx = 0.0
+            for i in range(m):
+                sx += A.C[j, i] * y[i]
+            e = 0.0
+            for h in range(H):
+                e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
+            md = effective_mode(A, j, sx - e)
         if md == 0:
             continue
         de = 0.0     # d e / d Om
@@ -258,10 +297,10 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
         p = A.expo[j]
         if md > 0:
             s = delta - A.g_hi[j]
-            fk = A.k_hi[j] * (s if p == 1.0 else (s if s > 0 else 0.0) ** p)
+            fk = A.k_hi[j] * (s if p == 1.0 else (power(s, p) if s > 0 else 0.0))
         else:
             s = A.g_lo[j] - delta
-            fk = -A.k_lo[j] * (s if p == 1.0 else (s if s > 0 else 0.0) ** p)
+            fk = -A.k_lo[j] * (s if p == 1.0 else (power(s, p) if s > 0 else 0.0))
         df = fk * dmod - kd[j] * de - cd[j] * ded
         df *= dOm
         if df != 0.0:
