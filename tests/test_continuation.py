@@ -1,0 +1,150 @@
+"""Pseudo-arclength continuation of the impact pair against independent references:
+the exact piecewise-linear orbits, finite differences, and the sequential sweep."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vibrogear.analyses.impact import jumps
+from vibrogear.models.impact_pair import impact_pair_model
+from vibrogear.solvers.continuation import ContinuationOptions, continue_orbits
+from vibrogear.solvers.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.shooting import periodic_flow
+from vibrogear.solvers.sweep import sweep
+from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
+
+# the default scene (configs/impact_pair.toml)
+PAR = dict(zeta=0.015, kappa=0.5, f_m=0.55, f_p=0.12, b_r=1.0)
+OPT = IntegrationOptions(rtol=1e-9, atol=1e-11)
+
+
+@pytest.fixture(scope="module")
+def model():
+    return impact_pair_model(**PAR)
+
+
+@pytest.fixture(scope="module")
+def branches(model):
+    p0 = 1.3
+    warm = integrate(model, p0, np.array([1.05, 0.0]), 0.0, 300 * 2 * np.pi / p0, options=OPT)
+    co = ContinuationOptions(param_min=0.45, param_max=1.3, ds=0.02, ds_max=0.05, tol=1e-9)
+    return continue_orbits(model, warm.u_end, p0, co, direction=-1, integration=OPT)
+
+
+def _labelled(branch, label):
+    return [p for p in branch.points if p.label == label]
+
+
+def test_branch_reaches_range_and_finds_main_folds(branches):
+    b1 = branches[0]
+    assert b1.status == 0 and b1.points[-1].param < 0.45 + 0.05
+    lps = sorted(p.param for p in _labelled(b1, "LP") if p.param > 0.8)
+    assert len(lps) == 2 and lps[0] < lps[1]
+
+
+def test_special_points_have_their_multiplier(branches):
+    """At an LP a multiplier sits at +1, at a PD at -1 (located to the bisection tolerance)."""
+    b1 = branches[0]
+    for p in _labelled(b1, "LP"):
+        assert np.min(np.abs(p.floquet - 1.0)) < 2e-2
+    pds = _labelled(b1, "PD")
+    assert len(pds) == 2
+    for p in pds:
+        assert np.min(np.abs(p.floquet + 1.0)) < 2e-2
+
+
+def test_orbits_match_exact_piecewise_linear_solution(branches):
+    """u0 and Floquet multipliers of branch points equal the exact orbit's."""
+    ip = ImpactParams(**PAR)
+    pts = [p for p in branches[0].points if not p.label][::25]
+    assert len(pts) >= 4
+    for p in pts:
+        ex = periodic_orbit(ip, p.param, p.u0)
+        assert ex.converged
+        assert np.max(np.abs(ex.u0 - p.u0)) < 1e-6 * (1 + np.max(np.abs(p.u0)))
+        assert np.max(np.abs(np.sort_complex(ex.floquet) - np.sort_complex(p.floquet))) < 1e-6
+        assert abs(ex.q_max - p.qmax) < 1e-6 * (1 + abs(p.qmax))
+
+
+def test_period_two_branch_is_genuine_and_exact(model, branches):
+    assert len(branches) == 2
+    b2 = branches[1]
+    assert b2.n_periods == 2 and len(b2.points) > 5
+    assert "rejoined" in b2.message
+    pd = sorted(p.param for p in _labelled(branches[0], "PD"))
+    ip = ImpactParams(**PAR)
+    for p in [q for q in b2.points if not q.label][1:-1:4]:
+        # inside the PD interval of the period-1 branch ...
+        assert pd[0] - 1e-3 <= p.param <= pd[1] + 1e-3
+        # ... not a period-1 orbit ...
+        half = integrate(model, p.param, p.u0, 0.0, 2 * np.pi / p.param, options=OPT)
+        assert np.linalg.norm(half.u_end - p.u0) > 1e-4
+        # ... and the exact period-2 orbit
+        ex = periodic_orbit(ip, p.param, p.u0, n_periods=2)
+        assert ex.converged
+        assert np.max(np.abs(ex.u0 - p.u0)) < 1e-6 * (1 + np.max(np.abs(p.u0)))
+
+
+def test_shooting_jacobian_against_finite_differences(model):
+    """dG/du0 (monodromy - I) and dG/dOmega (incl. the period change) vs central FD."""
+    opt = IntegrationOptions(rtol=1e-12, atol=1e-13)
+    u0, om = np.array([0.3, 0.2]), 0.9
+    f = periodic_flow(model, om, u0, options=opt)
+    assert f.trajectory.events >= 2
+    eps = 1e-6
+    J = np.zeros((2, 2))
+    for k in range(2):
+        e = np.zeros(2)
+        e[k] = eps
+        J[:, k] = (periodic_flow(model, om, u0 + e, options=opt).G
+                   - periodic_flow(model, om, u0 - e, options=opt).G) / (2 * eps)
+    assert np.max(np.abs(J - f.dG_du0)) < 1e-6 * (1 + np.max(np.abs(J)))
+    dp = (periodic_flow(model, om + eps, u0, options=opt).G
+          - periodic_flow(model, om - eps, u0, options=opt).G) / (2 * eps)
+    assert np.max(np.abs(dp - f.dG_dparam)) < 1e-5 * (1 + np.max(np.abs(dp)))
+
+
+@pytest.fixture(scope="module")
+def fold_sweep(model):
+    params = np.arange(0.80, 1.0001, 0.004)
+    return params, sweep(model, params, transient_periods=150, record_periods=8, max_period=4,
+                         options=IntegrationOptions(rtol=1e-8, atol=1e-10),
+                         u0=np.array([1.05, 0.0]))
+
+
+def test_sweep_jumps_at_the_folds(branches, fold_sweep):
+    """Up sweep falls at the upper fold, down sweep rises at the lower fold."""
+    params, res = fold_sweep
+    lp = sorted(p.param for p in _labelled(branches[0], "LP") if p.param > 0.8)
+    up = res.direction == "up"
+    j_up = jumps(res.param[up], res.qmax[up])
+    j_dn = jumps(res.param[~up], res.qmax[~up])
+    step = params[1] - params[0]
+    assert len(j_up) == 1 and len(j_dn) == 1
+    # the jump happens between the last point before the fold and the first beyond it
+    assert abs(j_up[0] - lp[1]) <= step
+    assert abs(j_dn[0] - lp[0]) <= step
+
+
+def test_stable_sweep_orbits_lie_on_stable_branch_segments(branches, fold_sweep):
+    _, res = fold_sweep
+    b1 = [p for p in branches[0].points if not p.label]
+    par = np.array([p.param for p in b1])
+    q = np.array([p.qmax for p in b1])
+    st = np.array([p.stable for p in b1])
+    checked = 0
+    for om, qs, n in zip(res.param, res.qmax, res.period_n):
+        if n != 1:
+            continue
+        # stable branch segments that bracket this Omega, interpolated there
+        cands = []
+        for k in range(len(b1) - 1):
+            lo, hi = sorted((par[k], par[k + 1]))
+            if st[k] and st[k + 1] and lo <= om <= hi and hi > lo:
+                w = (om - par[k]) / (par[k + 1] - par[k])
+                cands.append((q[k] + w * (q[k + 1] - q[k]), abs(q[k + 1] - q[k])))
+        assert cands, f"no stable branch segment at Omega = {om}"
+        err = min(abs(qs - qb) / (1e-3 + dq) for qb, dq in cands)
+        assert err < 1.0, (om, qs, cands)
+        checked += 1
+    assert checked > 30
