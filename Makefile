@@ -7,7 +7,7 @@ OUT    ?= out
 export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
-.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta clean housing housing-sweep housing-convergence housing-bench
+.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
 
@@ -37,6 +37,14 @@ fig5: $(STAMP)
 
 fig7: $(STAMP)
 	$(VG) run configs/impact_pair.toml --set impact_pair.zeta=0.05 --out $(OUT)/fig7_zeta0.05
+
+## work-precision of the integrator and of shooting against the exact impact-pair solution
+report: $(STAMP)
+	$(VG) run configs/impact_pair.toml --set 'scene.analyses=["report"]' --out $(OUT)/report
+
+## damping at which the two folds of the primary resonance meet (bisection of continuations)
+critical-zeta: $(STAMP)
+	$(VG) run configs/impact_pair.toml --set 'scene.analyses=["critical_damping"]' --out $(OUT)/critical_zeta
 
 ## rotor scenes: Friswell Example 5.9.1 and a stepped hollow shaft with a free gear
 rotor: $(STAMP)

@@ -29,6 +29,7 @@ ANALYSIS_TABLE: dict[tuple[str, str], str] = {
     ("impact_pair", "sweep"): "vibrogear.analyses.impact:run_sweep",
     ("impact_pair", "continuation"): "vibrogear.analyses.impact:run_continuation",
     ("impact_pair", "report"): "vibrogear.analyses.impact_report:run_report",
+    ("impact_pair", "critical_damping"): "vibrogear.analyses.critical_damping:run_critical_damping",
     ("rotor", "modes"): "vibrogear.analyses.rotor:run_modes",
     ("rotor", "campbell"): "vibrogear.analyses.rotor:run_campbell",
     ("housing", "modes"): "vibrogear.analyses.housing:run_modes",

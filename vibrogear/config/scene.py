@@ -10,8 +10,9 @@ from typing import Any
 from .base import ConfigError, build, parse_override, set_path, spec
 from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
 from .rotor import RotorConfig
-from .sections import (ContinuationConfig, ImpactPairConfig, IntegrationConfig, ReportConfig,
-                       SceneInfo, ShootingConfig, SweepConfig, TimeResponseConfig)
+from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
+                       IntegrationConfig, ReportConfig, SceneInfo, ShootingConfig, SweepConfig,
+                       TimeResponseConfig)
 
 __all__ = ["Scene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
 
@@ -24,6 +25,7 @@ ANALYSIS_SECTION = {
     "sweep": "sweep",
     "continuation": "continuation",
     "report": "report",
+    "critical_damping": "critical_damping",
     "modes": None,
     "campbell": None,
     "housing_sweep": "housing_sweep",
@@ -36,6 +38,7 @@ ANALYSIS_MODELS = {
     "sweep": ("impact_pair",),
     "continuation": ("impact_pair",),
     "report": ("impact_pair",),
+    "critical_damping": ("impact_pair",),
     "modes": ("rotor", "housing"),
     "campbell": ("rotor",),
     "housing_sweep": ("housing",),
@@ -57,6 +60,7 @@ class Scene:
     continuation: ContinuationConfig | None = spec(None)
     time_response: TimeResponseConfig | None = spec(None)
     report: ReportConfig | None = spec(None)
+    critical_damping: CriticalDampingConfig | None = spec(None)
 
     @property
     def model_kind(self) -> str:

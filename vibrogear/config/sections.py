@@ -7,7 +7,7 @@ from .base import ConfigError, spec
 
 __all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationConfig", "SweepConfig",
            "ShootingConfig", "ContinuationConfig", "TimeResponseConfig", "ReportConfig",
-           "ANALYSES"]
+           "CriticalDampingConfig", "ANALYSES"]
 
 #: analyses a scene may list, with what each is for
 ANALYSES = {
@@ -15,6 +15,7 @@ ANALYSES = {
     "sweep": "sequential continuation (brute-force bifurcation diagram) up and down in the parameter",
     "continuation": "shooting + pseudo-arclength continuation of periodic orbits with Floquet stability",
     "report": "work-precision study: integrator tolerance and shooting residual against run time",
+    "critical_damping": "bisection in zeta for the damping where the primary-resonance folds meet",
     "modes": "modal analysis (rotor or housing)",
     "campbell": "Campbell diagram of a rotor",
     "housing_sweep": "housing geometry sweep: first frequencies against one housing parameter",
@@ -120,3 +121,24 @@ class ReportConfig:
     shooting_tols: tuple[float, ...] = spec((1e-4, 1e-6, 1e-8, 1e-10, 1e-12), min_len=2, gt=0.0,
                                             lt=1.0, doc="shooting tolerances (integrator rtol matched)")
     repeats: int = spec(5, ge=1, le=100, doc="timing repeats per point (best time is reported)")
+
+
+@dataclass(frozen=True)
+class CriticalDampingConfig:
+    """Bisection in zeta; one continuation over [omega_min, omega_max] per trial zeta."""
+    zeta_lo: float = spec(ge=0.0, lt=1.0, doc="a damping whose primary resonance has a fold pair")
+    zeta_hi: float = spec(gt=0.0, lt=1.0, doc="a damping whose primary resonance has no folds")
+    omega_min: float = spec(gt=0.0, doc="continuation window: around the primary resonance only")
+    omega_max: float = spec(gt=0.0)
+    tol: float = spec(1e-4, gt=0.0, lt=1.0, doc="width of the final zeta bracket")
+    ds: float = spec(0.02, gt=0.0)
+    ds_max: float = spec(0.05, gt=0.0)
+    max_points: int = spec(3000, ge=2, le=1_000_000)
+    transient_periods: int = spec(300, ge=0, doc="periods integrated to find the starting orbit")
+    curve_points: int = spec(6, ge=0, le=100, doc="extra zetas below the cusp, for the plot only")
+
+    def validate(self, path: str) -> None:
+        _check_range(self, path, "omega_min", "omega_max")
+        _check_range(self, path, "zeta_lo", "zeta_hi")
+        if not self.ds <= self.ds_max:
+            raise ConfigError(f"{path}.ds", f"must be <= ds_max = {self.ds_max:g}, got {self.ds:g}")

@@ -1,0 +1,223 @@
+"""Critical damping of the impact pair: the zeta at which the primary-resonance folds meet.
+
+Below the critical damping the period-1 branch of the main resonance bends over (the
+hardening contact nonlinearity) and has a pair of turning points (LP, folds) with
+hysteresis between them; as zeta grows the two folds approach each other and meet at a
+cusp, above which the branch is single-valued.  :func:`critical_zeta` finds that zeta by
+bisection: at each trial zeta one pseudo-arclength continuation over the window
+[omega_min, omega_max] (which must contain the primary resonance and nothing else with
+folds) counts the LP points of the period-1 branch.
+
+At a cusp the two fold curves meet tangentially: with the normal form x^3 + a x + b = 0
+(a ~ zeta - zeta_c, b ~ Omega - Omega_c) the folds lie on 4 a^3 + 27 b^2 = 0, so their
+separation in Omega shrinks like (zeta_c - zeta)^(3/2) (in amplitude like the square
+root).  The separations of the runs nearest the cusp, raised to the power 2/3, are fitted
+by a straight line in zeta; its zero is reported as an independent (extrapolated)
+estimate of zeta_c, a check that the bisection did not stop early on a missed fold pair.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..models.impact_pair import impact_pair_from_config
+from ..runner import NumericalFailure, RunContext
+from ..solvers.continuation import ContinuationOptions, continue_orbits
+from ..solvers.integrate import IntegrationOptions, integrate
+from ..solvers.static import static_equilibrium
+
+__all__ = ["FoldScan", "CriticalDampingResult", "fold_scan", "critical_zeta",
+           "run_critical_damping"]
+
+
+@dataclass(frozen=True)
+class FoldScan:
+    """One continuation at one zeta: the folds (LP parameters) of the period-1 branch."""
+    zeta: float
+    folds: tuple[float, ...]
+    points: int
+    status: int
+    message: str
+    wall_time: float
+
+    @property
+    def has_fold_pair(self) -> bool:
+        return len(self.folds) >= 2
+
+
+@dataclass(frozen=True)
+class CriticalDampingResult:
+    zeta_critical: float            # midpoint of the final bracket
+    bracket: tuple[float, float]    # (largest zeta with folds, smallest zeta without)
+    folds_at_bracket: tuple[float, ...]   # fold parameters at bracket[0]
+    zeta_extrapolated: float        # zero of the linear fit of (fold gap)^(2/3) in zeta
+    continuations: int
+    scans: list = field(default_factory=list)   # FoldScan, in the order run
+    wall_time: float = 0.0
+
+    @property
+    def fold_gap(self) -> float:
+        f = self.folds_at_bracket
+        return float(max(f) - min(f)) if len(f) >= 2 else float("nan")
+
+
+def _start_state(model, omega: float, periods: int, options: IntegrationOptions) -> np.ndarray:
+    st = static_equilibrium(model)
+    u = st.u0 if st.converged else np.zeros(model.n_states)
+    tr = integrate(model, omega, u, 0.0, periods * model.excitation_period(omega), options=options)
+    if not tr.ok:
+        raise NumericalFailure(f"critical damping: transient at Omega = {omega:g} failed: "
+                               f"{tr.message}")
+    return tr.u_end
+
+
+def fold_scan(cfg_impact_pair, zeta: float, *, omega_min: float, omega_max: float,
+              integration: IntegrationOptions = IntegrationOptions(),
+              shooting_tol: float = 1e-9, ds: float = 0.02, ds_max: float = 0.05,
+              ds_min: float = 1e-6, max_points: int = 3000,
+              transient_periods: int = 300) -> FoldScan:
+    """Continue the period-1 branch from omega_max down to omega_min at this zeta."""
+    wall = time.perf_counter()
+    model = impact_pair_from_config(dataclasses.replace(cfg_impact_pair, zeta=float(zeta)))
+    u0 = _start_state(model, omega_max, transient_periods, integration)
+    copts = ContinuationOptions(param_min=omega_min, param_max=omega_max, ds=ds, ds_min=ds_min,
+                                ds_max=ds_max, max_points=max_points, tol=shooting_tol,
+                                period_doubling_branch=False)
+    branch = continue_orbits(model, u0, omega_max, copts, direction=-1,
+                             integration=integration)[0]
+    folds = tuple(sorted(p.param for p in branch.points
+                         if p.label == "LP" and omega_min <= p.param <= omega_max))
+    return FoldScan(zeta=float(zeta), folds=folds, points=len(branch.points),
+                    status=branch.status, message=branch.message,
+                    wall_time=time.perf_counter() - wall)
+
+
+def _extrapolate(scans) -> float:
+    """zeta where a straight-line fit of (fold gap)^(2/3) against zeta reaches zero."""
+    pts = sorted((s.zeta, (max(s.folds) - min(s.folds)) ** (2.0 / 3.0))
+                 for s in scans if s.has_fold_pair)
+    pts = pts[-3:]   # the ones nearest the cusp
+    if len(pts) < 2:
+        return float("nan")
+    z, g2 = np.array(pts).T
+    if np.ptp(z) == 0:
+        return float("nan")
+    a, b = np.polyfit(z, g2, 1)
+    return float(-b / a) if a < 0 else float("nan")
+
+
+def critical_zeta(cfg_impact_pair, *, omega_min: float, omega_max: float, zeta_lo: float,
+                  zeta_hi: float, tol: float = 1e-4,
+                  integration: IntegrationOptions = IntegrationOptions(),
+                  shooting_tol: float = 1e-9, ds: float = 0.02, ds_max: float = 0.05,
+                  max_points: int = 3000, transient_periods: int = 300,
+                  callback: Callable[[FoldScan], None] | None = None) -> CriticalDampingResult:
+    """Bisect in zeta for the damping above which the primary resonance has no fold pair.
+
+    ``zeta_lo`` must give a fold pair in [omega_min, omega_max] and ``zeta_hi`` none;
+    the bracket is halved until it is narrower than ``tol``.  Raises
+    :class:`~vibrogear.runner.NumericalFailure` when the ends do not bracket the cusp or
+    a continuation stops before leaving the window (its verdict would be unreliable).
+    """
+    if not 0.0 <= zeta_lo < zeta_hi:
+        raise ValueError("need 0 <= zeta_lo < zeta_hi")
+    wall = time.perf_counter()
+    scans: list[FoldScan] = []
+
+    def scan(z: float) -> FoldScan:
+        s = fold_scan(cfg_impact_pair, z, omega_min=omega_min, omega_max=omega_max,
+                      integration=integration, shooting_tol=shooting_tol, ds=ds, ds_max=ds_max,
+                      max_points=max_points, transient_periods=transient_periods)
+        scans.append(s)
+        if callback is not None:
+            callback(s)
+        if s.status != 0:
+            raise NumericalFailure(f"critical damping: continuation at zeta = {z:.6g} stopped "
+                                   f"early: {s.message}")
+        return s
+
+    lo, hi = scan(zeta_lo), scan(zeta_hi)
+    if not lo.has_fold_pair:
+        raise NumericalFailure(f"critical damping: zeta_lo = {zeta_lo:g} has no fold pair in "
+                               f"Omega [{omega_min:g}, {omega_max:g}] (folds {list(lo.folds)}): "
+                               "lower zeta_lo")
+    if hi.has_fold_pair:
+        raise NumericalFailure(f"critical damping: zeta_hi = {zeta_hi:g} still has folds "
+                               f"{list(hi.folds)}: raise zeta_hi")
+    while hi.zeta - lo.zeta > tol:
+        mid = scan(0.5 * (lo.zeta + hi.zeta))
+        if mid.has_fold_pair:
+            lo = mid
+        else:
+            hi = mid
+    return CriticalDampingResult(
+        zeta_critical=0.5 * (lo.zeta + hi.zeta), bracket=(lo.zeta, hi.zeta),
+        folds_at_bracket=lo.folds, zeta_extrapolated=_extrapolate(scans),
+        continuations=len(scans), scans=scans, wall_time=time.perf_counter() - wall)
+
+
+def run_critical_damping(scene, ctx: RunContext) -> dict:
+    """Runner entry: ``critical_damping.json`` and ``critical_damping.png/.svg``."""
+    import json
+
+    from ..report.critical_damping_plots import plot_fold_cusp
+    from .impact import integration_options
+
+    cfg = scene.critical_damping
+    c = scene.impact_pair
+    n_max = 2 + int(np.ceil(np.log2(max((cfg.zeta_hi - cfg.zeta_lo) / cfg.tol, 1.0))))
+    with ctx.progress(n_max, "critical zeta") as bar:
+        res = critical_zeta(
+            c, omega_min=cfg.omega_min, omega_max=cfg.omega_max, zeta_lo=cfg.zeta_lo,
+            zeta_hi=cfg.zeta_hi, tol=cfg.tol, integration=integration_options(scene),
+            shooting_tol=scene.shooting.tol, ds=cfg.ds, ds_max=cfg.ds_max,
+            max_points=cfg.max_points, transient_periods=cfg.transient_periods,
+            callback=lambda s: bar.update(1, f"zeta={s.zeta:.5g} LP={len(s.folds)}"))
+    # extra zetas between zeta_lo and the cusp, only to draw the two fold curves
+    extra = []
+    kw = dict(omega_min=cfg.omega_min, omega_max=cfg.omega_max,
+              integration=integration_options(scene), shooting_tol=scene.shooting.tol,
+              ds=cfg.ds, ds_max=cfg.ds_max, max_points=cfg.max_points,
+              transient_periods=cfg.transient_periods)
+    for z in np.linspace(cfg.zeta_lo, res.bracket[0], cfg.curve_points + 2)[1:-1]:
+        s = fold_scan(c, float(z), **kw)
+        if s.status == 0:
+            extra.append(s)
+    scans = [dataclasses.asdict(s) | {"has_fold_pair": s.has_fold_pair} for s in res.scans]
+    out = {
+        "status": "ok",
+        "zeta_critical": res.zeta_critical,
+        "bracket": list(res.bracket),
+        "bracket_width": res.bracket[1] - res.bracket[0],
+        "folds_at_bracket": list(res.folds_at_bracket),
+        "fold_gap_at_bracket": res.fold_gap,
+        "zeta_extrapolated": res.zeta_extrapolated,
+        "continuations": res.continuations,
+        "window": [cfg.omega_min, cfg.omega_max],
+        "scans": scans,
+        "curve_scans": [dataclasses.asdict(s) | {"has_fold_pair": s.has_fold_pair}
+                        for s in extra],
+        "solver_wall_s": res.wall_time,
+        "error_estimate": {"zeta_half_bracket": 0.5 * (res.bracket[1] - res.bracket[0]),
+                           "extrapolation_minus_bisection": res.zeta_extrapolated
+                           - res.zeta_critical},
+    }
+    (ctx.out / "critical_damping.json").write_text(json.dumps(_finite(out), indent=2))
+    title = (f"{scene.scene.name}: kappa={c.kappa:g}, f_m={c.f_m:g}, f_p={c.f_p:g}, "
+             f"b_r={c.b_r:g}")
+    plot_fold_cusp(res, ctx.out / "critical_damping", title=title, extra_scans=extra)
+    return out
+
+
+def _finite(obj):
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
