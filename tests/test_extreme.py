@@ -1,0 +1,151 @@
+"""Stiff and extreme impact-pair cases: a correct result or a clear failure status,
+never NaN/inf in an output file, never a hang (every loop is bounded)."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from vibrogear.cli import main
+from vibrogear.models.impact_pair import impact_pair_model
+from vibrogear.solvers.continuation import ContinuationOptions, continue_orbits
+from vibrogear.solvers.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.shooting import shoot
+from vibrogear.solvers.sweep import sweep
+from vibrogear.verification.impact_exact import ImpactParams, linear_frf, periodic_orbit
+
+OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
+
+
+def _against_exact(par, omega, guess=None, n_periods=1):
+    """Shoot from the exact orbit's neighbourhood; compare u0 and multipliers."""
+    ip = ImpactParams(**par)
+    ex = periodic_orbit(ip, omega, guess, n_periods=n_periods)
+    assert ex.converged
+    model = impact_pair_model(**par)
+    sh = shoot(model, omega, ex.u0 * (1 + 1e-3) + 1e-3, n_periods=n_periods, options=OPT,
+               tol=1e-11)
+    assert sh.converged, sh.message
+    assert np.max(np.abs(sh.u0 - ex.u0)) < 1e-6 * (1 + np.max(np.abs(ex.u0)))
+    assert np.max(np.abs(np.sort_complex(sh.floquet) - np.sort_complex(ex.floquet))) < 1e-6
+    return sh, ex
+
+
+def test_pure_dead_zone_kappa_zero():
+    """kappa = 0: no stiffness inside the clearance (free flight, pure rattle)."""
+    sh, ex = _against_exact(dict(zeta=0.05, kappa=0.0, f_m=0.1, f_p=0.3, b_r=1.0), 0.8)
+    assert sh.impacts >= 1 and ex.q_max > 1.0
+
+
+def test_stiffness_ratio_1e4():
+    """Outer/inner stiffness ratio 1e4 (kappa = 1e-4): stiff contact phases."""
+    sh, ex = _against_exact(dict(zeta=0.05, kappa=1e-4, f_m=0.05, f_p=0.3, b_r=1.0), 0.7)
+    assert sh.impacts >= 1
+
+
+def test_undamped_orbit_exists_on_unit_circle():
+    """zeta = 0: impacting periodic orbits still exist; det(M) = 1 and |mu| = 1."""
+    par = dict(zeta=0.0, kappa=0.5, f_m=0.0, f_p=2.5, b_r=1.0)
+    sh, ex = _against_exact(par, 1.5)
+    assert ex.contact_sides == {1, -1} and sh.impacts == 2
+    assert abs(np.prod(sh.floquet).real - 1.0) < 1e-8
+    assert np.allclose(np.abs(sh.floquet), 1.0, atol=1e-6)
+
+
+def test_tiny_clearance_is_the_linear_system():
+    """b_r = 1e-9: the dead zone vanishes; amplitude = FRF with stiffness kappa + (1 - kappa)."""
+    par = dict(zeta=0.05, kappa=0.3, f_m=0.0, f_p=0.2, b_r=1e-9)
+    model = impact_pair_model(**par)
+    for om in (0.5, 1.2):
+        warm = integrate(model, om, np.zeros(2), 0.0, 200 * 2 * np.pi / om, options=OPT)
+        sh = shoot(model, om, warm.u_end, options=OPT, tol=1e-11)
+        assert sh.converged
+        amp = 0.5 * (sh.monitor_max - sh.monitor_min)
+        _, ref = linear_frf(par["zeta"], 1.0, 0.0, par["f_p"], om)
+        assert abs(amp - ref) < 1e-6 + 2e-9
+        assert sh.impacts == 2                 # crosses the 2e-9 wide gap twice per period
+
+
+def test_large_forcing_double_sided_impacts_and_chaos():
+    """Large forcing: double-sided impacts; at Omega = 1.0 the motion is chaotic: the sweep
+    says 'not periodic', and an independent Lyapunov estimate is positive."""
+    par = dict(zeta=0.02, kappa=0.0, f_m=0.1, f_p=1.0, b_r=1.0)
+    model = impact_pair_model(**par)
+    res = sweep(model, [0.8, 1.0], directions=("up",), transient_periods=200, record_periods=64,
+                max_period=16, options=IntegrationOptions(rtol=1e-8, atol=1e-10))
+    assert res.period_n[0] == 1 and res.qmin[0] < -1 and res.qmax[0] > 1   # double-sided
+    assert res.period_n[1] == 0 and res.clusters[1] > 16
+    # largest Lyapunov exponent from the variational equations, renormalised per period
+    T = 2 * np.pi / 1.0
+    u = res.u_end[1].copy()
+    v = np.array([1.0, 0.0])
+    logs = 0.0
+    n = 150
+    for k in range(n):
+        tr = integrate(model, 1.0, u, 0.0, T, options=IntegrationOptions(rtol=1e-9, atol=1e-11),
+                       variational=True)
+        assert tr.ok
+        w = tr.monodromy @ v
+        logs += np.log(np.linalg.norm(w))
+        v = w / np.linalg.norm(w)
+        u = tr.u_end
+    lyap = logs / (n * T)
+    assert lyap > 0.01
+    # the sum of both exponents is the trace -2 zeta: the second one is negative
+    assert lyap < 1.0
+
+
+def test_bounded_work_gives_a_failure_status_not_a_hang():
+    model = impact_pair_model(0.015, 0.5, 0.55, 0.12, 1.0)
+    tr = integrate(model, 0.9, np.zeros(2), 0.0, 1000.0, options=IntegrationOptions(max_steps=50))
+    assert tr.status == -1 and "maximum number of steps" in tr.message
+    assert np.all(np.isfinite(tr.u_end))
+    sh = shoot(model, 0.9, np.zeros(2), options=IntegrationOptions(max_steps=50))
+    assert not sh.converged and sh.status < 0
+    br = continue_orbits(model, np.zeros(2), 0.9, ContinuationOptions(0.5, 1.0), 
+                         integration=IntegrationOptions(max_steps=50))
+    assert br[0].status == 1 and not br[0].points and "starting orbit" in br[0].message
+
+
+def test_chattering_contact_is_reported():
+    """Huge contact damping makes the contact sticky: reported as a status, bounded."""
+    model = impact_pair_model(0.01, 0.0, 0.0, 0.5, 1e-3, contact_damping=1e6)
+    tr = integrate(model, 1.0, np.array([0.0, 1.0]), 0.0, 50.0,
+                   options=IntegrationOptions(rtol=1e-6, atol=1e-9, max_steps=200_000))
+    assert tr.status in (0, -1, -3)
+    assert np.all(np.isfinite(tr.u_end))
+
+
+@pytest.mark.parametrize("overrides", [
+    ["impact_pair.kappa=0.0"],
+    ["impact_pair.zeta=0.0", "impact_pair.f_m=0.0", "impact_pair.f_p=0.05"],
+    ["impact_pair.b_r=1e-9"],
+    ["impact_pair.kappa=1e-4"],
+    ["impact_pair.f_p=1.0", "impact_pair.kappa=0.0", "impact_pair.f_m=0.1",
+     "impact_pair.zeta=0.02"],
+])
+def test_extreme_scenes_write_finite_files(tmp_path, overrides):
+    out = tmp_path / "o"
+    args = ["run", "configs/impact_pair.toml", "--quiet", "--out", str(out),
+            "--set", "scene.analyses=[\"sweep\",\"continuation\"]",
+            "--set", "sweep.n_points=6", "--set", "sweep.omega_min=0.7",
+            "--set", "sweep.omega_max=1.2", "--set", "sweep.transient_periods=30",
+            "--set", "continuation.omega_min=0.7", "--set", "continuation.omega_max=1.2",
+            "--set", "continuation.max_points=60", "--set", "continuation.transient_periods=100"]
+    for o in overrides:
+        args += ["--set", o]
+    code = main(args)
+    assert code in (0, 1)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] in ("ok", "failed")
+    for name in ("sweep.npz", "branch.npz"):
+        if (out / name).exists():
+            with np.load(out / name) as z:
+                for k in z.files:
+                    if z[k].dtype.kind in "fc":
+                        assert np.all(np.isfinite(z[k])), (name, k)
+    for name in ("sweep.csv", "branch.csv"):
+        if (out / name).exists():
+            text = (out / name).read_text().lower()
+            assert "nan" not in text and "inf" not in text
