@@ -26,6 +26,44 @@ def _segments(x, y, stable):
             start = k
 
 
+def _draw(ax, arrays, quantity, lw_scale=1.0):
+    label = np.asarray(arrays["label"]).astype(str)
+    branch = np.asarray(arrays["branch"])
+    for b in np.unique(branch):
+        sel = (branch == b) & (label == "")
+        nper = int(np.asarray(arrays["n_periods"])[branch == b][0])
+        x = np.asarray(arrays["param"])[sel]
+        y = np.asarray(arrays[quantity])[sel]
+        st = np.asarray(arrays["stable"])[sel]
+        for xs, ys, s in _segments(x, y, st):
+            ax.plot(xs, ys, "-" if s else "--", color=_COLOR.get(nper, "tab:gray"),
+                    lw=(1.6 if s else 1.1) * lw_scale)
+    for lab, (mk, col) in _MARK.items():
+        sel = label == lab
+        if np.any(sel):
+            ax.plot(np.asarray(arrays["param"])[sel], np.asarray(arrays[quantity])[sel], mk,
+                    color=col, ms=5 * lw_scale, mfc="none", mew=1.2, zorder=5)
+
+
+def _inset_period_doubling(ax, arrays, quantity):
+    """Zoom on the period-2 branch (usually small against the whole range)."""
+    p = np.asarray(arrays["param"])
+    q = np.asarray(arrays[quantity])
+    sel2 = np.asarray(arrays["n_periods"]) == 2
+    x0, x1 = p[sel2].min(), p[sel2].max()
+    pad = 0.15 * (x1 - x0) + 1e-9
+    near = (p > x0 - pad) & (p < x1 + pad)
+    y0, y1 = q[near].min(), q[near].max()
+    ypad = 0.1 * (y1 - y0) + 1e-9
+    ins = ax.inset_axes([0.55, 0.45, 0.4, 0.35])
+    _draw(ins, arrays, quantity, lw_scale=0.8)
+    ins.set_xlim(x0 - pad, x1 + pad)
+    ins.set_ylim(y0 - ypad, y1 + ypad)
+    ins.tick_params(labelsize=6)
+    ins.set_title("period-doubling region", fontsize=7)
+    ax.indicate_inset_zoom(ins, edgecolor="0.5")
+
+
 def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "max q",
                   xlabel: str = "Omega", title: str = "", sweep: dict | None = None,
                   bounds=(), formats=("png", "svg"), dpi: int = 150) -> list[Path]:
@@ -38,25 +76,12 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
     FigureCanvasAgg(fig)
     ax = fig.add_subplot(111)
     label = np.asarray(arrays["label"]).astype(str)
-    branch = np.asarray(arrays["branch"])
-    for b in np.unique(branch):
-        sel = (branch == b) & (label == "")
-        nper = int(np.asarray(arrays["n_periods"])[branch == b][0])
-        x = np.asarray(arrays["param"])[sel]
-        y = np.asarray(arrays[quantity])[sel]
-        st = np.asarray(arrays["stable"])[sel]
-        for xs, ys, s in _segments(x, y, st):
-            ax.plot(xs, ys, "-" if s else "--", color=_COLOR.get(nper, "tab:gray"),
-                    lw=1.6 if s else 1.1)
-    for lab, (mk, col) in _MARK.items():
-        sel = label == lab
-        if np.any(sel):
-            xs = np.asarray(arrays["param"])[sel]
-            ys = np.asarray(arrays[quantity])[sel]
-            ax.plot(xs, ys, mk, color=col, ms=6, mfc="none", mew=1.5, zorder=5)
-            for xv, yv in zip(xs, ys):
-                ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4),
-                            fontsize=7, color=col)
+    _draw(ax, arrays, quantity)
+    for lab, (_, col) in _MARK.items():
+        for xv, yv in zip(np.asarray(arrays["param"])[label == lab],
+                          np.asarray(arrays[quantity])[label == lab]):
+            ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4), fontsize=7,
+                        color=col)
     if sweep is not None:
         ok = np.asarray(sweep["status"]) == 0 if "status" in sweep else slice(None)
         for d, mk, col in (("up", "^", "tab:cyan"), ("down", "v", "tab:red")):
@@ -77,6 +102,9 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
         handles += [Line2D([], [], marker="^", color="tab:cyan", ls="none", ms=4, label="sweep up"),
                     Line2D([], [], marker="v", color="tab:red", ls="none", ms=4, label="sweep down")]
     ax.legend(handles=handles, fontsize=7, loc="best")
+    nper = np.asarray(arrays["n_periods"])
+    if np.any(nper == 2):
+        _inset_period_doubling(ax, arrays, quantity)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)

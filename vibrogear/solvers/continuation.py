@@ -37,7 +37,7 @@ class ContinuationOptions:
     max_corrector_iter: int = 8
     tol: float = 1e-9
     param_scale: float = 1.0
-    locate_iter: int = 12
+    locate_iter: int = 10
     max_angle: float = 0.35          # radians between successive tangents
     period_doubling_branch: bool = True
 
@@ -144,12 +144,20 @@ def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPo
                        tangent=t.copy(), label=label, iterations=it)
 
 
-def _locate(prob, za, ta, ds_total, fa, which, opts):
-    """Bisection in arclength from point a (test value ``fa``) to its sign change."""
+def _locate(prob, za, ta, ds_total, fa, fb, which, opts):
+    """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
+    and the next point (``fb``, s = ds_total) for the zero of test function ``which``."""
     lo, hi = 0.0, ds_total
+    f_lo, f_hi = fa, fb
     best = None
+    side = 0
     for _ in range(opts.locate_iter):
-        mid = 0.5 * (lo + hi)
+        if f_hi != f_lo:
+            mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
+        else:
+            mid = 0.5 * (lo + hi)
+        if not lo < mid < hi:
+            mid = 0.5 * (lo + hi)
         got = _correct(prob, za + mid * ta, ta, opts.max_corrector_iter, opts.tol)
         if got is None:
             break
@@ -157,10 +165,18 @@ def _locate(prob, za, ta, ds_total, fa, which, opts):
         t = _tangent(prob.jac(f), ta)
         val = test_functions(f.monodromy, t)[which]
         best = (z, f, t, it, res)
-        if np.sign(val) == np.sign(fa):
-            lo = mid
+        if np.sign(val) == np.sign(f_lo):
+            lo, f_lo = mid, val
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
         else:
-            hi = mid
+            hi, f_hi = mid, val
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9:
+            break
     return best
 
 
@@ -202,6 +218,7 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
     ds = options.ds
     status, message = 0, "left the parameter range"
     tests_prev = test_functions(f.monodromy, t)
+    t_prev, ds_prev = None, ds
     d_prev = _half_defect(model, z0, options, integration, n_periods) if n_periods > 1 else None
     while True:
         if len(pts) >= options.max_points:
@@ -210,7 +227,13 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
         p = z[-1] * options.param_scale
         if p < options.param_min or p > options.param_max:
             break
-        got = _correct(prob, z + ds * t, t, options.max_corrector_iter, options.tol)
+        pred = z + ds * t
+        if t_prev is not None:
+            # second-order predictor: the tangent's change estimates the curvature
+            bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
+            if np.linalg.norm(bend) < 0.25 * ds:
+                pred = pred + bend
+        got = _correct(prob, pred, t, options.max_corrector_iter, options.tol)
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
@@ -234,7 +257,7 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
                 labels.append(which)
         if labels:
             which = labels[0]
-            loc = _locate(prob, z, t, ds, tests_prev[which], which, options)
+            loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
                 special = _point(prob, zl, fl, tl, itl, resl, label=which)
@@ -242,6 +265,7 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
                     pts.append(special)
                     if callback:
                         callback(special)
+        ds_used = ds
         ds = min(ds * 1.5, options.ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
         ds = max(ds, options.ds_min)
         if n_periods > 1:
@@ -254,6 +278,7 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
                                       f"between param = {p:.6g} and {p_new:.6g}")
                 break
             d_prev = d_new
+        t_prev, ds_prev = t, ds_used
         z, f, t, tests_prev = z_new, f_new, t_new, tests
         pts.append(_point(prob, z, f, t, it, res))
         if callback:
