@@ -224,3 +224,5 @@ class HousingConvergenceConfig:
     p1_size_factors: tuple[float, ...] = spec((1.5, 1.0, 0.75), min_len=1, gt=0.0)
     n_freqs: int = spec(10, ge=1, le=500)
     target_error: float = spec(0.01, gt=0.0, lt=1.0)
+    order: float | None = spec(None, gt=0.0, le=8.0, doc="convergence order for the Richardson reference "
+                               "(default: median of the per-mode fits, clipped to [1, 4])")
