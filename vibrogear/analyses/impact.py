@@ -100,6 +100,7 @@ def run_sweep(scene, ctx: RunContext) -> dict:
 
         res = sweep(model, params, directions=cfg.directions,
                     transient_periods=cfg.transient_periods, record_periods=cfg.record_periods,
+                    extra_transient_periods=cfg.extra_transient_periods,
                     max_period=cfg.max_period, period_tol=cfg.period_tol, options=opts,
                     u0=_start_state(model), callback=on_point, done=done)
     write_sweep(res, ctx.out)

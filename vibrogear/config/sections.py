@@ -68,6 +68,8 @@ class SweepConfig:
     omega_max: float = spec(gt=0.0)
     n_points: int = spec(200, ge=2, le=1_000_000)
     transient_periods: int = spec(200, ge=0, le=1_000_000)
+    extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
+                                        doc="more transient allowed while not yet periodic")
     record_periods: int = spec(32, ge=1, le=100_000)
     directions: tuple[str, ...] = spec(("up", "down"), min_len=1, max_len=2, choices=("up", "down"))
     max_period: int = spec(8, ge=1, le=64, doc="largest n classified as period-n")

@@ -195,40 +195,55 @@ def _failed(direction, index, param, R, status, message, u_seed, traj=None, wall
 
 
 def _run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
-               max_period, period_tol, cluster_tol, options, keep_states) -> PointRecord:
+               max_period, period_tol, cluster_tol, options, keep_states,
+               extra_transient_periods=0) -> PointRecord:
+    """Integrate the transient, record; while the motion is not yet periodic and the
+    extra-transient budget lasts, drop the record as transient too and record again."""
     wall = time.perf_counter()
     R = int(record_periods)
     if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
         return _failed(direction, index, param, R, -10,
                        "excitation frequency must be finite and > 0", u_seed)
     T = model.excitation_period(param)
-    t_rec = transient_periods * T
-    t1 = (transient_periods + R) * T
-    t_eval = (transient_periods + np.arange(1, R + 1)) * T
-    t_eval[-1] = t1
-    tr = integrate(model, param, u_seed, 0.0, t1, t_eval=t_eval, options=options,
-                   record_from=t_rec)
-    wall = time.perf_counter() - wall
-    if tr.status < 0:
-        return _failed(direction, index, param, R, tr.status, tr.message, u_seed, tr, wall)
-    states = tr.u
-    has_monitor = model.contacts.count > 0   # else the extrema come from the samples only
-    ok = (np.all(np.isfinite(states)) and np.all(np.isfinite(tr.u_end))
-          and (not has_monitor or (math.isfinite(tr.monitor_min)
-                                   and math.isfinite(tr.monitor_max))))
-    if not ok:
-        return _failed(direction, index, param, R, -2,
-                       "non-finite state or monitor values", u_seed, tr, wall)
+    seed = np.array(u_seed, dtype=float)
+    tp = int(transient_periods)
+    budget = int(extra_transient_periods)
+    counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
+    while True:
+        t_rec = tp * T
+        t1 = (tp + R) * T
+        t_eval = (tp + np.arange(1, R + 1)) * T
+        t_eval[-1] = t1
+        tr = integrate(model, param, seed, 0.0, t1, t_eval=t_eval, options=options,
+                       record_from=t_rec)
+        counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+        if tr.status < 0:
+            return _failed(direction, index, param, R, tr.status, tr.message, u_seed, tr,
+                           time.perf_counter() - wall)
+        states = tr.u
+        has_monitor = model.contacts.count > 0   # else the extrema come from the samples only
+        ok = (np.all(np.isfinite(states)) and np.all(np.isfinite(tr.u_end))
+              and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                       and math.isfinite(tr.monitor_max))))
+        if not ok:
+            return _failed(direction, index, param, R, -2, "non-finite state or monitor values",
+                           u_seed, tr, time.perf_counter() - wall)
+        m = model.n_modes
+        n, defect = classify_period(states, max_period, period_tol, split=m)
+        if n > 0 or budget <= 0:
+            break
+        # not periodic yet: the recorded window becomes transient, integrate on
+        seed = tr.u_end.copy()
+        tp = min(max(int(transient_periods), R), budget)
+        budget -= tp + R
     delta = monitored_deformation(model, param, t_eval, states)
-    m = model.n_modes
-    n, defect = classify_period(states, max_period, period_tol, split=m)
     clusters = count_clusters(states, cluster_tol, split=m)
     qmin = min(tr.monitor_min, float(delta.min())) if has_monitor else float(delta.min())
     qmax = max(tr.monitor_max, float(delta.max())) if has_monitor else float(delta.max())
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
                        tr.monitor_losses / R, defect, clusters, 0, "ok", tr.u_end.copy(),
-                       steps=tr.steps, rejected=tr.rejected, rhs_calls=tr.rhs_calls,
-                       events=tr.events, wall_time=wall,
+                       steps=int(counts[0]), rejected=int(counts[1]), rhs_calls=int(counts[2]),
+                       events=int(counts[3]), wall_time=time.perf_counter() - wall,
                        states=states.copy() if keep_states else None)
 
 
@@ -237,7 +252,8 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
 def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_periods: int = 200,
           record_periods: int = 32, max_period: int = 8, period_tol: float = 1e-5,
           options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
-          done=None, cluster_tol: float = 1e-3, keep_states: bool = False) -> SweepResult:
+          done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
+          extra_transient_periods: int = 0) -> SweepResult:
     """Sequential continuation of ``model`` over ``params`` (see the module docstring).
 
     ``callback(record)`` is called after each newly computed point; returning ``False``
@@ -264,7 +280,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
     done = dict(done or {})
     kw = dict(transient_periods=int(transient_periods), record_periods=int(record_periods),
               max_period=int(max_period), period_tol=float(period_tol),
-              cluster_tol=float(cluster_tol), options=options, keep_states=keep_states)
+              cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
+              extra_transient_periods=int(extra_transient_periods))
     records: list[PointRecord] = []
     stopped = False
     for direction in directions:
