@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotor_fixtures import FRISWELL_STEEL, friswell_overhung, friswell_two_disc, rotor_from_dict
+from rotor_fixtures import friswell_overhung, friswell_two_disc, rotor_from_dict
 from vibrogear.models.rotor import assemble_rotor, master_modes
 from vibrogear.solvers.rotor_modes import rotor_modes
 

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import new_figure, save_figure
+
 __all__ = ["plot_branches"]
 
 _MARK = {"LP": ("^", "black"), "PD": ("s", "tab:purple"), "NS": ("D", "tab:orange"),
@@ -68,12 +70,9 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
                   xlabel: str = "Omega", title: str = "", sweep: dict | None = None,
                   bounds=(), formats=("png", "svg"), dpi: int = 150) -> list[Path]:
     """Plot ``arrays[quantity]`` (e.g. qmax or qmin) of every branch against param."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-    fig = Figure(figsize=(8.0, 5.0))
-    FigureCanvasAgg(fig)
+    fig = new_figure((8.0, 5.0))
     ax = fig.add_subplot(111)
     label = np.asarray(arrays["label"]).astype(str)
     _draw(ax, arrays, quantity)
@@ -109,10 +108,4 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
     ax.grid(alpha=0.3)
-    fig.tight_layout()
-    out = []
-    for fmt in formats:
-        p = Path(path).with_suffix("." + fmt)
-        fig.savefig(p, dpi=dpi)
-        out.append(p)
-    return out
+    return save_figure(fig, path, formats, dpi)

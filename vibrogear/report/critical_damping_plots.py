@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import new_figure, save_figure
+
 __all__ = ["plot_fold_cusp"]
 
 
@@ -18,11 +20,7 @@ def plot_fold_cusp(result, path, *, title: str = "", extra_scans=(), formats=("p
                    dpi: int = 150) -> list[Path]:
     """``result``: a :class:`~vibrogear.analyses.critical_damping.CriticalDampingResult`;
     ``extra_scans``: more :class:`FoldScan` s (not part of the bisection) for the curves."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(7.5, 4.8))
-    FigureCanvasAgg(fig)
+    fig = new_figure((7.5, 4.8))
     ax = fig.add_subplot(111)
     with_f = sorted((s for s in [*result.scans, *extra_scans] if s.has_fold_pair),
                     key=lambda s: s.zeta)
@@ -53,10 +51,4 @@ def plot_fold_cusp(result, path, *, title: str = "", extra_scans=(), formats=("p
     ax.set_title(title + f" ({result.continuations} continuations in the bisection)", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
-    fig.tight_layout()
-    out = []
-    for fmt in formats:
-        p = Path(path).with_suffix("." + fmt)
-        fig.savefig(p, dpi=dpi)
-        out.append(p)
-    return out
+    return save_figure(fig, path, formats, dpi)

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import new_figure, save_figure
+
 __all__ = ["write_table", "plot_work_precision", "plot_shooting_precision"]
 
 
@@ -38,22 +40,12 @@ def _fmt(v) -> str:
 
 
 def _figure(ncols: int):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(5.0 * ncols, 4.6))
-    FigureCanvasAgg(fig)
+    fig = new_figure((5.0 * ncols, 4.6))
     return fig, [fig.add_subplot(1, ncols, k + 1) for k in range(ncols)]
 
 
 def _save(fig, path, formats, dpi) -> list[Path]:
-    fig.tight_layout()
-    out = []
-    for fmt in formats:
-        p = Path(path).with_suffix("." + fmt)
-        fig.savefig(p, dpi=dpi)
-        out.append(p)
-    return out
+    return save_figure(fig, path, formats, dpi)
 
 
 def _annotate(ax, xs, ys, labels, color="0.25") -> None:

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import new_figure, save_figure
 from .sweep_io import atomic_write_bytes
 
 __all__ = ["write_time_response", "plot_time_response"]
@@ -21,11 +22,7 @@ def write_time_response(out_dir, t, u, names=()) -> Path:
 
 def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str = "",
                        formats=("png", "svg"), dpi: int = 150) -> list[Path]:
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(10.0, 4.2))
-    FigureCanvasAgg(fig)
+    fig = new_figure((10.0, 4.2))
     ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
     ax1.plot(t / period, q, lw=0.8)
     ax1.set_xlabel("time / excitation period")
@@ -39,10 +36,4 @@ def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str =
         ax1.axhline(b, color="0.6", ls=":", lw=0.8)
         ax2.axvline(b, color="0.6", ls=":", lw=0.8)
     fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    out = []
-    for fmt in formats:
-        p = Path(path).with_suffix("." + fmt)
-        fig.savefig(p, dpi=dpi)
-        out.append(p)
-    return out
+    return save_figure(fig, path, formats, dpi)
