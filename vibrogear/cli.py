@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 
@@ -43,11 +42,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scene = load_scene(args.scene, tuple(args.overrides))
         if args.command in SINGLE:
-            from .config.base import build
+            from .config.base import as_data, build
             from .config.scene import Scene
-            data = dataclasses.asdict(scene)
+            data = as_data(scene)
             data["scene"]["analyses"] = [SINGLE[args.command]]
-            scene = build(Scene, _strip_none(data))
+            scene = build(Scene, data)
     except ConfigError as exc:
         print(f"vibrogear: invalid input: {exc}", file=sys.stderr)
         return 2
@@ -70,14 +69,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"wrote {out}/ ({', '.join(summary['analyses'])}; "
               f"{summary['wall_time_s']['total']:.2f} s)")
     return 0
-
-
-def _strip_none(obj):
-    if isinstance(obj, dict):
-        return {k: _strip_none(v) for k, v in obj.items() if v is not None}
-    if isinstance(obj, (list, tuple)):
-        return [_strip_none(v) for v in obj]
-    return obj
 
 
 if __name__ == "__main__":

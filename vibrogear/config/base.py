@@ -14,7 +14,7 @@ import types
 import typing
 from typing import Any
 
-__all__ = ["ConfigError", "spec", "build", "check", "set_path", "parse_override"]
+__all__ = ["ConfigError", "spec", "build", "check", "set_path", "parse_override", "as_data"]
 
 
 class ConfigError(ValueError):
@@ -203,3 +203,14 @@ def set_path(data: dict, keys: list[str], value: Any) -> None:
             raise ConfigError(".".join(keys), "no such list entry") from None
     else:
         node[last] = value
+
+
+def as_data(config: Any) -> Any:
+    """A config dataclass back as plain TOML-like data (tables, lists; None left out)."""
+    def strip(obj):
+        if isinstance(obj, dict):
+            return {k: strip(v) for k, v in obj.items() if v is not None}
+        if isinstance(obj, (list, tuple)):
+            return [strip(v) for v in obj]
+        return obj
+    return strip(dataclasses.asdict(config) if dataclasses.is_dataclass(config) else config)

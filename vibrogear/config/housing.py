@@ -182,12 +182,10 @@ class HousingSweepConfig:
 
     def housing_points(self, housing: "HousingConfig", path: str = "housing_sweep") -> tuple["HousingConfig", ...]:
         """The validated housing of each sweep point (ConfigError names the point and field)."""
-        import dataclasses
-
-        from .base import build, set_path
+        from .base import as_data, build, set_path
 
         keys = self.parameter.split(".")[1:]
-        base = _strip_none(dataclasses.asdict(housing))
+        base = as_data(housing)
         node = base
         try:
             for k in keys:
@@ -198,7 +196,7 @@ class HousingSweepConfig:
             raise ConfigError(f"{path}.parameter", f"{self.parameter!r} is not a number")
         out = []
         for i, v in enumerate(self.points()):
-            data = _strip_none(dataclasses.asdict(housing))
+            data = as_data(housing)
             set_path(data, keys, int(round(v)) if isinstance(node, int) else float(v))
             try:
                 out.append(build(HousingConfig, data, "housing"))
@@ -206,14 +204,6 @@ class HousingSweepConfig:
                 raise ConfigError(f"{path}.values[{i}]", f"{self.parameter} = {v:g} gives an invalid "
                                   f"housing: {exc}") from None
         return tuple(out)
-
-
-def _strip_none(obj):
-    if isinstance(obj, dict):
-        return {k: _strip_none(v) for k, v in obj.items() if v is not None}
-    if isinstance(obj, (list, tuple)):
-        return [_strip_none(v) for v in obj]
-    return obj
 
 
 @dataclass(frozen=True, kw_only=True)
