@@ -2,7 +2,6 @@
 rigid-body content of the bore coupling values, and the cache (a hit does no FE work)."""
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import subprocess
@@ -14,7 +13,8 @@ import pytest
 
 from vibrogear.config import load_scene
 from vibrogear.config.base import build
-from vibrogear.config.housing import HousingConfig, _strip_none
+from vibrogear.config.base import as_data
+from vibrogear.config.housing import HousingConfig
 from vibrogear.geometry.housing import housing_volume
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -22,7 +22,7 @@ SMALL = ROOT / "configs" / "housing_small.toml"
 
 
 def _cfg(**changes):
-    d = _strip_none(dataclasses.asdict(load_scene(SMALL).housing))
+    d = as_data(load_scene(SMALL).housing)
     for k, v in changes.items():
         node, *path = k.split(".")
         if path:

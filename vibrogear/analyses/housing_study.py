@@ -7,7 +7,6 @@ error / DOF / wall-time chart, and the cheapest run within ``target_error`` is n
 from __future__ import annotations
 
 import csv
-import dataclasses
 import math
 
 import numpy as np
@@ -60,9 +59,10 @@ def with_mesh(cfg, *, size: float | None = None, degree: int | None = None, refi
               count: int | None = None):
     """A copy of the housing config with other mesh settings (validated)."""
     from ..config.base import build
-    from ..config.housing import HousingConfig, _strip_none
+    from ..config.base import as_data
+    from ..config.housing import HousingConfig
 
-    d = _strip_none(dataclasses.asdict(cfg))
+    d = as_data(cfg)
     if size is not None:
         d["mesh"]["size"] = size
         d["mesh"].pop("bore_size", None)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import csv
-import dataclasses
 import json
 import multiprocessing as mp
 import os
@@ -55,7 +54,7 @@ def _done(path) -> dict[float, dict]:
 
 
 def run_sweep(scene, ctx) -> dict:
-    from ..config.housing import _strip_none
+    from ..config.base import as_data
 
     opts = scene.housing_sweep
     cfgs = opts.housing_points(scene.housing, "housing_sweep")
@@ -75,7 +74,7 @@ def run_sweep(scene, ctx) -> dict:
                                     mp_context=mp.get_context("spawn")) as pool:
             futs = {}
             for v, c in todo:
-                d = _strip_none(dataclasses.asdict(c))
+                d = as_data(c)
                 d["modes"] = {**d["modes"], "count": max(n, c.modes.count)}
                 futs[pool.submit(sweep_point, d, n)] = v
             for fut in cf.as_completed(futs):
