@@ -46,9 +46,6 @@ _P = np.array([
 ])
 N_SAMPLES = 4  # dense-output samples per step for switch and extremum detection
 
-# the right-hand side inlined into the stage loop (the called version serves the rest)
-_accel_inline = njit(cache=True, _nrt=False, inline="always", fastmath=FAST)(accel.py_func)
-
 
 @njit(cache=True, inline="always", _nrt=False)
 def _bw(theta, b):
@@ -100,8 +97,7 @@ def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
             for k in range(s):
                 acc += _A[s, k] * K[k, i]
             Ys[s, i] = y[i] + h * acc
-        _accel_inline(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s],
-                      cdS[s], tmp)
+        accel(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s], cdS[s], tmp)
     for i in range(n):
         y1[i] = Ys[6, i]
 
@@ -294,7 +290,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
     r = A.P.shape[0]
     cs = np.empty(H)
     sn = np.empty(H)
-    tmp = np.empty(3 * (nc + r) + 1)
+    tmp = np.empty(2 * r + 1)
     K = np.empty((7, n))
     Ys = np.empty((7, n))
     CxS = np.empty((7, nc))

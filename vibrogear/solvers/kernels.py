@@ -13,13 +13,12 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-__all__ = ["ModelArrays", "model_arrays", "scratch_size", "FAST", "effective_mode", "accel", "jac_times", "accel_dparam",
+__all__ = ["ModelArrays", "model_arrays", "FAST", "effective_mode", "accel", "jac_times", "accel_dparam",
            "contact_modes", "harmonics", "error_and_rate"]
 
 ModelArrays = namedtuple("ModelArrays", [
     "w2", "damp", "P", "Kc", "Bc", "Kc1", "Bc1", "F0", "Fc", "Fs",
     "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es", "smooth",
-    "Q",
 ])
 
 #: safe fast-math: reassociation (vectorised reductions) but no finite-math assumptions
@@ -30,7 +29,6 @@ def model_arrays(model, param: float) -> tuple:
     """Pack ``model`` at ``param`` into ModelArrays plus (Omega, spin, dOmega/dp, dspin/dp)."""
     cp, fo, ct = model.coupling, model.forcing, model.contacts
     spin = model.spin_per_param * param
-    m = model.n_modes
     f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
     arrs = ModelArrays(
         f64(model.omega2), f64(model.damping), f64(cp.P),
@@ -41,8 +39,6 @@ def model_arrays(model, param: float) -> tuple:
         f64(ct.error_cos), f64(ct.error_sin),
         # C1 contacts (Hertzian exponent > 1, no damping) switch without located events
         f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
-        # stacked projections [C; P]: one pass computes all of them
-        f64(np.vstack([ct.directions, cp.P])) if cp.P.shape[0] + ct.count else np.zeros((0, m)),
     )
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
@@ -66,11 +62,6 @@ def error_and_rate(A, j, Om, cs, sn):
         e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
         ed += w * (-A.ec[j, h] * sn[h] + A.es[j, h] * cs[h])
     return e, ed
-
-
-def scratch_size(A) -> int:
-    """Length of the ``tmp`` scratch array the kernels need."""
-    return 3 * (A.C.shape[0] + A.P.shape[0]) + 1
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -119,7 +110,6 @@ def contact_modes(A, t, Om, x, mode):
 def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     """out[:m] = x', out[m:] = x'' at state y = [x, v] with contact modes ``mode``.
 
-    ``tmp`` is scratch of length >= 3 (nc + r) + 1 (see :func:`scratch_size`).
     Also fills Cx[j] = c_j . x, Cv[j] = c_j . v (raw projections), kd[j] = df_j/ddelta,
     cd[j] = df_j/ddelta' (0 out of contact), for the Jacobian and the dense output.
     """
@@ -132,33 +122,33 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
         for h in range(H):
             a += A.Fc[h, i] * cs[h] + A.Fs[h, i] * sn[h]
         out[m + i] = a
-    # one pass over Q = [C; P] for both projections (x and v), one scatter of Q^T g
-    nc = A.C.shape[0]
     r = A.P.shape[0]
-    nq = nc + r
-    qx = tmp[:nq]
-    qv = tmp[nq:2 * nq]
-    g = tmp[2 * nq:3 * nq]
-    for k in range(nq):
+    if r > 0:
+        for k in range(r):
+            sx = 0.0
+            for i in range(m):
+                sx += A.P[k, i] * y[i]
+            sv = 0.0
+            for i in range(m):
+                sv += A.P[k, i] * y[m + i]
+            tmp[k] = sx
+            tmp[r + k] = sv
+        for k in range(r):
+            z = 0.0
+            for l in range(r):
+                z += A.Kc[k, l] * tmp[l] + A.Bc[k, l] * tmp[r + l]
+            if z != 0.0:
+                for i in range(m):
+                    out[m + i] -= A.P[k, i] * z
+    for j in range(A.C.shape[0]):
         sx = 0.0
+        for i in range(m):
+            sx += A.C[j, i] * y[i]
         sv = 0.0
         for i in range(m):
-            q = A.Q[k, i]
-            sx += q * y[i]
-            sv += q * y[m + i]
-        qx[k] = sx
-        qv[k] = sv
-    for k in range(r):
-        z = 0.0
-        for l in range(r):
-            z += A.Kc[k, l] * qx[nc + l] + A.Bc[k, l] * qv[nc + l]
-        g[nc + k] = z
-    for j in range(nc):
-        sx = qx[j]
-        sv = qv[j]
+            sv += A.C[j, i] * y[m + i]
         Cx[j] = sx
         Cv[j] = sv
-        g[j] = 0.0
         md = mode[j]
         if md == 0 and A.smooth[j] == 0.0:
             kd[j] = 0.0
@@ -197,12 +187,9 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
             kd[j] = 0.0
         f += A.cdamp[j] * ddot
         cd[j] = A.cdamp[j]
-        g[j] = f
-    for k in range(nq):
-        gk = g[k]
-        if gk != 0.0:
+        if f != 0.0:
             for i in range(m):
-                out[m + i] -= A.Q[k, i] * gk
+                out[m + i] -= A.C[j, i] * f
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
