@@ -64,7 +64,9 @@ class HousingModesConfig:
     count: int = spec(20, ge=1, le=2000, doc="number of master modes (ignored with cutoff_hz)")
     cutoff_hz: float | None = spec(None, gt=0.0, doc="all modes below this (paper: >= 2 x highest excitation)")
     max_count: int = spec(400, ge=1, le=5000, doc="safety cap on the number of modes with cutoff_hz")
-    tol: float = spec(1e-8, gt=0.0, le=1e-4, doc="SLEPc relative tolerance")
+    tol: float = spec(1e-8, gt=0.0, le=1e-4, doc="relative eigen-tolerance (SLEPc's criterion)")
+    solver: str = spec("block", choices=("block", "krylovschur"),
+                       doc="block Lanczos with block solves, or SLEPc Krylov-Schur (one solve per vector)")
     shapes: int = spec(12, ge=0, le=5000, doc="mode shapes written to XDMF")
 
 
