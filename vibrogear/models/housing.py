@@ -341,7 +341,7 @@ class _Breakdown(RuntimeError):
     pass
 
 
-def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=_BLOCK, smooth=_SMOOTH, seed=20261122):
+def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=None, smooth=None, seed=20261122):
     """Block Lanczos for A = K^-1 M (self-adjoint in the M inner product), full two-pass block
     Gram-Schmidt reorthogonalisation, no restarts: the basis grows by one block per step until
     ``want(theta)`` says enough leading Ritz values theta = 1/lambda have converged, with SLEPc's
@@ -353,7 +353,10 @@ def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=_BLOCK, smooth=_S
     exceed ``max_dim`` columns or loses rank."""
     from mpi4py import MPI
     import scipy.linalg as sla
+    from scipy.linalg.blas import dgemm
 
+    block = _BLOCK if block is None else block
+    smooth = _SMOOTH if smooth is None else smooth
     stats = {"n_rhs": 0, "steps": 0, "t_solve": 0.0, "t_orth": 0.0, "t_mmul": 0.0}
     n = K.getLocalSize()[0]
 
@@ -411,11 +414,11 @@ def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=_BLOCK, smooth=_S
             V = np.concatenate([V, np.zeros((n, extra))], axis=1, dtype=float)
             V = np.asfortranarray(V)
             MV = np.asfortranarray(np.concatenate([MV, np.zeros((n, extra))], axis=1))
-        W = solve(MV[:, j:j + b])                  # A V_j
+        W = np.asfortranarray(solve(MV[:, j:j + b]))  # A V_j
         t = time.perf_counter()
-        for _ in range(2):
+        for _ in range(2):                     # classical Gram-Schmidt, twice
             C = gram(MV[:, :j + b], W)
-            W -= V[:, :j + b] @ C
+            W = dgemm(-1.0, V[:, :j + b], C, 1.0, W, overwrite_c=True)  # in place: 3x numpy's W -= V @ C
             H[:j + b, j:j + b] += C
         stats["t_orth"] += time.perf_counter() - t
         Z = mmul(W)
