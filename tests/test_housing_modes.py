@@ -122,3 +122,16 @@ def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, cache):
     # a geometry change re-meshes
     thick = housing_modes(_cfg(wall_thickness=0.016))
     assert not thick.cached and thick.timings["meshing"] > 0.0
+
+
+def test_block_lanczos_agrees_with_slepc_krylov_schur_and_cutoff(fixed, cache):
+    """The default block Lanczos against SLEPc Krylov-Schur on the same mesh; cutoff_hz mode."""
+    from vibrogear.models.housing import housing_modes
+    ks = housing_modes(_cfg(**{"modes": {**as_data(_cfg().modes), "solver": "krylovschur"}}))
+    assert np.allclose(ks.freqs_hz, fixed.freqs_hz, rtol=1e-8)
+    assert ks.residuals.max() < 1e-6 and ks.orthogonality_error < 1e-8
+    cut = 0.5 * (fixed.freqs_hz[4] + fixed.freqs_hz[5])
+    below = housing_modes(_cfg(**{"modes": {**as_data(_cfg().modes), "cutoff_hz": cut}}))
+    assert below.n_modes == 5 and below.status == "ok"
+    assert np.allclose(below.freqs_hz, fixed.freqs_hz[:5], rtol=1e-8)
+    assert below.residuals.max() < 1e-6 and below.orthogonality_error < 1e-8

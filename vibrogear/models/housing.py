@@ -439,6 +439,9 @@ def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=None, smooth=None
             break
         if j + b > max_dim:
             raise _Breakdown(f"block Lanczos: {nconv} Ritz values converged in {j} basis vectors")
+    stats["basis"] = j
+    if k == 0:
+        return np.zeros(0), np.zeros((n, 0), order="F"), stats
     t = time.perf_counter()
     X = V[:, :j] @ Y[:, :k]
     del V, MV
@@ -449,7 +452,6 @@ def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=None, smooth=None
     MXa = mmul(Xa)
     Kp, Mp = gram(Xa, MX), gram(Xa, MXa)
     lam, Q = sla.eigh(0.5 * (Kp + Kp.T), 0.5 * (Mp + Mp.T))
-    stats["basis"] = j
     return lam, np.asfortranarray(Xa @ Q), stats
 
 
