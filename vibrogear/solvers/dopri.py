@@ -45,6 +45,7 @@ _P = np.array([
     [0, 40617522 / 29380423, -110615467 / 29380423, 69997945 / 29380423],
 ])
 N_SAMPLES = 4  # dense-output samples per step for switch and extremum detection
+PI_BETA = 0.08  # PI step-size controller
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -327,6 +328,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
     ext = np.array([np.inf, -np.inf])
     status = 0
     consecutive = 0
+    err_old = 1e-4
     t = t0
     Ys[0, :] = y
     accel(t, y, mode, A, Om, cs, sn, K[0], CxS[0], CvS[0], kdS[0], cdS[0], tmp)
@@ -364,7 +366,13 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             rejected += 1
             steps += 1
             continue
-        fac = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** -0.2)
+        # PI step-size control (Hairer's DOPRI5, beta = 0.08): smooth steps near the
+        # stability boundary of the stiff modal part instead of accept/reject cycling
+        if err == 0.0:
+            fac = 10.0
+        else:
+            fac = min(10.0, max(0.2, 0.9 * err ** -(0.2 - 0.75 * PI_BETA) * err_old ** PI_BETA))
+        err_old = max(err, 1e-4)
         h_next = h * fac
         # ---- event search on the dense output of this accepted step ----
         theta_ev, j_ev, m_ev = _event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk)

@@ -19,6 +19,7 @@ __all__ = ["ModelArrays", "model_arrays", "FAST", "effective_mode", "accel", "ja
 ModelArrays = namedtuple("ModelArrays", [
     "w2", "damp", "P", "Kc", "Bc", "Kc1", "Bc1", "F0", "Fc", "Fs",
     "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es", "smooth",
+    "harm", "Ct", "Pt",
 ])
 
 #: safe fast-math: reassociation (vectorised reductions) but no finite-math assumptions
@@ -39,6 +40,10 @@ def model_arrays(model, param: float) -> tuple:
         f64(ct.error_cos), f64(ct.error_sin),
         # C1 contacts (Hertzian exponent > 1, no damping) switch without located events
         f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
+        # contacts with mesh-stiffness or transmission-error harmonics
+        f64(np.any(np.hstack([ct.stiffness_cos, ct.stiffness_sin, ct.error_cos,
+                              ct.error_sin]) != 0.0, axis=1) if ct.count else np.zeros(0)),
+        f64(ct.directions.T), f64(cp.P.T),     # column-wise copies for the projections
     )
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
@@ -118,21 +123,36 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     H = cs.shape[0]
     for i in range(m):
         out[i] = y[m + i]
-        a = A.F0[i] - A.damp[i] * y[m + i] - A.w2[i] * y[i]
-        for h in range(H):
-            a += A.Fc[h, i] * cs[h] + A.Fs[h, i] * sn[h]
-        out[m + i] = a
+        out[m + i] = A.F0[i] - A.damp[i] * y[m + i] - A.w2[i] * y[i]
+    for h in range(H):
+        c_ = cs[h]
+        s_ = sn[h]
+        for i in range(m):
+            out[m + i] += A.Fc[h, i] * c_ + A.Fs[h, i] * s_
+    # projections c_j . x, c_j . v, p_k . x, p_k . v in one column-wise pass each
+    # (vectorises without reductions; the row-wise scatter below uses C and P)
+    nc = A.C.shape[0]
     r = A.P.shape[0]
+    for j in range(nc):
+        Cx[j] = 0.0
+        Cv[j] = 0.0
+    for i in range(m):
+        xi = y[i]
+        vi = y[m + i]
+        for j in range(nc):
+            c = A.Ct[i, j]
+            Cx[j] += c * xi
+            Cv[j] += c * vi
     if r > 0:
-        for k in range(r):
-            sx = 0.0
-            for i in range(m):
-                sx += A.P[k, i] * y[i]
-            sv = 0.0
-            for i in range(m):
-                sv += A.P[k, i] * y[m + i]
-            tmp[k] = sx
-            tmp[r + k] = sv
+        for k in range(2 * r):
+            tmp[k] = 0.0
+        for i in range(m):
+            xi = y[i]
+            vi = y[m + i]
+            for k in range(r):
+                c = A.Pt[i, k]
+                tmp[k] += c * xi
+                tmp[r + k] += c * vi
         for k in range(r):
             z = 0.0
             for l in range(r):
@@ -140,21 +160,15 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
             if z != 0.0:
                 for i in range(m):
                     out[m + i] -= A.P[k, i] * z
-    for j in range(A.C.shape[0]):
-        sx = 0.0
-        for i in range(m):
-            sx += A.C[j, i] * y[i]
-        sv = 0.0
-        for i in range(m):
-            sv += A.C[j, i] * y[m + i]
-        Cx[j] = sx
-        Cv[j] = sv
+    for j in range(nc):
+        sx = Cx[j]
+        sv = Cv[j]
         md = mode[j]
         if md == 0 and A.smooth[j] == 0.0:
             kd[j] = 0.0
             cd[j] = 0.0
             continue
-        e, ed = error_and_rate(A, j, Om, cs, sn)
+        e, ed = error_and_rate(A, j, Om, cs, sn) if A.harm[j] != 0.0 else (0.0, 0.0)
         if A.smooth[j] != 0.0:
             md = effective_mode(A, j, sx - e)
             if md == 0:
@@ -162,8 +176,9 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
                 cd[j] = 0.0
                 continue
         mod = 1.0
-        for h in range(H):
-            mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
+        if A.harm[j] != 0.0:
+            for h in range(H):
+                mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
         delta = sx - e
         ddot = sv - ed
         if md > 0:
