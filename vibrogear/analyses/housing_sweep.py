@@ -29,7 +29,8 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
     from ..config.base import build
     from ..config.housing import HousingConfig
     from ..geometry.housing import MeshingError
-    from ..models.housing import HousingSolveError, housing_modes
+    from ..models.housing import HousingSolveError
+    from ..models.housing_run import housing_modes
 
     cfg = build(HousingConfig, housing, "housing")
     t0 = time.perf_counter()

@@ -1,35 +1,29 @@
-"""Housing FE model: dolfinx 0.5.2 elasticity, SLEPc master modes, bore coupling values, cache.
+"""Housing FE model: dolfinx 0.5.2 elasticity, master modes, bore coupling values.
 
 The only module of vibrogear that imports dolfinx, PETSc or SLEPc, always inside functions, so
-importing it costs nothing and a cached result never loads dolfinx.  Under ``mpirun`` the mesh is
-read on rank 0 and partitioned by dolfinx; K and M are assembled and solved distributed; every
-rank returns the same :class:`HousingModes`; only rank 0 writes cache entries.  An exception on
-one rank aborts all of them (no hang).
+importing it costs nothing.  Under ``mpirun`` the mesh is read on rank 0 and partitioned by
+dolfinx; K and M are assembled and solved distributed.  Meshing, the on-disk cache and the MPI
+orchestration live in :mod:`.housing_run` (``housing_modes``).
 
     K = int sigma(u) : eps(v) dx (+ k_f int u . v ds_base),  M = int rho u . v dx,
     K x = omega^2 M x,  x^T M x = 1,  B_S = beta K_S  (paper eq. (3)).
 """
 from __future__ import annotations
 
-import dataclasses
 import os
 import resource
 import sys
-import tempfile
 import time
-import traceback
 from pathlib import Path
 
 import numpy as np
 
-from ..config.housing import HousingConfig, MaterialConfig
-from ..geometry.housing import (BoreGeometry, HousingMesh, bore_layout, build_housing_mesh,
-                                read_msh_arrays)
-from ..pipeline.cache import cache_key, entry_dir
-from .housing_result import HousingModes, load_modes, publish, save_modes
+from ..config.housing import MaterialConfig
+from ..geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
+from .block_lanczos import Breakdown, block_lanczos
+from .housing_result import HousingModes
 
-__all__ = ["HousingModes", "HousingSolveError", "housing_modes", "solve_mesh_modes",
-           "housing_cache_keys", "under_mpi"]
+__all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes"]
 
 _PREVIEW_MODES = 6
 _PREVIEW_POINTS = 4000
@@ -37,109 +31,6 @@ _PREVIEW_POINTS = 4000
 
 class HousingSolveError(RuntimeError):
     """The eigen-solve failed or converged too few modes."""
-
-
-def under_mpi() -> bool:
-    return int(os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))) > 1
-
-
-def _comm():
-    if not under_mpi():
-        return None
-    from mpi4py import MPI
-    return MPI.COMM_WORLD
-
-
-def _bcast(comm, value):
-    return value if comm is None else comm.bcast(value, root=0)
-
-
-def _rank(comm) -> int:
-    return 0 if comm is None else comm.rank
-
-
-def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
-    """(mesh key, modes key): the mesh depends on geometry and mesh sizes only."""
-    geo = dataclasses.asdict(cfg)
-    for k in ("material", "modes", "support", "foundation_stiffness"):
-        geo.pop(k)
-    geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
-    return cache_key("housing-mesh", geo), cache_key("housing-modes", dataclasses.asdict(cfg))
-
-
-def housing_modes(cfg: HousingConfig, *, cache: bool = True) -> HousingModes:
-    """Mesh -> assemble -> solve, with the on-disk cache (a hit does no FE work)."""
-    comm = _comm()
-    mesh_key, modes_key = housing_cache_keys(cfg)
-    final = entry_dir(modes_key)
-    if cache and _bcast(comm, (final / "meta.json").is_file() if _rank(comm) == 0 else None):
-        t0 = time.perf_counter()
-        res = load_modes(final, key=modes_key)
-        return dataclasses.replace(res, timings={**res.timings, "cache_load": time.perf_counter() - t0})
-    try:
-        return _compute(cfg, comm, mesh_key, modes_key, cache)
-    except Exception:
-        if comm is not None and comm.size > 1:
-            sys.stderr.write(f"[rank {comm.rank}] housing FE failed; aborting all ranks\n")
-            traceback.print_exc()
-            sys.stderr.flush()
-            comm.Abort(1)
-        raise
-
-
-def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
-    rank = _rank(comm)
-    root = (entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir()))
-    work = _bcast(comm, Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root)) if rank == 0 else None)
-    mesh_dir = entry_dir(mesh_key)
-    t_mesh = 0.0
-    if rank == 0:
-        if cache and (mesh_dir / "mesh.msh").is_file():
-            hm = _load_mesh_meta(mesh_dir)
-        else:
-            tmp = Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
-            hm = build_housing_mesh(cfg, tmp / "mesh.msh")
-            t_mesh = hm.seconds
-            _save_mesh_meta(hm, tmp)
-            if cache:
-                publish(tmp, mesh_dir)
-                hm = hm._replace(path=mesh_dir / "mesh.msh")
-            if not (hm.path.is_file()):
-                hm = _load_mesh_meta(mesh_dir)
-        msg = hm
-    else:
-        msg = None
-    hm = _bcast(comm, msg)
-    if comm is not None and os.environ.get("VIBROGEAR_HOUSING_FAIL_RANK") == str(comm.rank):
-        raise RuntimeError("injected failure (VIBROGEAR_HOUSING_FAIL_RANK, for the MPI abort test)")
-    m = cfg.modes
-    res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bore_layout(cfg),
-                           count=m.count, cutoff_hz=m.cutoff_hz, max_count=m.max_count, tol=m.tol,
-                           solver=m.solver, support=cfg.support, foundation_stiffness=cfg.foundation_stiffness,
-                           shapes=m.shapes, shapes_dir=work)
-    res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key)
-    if rank == 0:
-        save_modes(res, work)
-        if cache:
-            final = publish(work, entry_dir(modes_key))
-            res = dataclasses.replace(res, shapes_path=(final / res.shapes_path.name)
-                                      if res.shapes_path is not None else None)
-    return _bcast(comm, res) if comm is not None else res
-
-
-def _save_mesh_meta(hm: HousingMesh, folder: Path) -> None:
-    import json
-    d = hm._asdict()
-    d["path"] = hm.path.name
-    (folder / "mesh.json").write_text(json.dumps(d))
-
-
-def _load_mesh_meta(folder: Path) -> HousingMesh:
-    import json
-    d = json.loads((folder / "mesh.json").read_text())
-    d["path"] = folder / d["path"]
-    d["bore_tags"] = tuple(d["bore_tags"])
-    return HousingMesh(**d)
 
 
 def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int = 2,
@@ -337,122 +228,16 @@ def _matsolve(F, Y, comm):
     return out
 
 
-class _Breakdown(RuntimeError):
-    pass
-
-
-def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, block=None, smooth=None, seed=20261122):
-    """Block Lanczos for A = K^-1 M (self-adjoint in the M inner product), full two-pass block
-    Gram-Schmidt reorthogonalisation, no restarts: the basis grows by one block per step until
-    ``want(theta)`` says enough leading Ritz values theta = 1/lambda have converged, with SLEPc's
-    criterion ||A x - theta x||_M / theta < tol.  The converged Ritz vectors then get one step of
-    subspace iteration (x <- A x, Rayleigh-Ritz on (K, M)): it damps their high-frequency error by
-    lambda_i / lambda_k, so ||K x - lambda M x|| / ||K x|| ends near tol, as with SLEPc.
-
-    Returns (lam ascending, X local rows, statistics).  Raises _Breakdown when the basis would
-    exceed ``max_dim`` columns or loses rank."""
+def _block_lanczos(K, M, F, comm, *, want, max_dim, tol):
+    """Block Lanczos (:mod:`.block_lanczos`) with PETSc operators: the factor F of K, M."""
     from mpi4py import MPI
-    import scipy.linalg as sla
-    from scipy.linalg.blas import dgemm
 
-    block = _BLOCK if block is None else block
-    smooth = _SMOOTH if smooth is None else smooth
-    stats = {"n_rhs": 0, "steps": 0, "t_solve": 0.0, "t_orth": 0.0, "t_mmul": 0.0}
-    n = K.getLocalSize()[0]
-
-    def gram(A, B):
-        return comm.allreduce(A.T @ B, op=MPI.SUM)
-
-    def solve(Y):
-        t = time.perf_counter()
-        out = _matsolve(F, Y, comm)
-        stats["t_solve"] += time.perf_counter() - t
-        stats["n_rhs"] += Y.shape[1]
-        return out
-
-    def mmul(W):
-        t = time.perf_counter()
-        out = _matmul(M, W)
-        stats["t_mmul"] += time.perf_counter() - t
-        return out
-
-    def orthonormalize(W, Z):
-        """M-orthonormalise W (Z = M W) by Cholesky-QR twice: W_in = W_out R."""
-        R = np.eye(W.shape[1])
-        for _ in range(2):
-            G = gram(W, Z)
-            G = 0.5 * (G + G.T)
-            try:
-                L = np.linalg.cholesky(G)
-            except np.linalg.LinAlgError:
-                try:
-                    L = np.linalg.cholesky(G + 1e-14 * np.trace(G) * np.eye(len(G)))
-                except np.linalg.LinAlgError:
-                    raise _Breakdown("block Lanczos basis lost rank") from None
-            Li = sla.solve_triangular(L, np.eye(len(G)), lower=True)
-            W, Z, R = W @ Li.T, Z @ Li.T, L.T @ R
-        return W, Z, R
-
-    b = block
-    cap = b * (max_dim // b + 1)
-    alloc = min(cap, 4 * b * 8)
-    V = np.zeros((n, alloc + b), order="F")
-    MV = np.zeros_like(V)
-    H = np.zeros((cap + b, cap))
-    rng = np.random.default_rng(seed + comm.rank)
-    W = rng.standard_normal((n, b))
-    for _ in range(max(1, smooth)):            # into the range of A, and smoother
-        W = solve(mmul(W))
-    t = time.perf_counter()
-    W, Z, _ = orthonormalize(W, mmul(W))
-    stats["t_orth"] += time.perf_counter() - t
-    V[:, :b], MV[:, :b] = W, Z
-    j = 0
-    while True:
-        if j + 2 * b > V.shape[1]:                 # grow the basis storage
-            extra = min(cap + b, 2 * V.shape[1]) - V.shape[1]
-            V = np.concatenate([V, np.zeros((n, extra))], axis=1, dtype=float)
-            V = np.asfortranarray(V)
-            MV = np.asfortranarray(np.concatenate([MV, np.zeros((n, extra))], axis=1))
-        W = np.asfortranarray(solve(MV[:, j:j + b]))  # A V_j
-        t = time.perf_counter()
-        for _ in range(2):                     # classical Gram-Schmidt, twice
-            C = gram(MV[:, :j + b], W)
-            W = dgemm(-1.0, V[:, :j + b], C, 1.0, W, overwrite_c=True)  # in place: 3x numpy's W -= V @ C
-            H[:j + b, j:j + b] += C
-        stats["t_orth"] += time.perf_counter() - t
-        Z = mmul(W)
-        t = time.perf_counter()
-        W, Z, R = orthonormalize(W, Z)
-        stats["t_orth"] += time.perf_counter() - t
-        V[:, j + b:j + 2 * b], MV[:, j + b:j + 2 * b] = W, Z
-        H[j + b:j + 2 * b, j:j + b] = R
-        j += b
-        stats["steps"] += 1
-        T = H[:j, :j]
-        theta, Y = np.linalg.eigh(0.5 * (T + T.T))
-        theta, Y = theta[::-1].copy(), np.ascontiguousarray(Y[:, ::-1])
-        est = np.linalg.norm(H[j:j + b, j - b:j] @ Y[j - b:j, :], axis=0) / np.abs(theta)
-        nconv = int(np.argmin(est < tol)) if not np.all(est < tol) else len(est)
-        k = want(theta[:nconv])
-        if k is not None:
-            break
-        if j + b > max_dim:
-            raise _Breakdown(f"block Lanczos: {nconv} Ritz values converged in {j} basis vectors")
-    stats["basis"] = j
-    if k == 0:
-        return np.zeros(0), np.zeros((n, 0), order="F"), stats
-    t = time.perf_counter()
-    X = V[:, :j] @ Y[:, :k]
-    del V, MV
-    stats["t_orth"] += time.perf_counter() - t
-    # one subspace-iteration step + Rayleigh-Ritz: K (A X) = M X, so Kp needs no K product
-    MX = mmul(X)
-    Xa = solve(MX)
-    MXa = mmul(Xa)
-    Kp, Mp = gram(Xa, MX), gram(Xa, MXa)
-    lam, Q = sla.eigh(0.5 * (Kp + Kp.T), 0.5 * (Mp + Mp.T))
-    return lam, np.asfortranarray(Xa @ Q), stats
+    return block_lanczos(
+        K.getLocalSize()[0], solve=lambda Y: _matsolve(F, Y, comm),
+        mmul=lambda W: _matmul(M, W),
+        gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
+        want=want, max_dim=max_dim, tol=tol, block=_BLOCK, smooth=_SMOOTH,
+        seed=20261122 + comm.rank)
 
 
 def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block"):
@@ -460,8 +245,6 @@ def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block")
     SLEPc Krylov-Schur with shift-and-invert at 0 (``solver = "krylovschur"``, and the fallback).
 
     Returns (lam, X local rows (n_own x m), converged reason, n converged, status, message, info)."""
-    from petsc4py import PETSc
-
     timings = {}
     t0 = time.perf_counter()
     ksp = _factor(K, comm)
@@ -489,7 +272,7 @@ def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block")
         try:
             lam, X, st = _block_lanczos(K, M, ksp.getPC().getFactorMatrix(), comm, want=want, tol=tol,
                                         max_dim=max(3 * nev + 100, 2 * nev + 16 * _BLOCK))
-        except _Breakdown as exc:
+        except Breakdown as exc:
             info["fallback"] = str(exc)
             solver = "krylovschur"
         else:
