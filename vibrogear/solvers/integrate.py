@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import time
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -57,14 +58,20 @@ class Trajectory:
         return self.status == 0
 
 
+_W2_MAX: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def _initial_step(model: ReducedModel, param: float, span: float, rtol: float) -> float:
-    ct = model.contacts
-    k_contact = 0.0
-    if ct.count:
-        k = np.maximum(np.abs(ct.k_hi), np.abs(ct.k_lo)) * np.sum(ct.directions ** 2, axis=1)
-        k_contact = float(np.max(k))
-    w_max = np.sqrt(max(float(np.max(model.omega2, initial=0.0)) + k_contact,
-                        model.excitation_frequency(param) ** 2, 1e-30))
+    """A step well below the fastest time scale (modal, contact, excitation)."""
+    w2 = _W2_MAX.get(model)
+    if w2 is None:
+        ct = model.contacts
+        k_contact = 0.0
+        if ct.count:
+            k = np.maximum(np.abs(ct.k_hi), np.abs(ct.k_lo)) * np.sum(ct.directions ** 2, axis=1)
+            k_contact = float(np.max(k))
+        w2 = _W2_MAX[model] = float(np.max(model.omega2, initial=0.0)) + k_contact
+    w_max = np.sqrt(max(w2, model.excitation_frequency(param) ** 2, 1e-30))
     return min(span, 0.1 * rtol ** 0.2 / w_max)
 
 

@@ -8,6 +8,7 @@ events, so that every step sees one smooth vector field.
 """
 from __future__ import annotations
 
+import weakref
 from collections import namedtuple
 
 import numpy as np
@@ -26,14 +27,30 @@ ModelArrays = namedtuple("ModelArrays", [
 FAST = {"reassoc", "contract", "arcp", "nsz"}
 
 
+_STATIC: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def model_arrays(model, param: float) -> tuple:
-    """Pack ``model`` at ``param`` into ModelArrays plus (Omega, spin, dOmega/dp, dspin/dp)."""
-    cp, fo, ct = model.coupling, model.forcing, model.contacts
+    """Pack ``model`` at ``param`` into ModelArrays plus (Omega, spin, dOmega/dp, dspin/dp).
+
+    The parameter-free arrays are packed once per model (models are immutable) and reused."""
+    arrs = _STATIC.get(model)
+    if arrs is None:
+        arrs = _STATIC[model] = _pack(model)
     spin = model.spin_per_param * param
+    cp = model.coupling
+    if spin != 0.0 and cp.P.shape[0]:
+        arrs = arrs._replace(Kc=np.ascontiguousarray(cp.Kc0 + spin * cp.Kc1, dtype=np.float64),
+                             Bc=np.ascontiguousarray(cp.Bc0 + spin * cp.Bc1, dtype=np.float64))
+    return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
+
+
+def _pack(model) -> tuple:
+    cp, fo, ct = model.coupling, model.forcing, model.contacts
     f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
-    arrs = ModelArrays(
-        f64(model.omega2), f64(model.damping), f64(cp.P),
-        f64(cp.Kc0 + spin * cp.Kc1), f64(cp.Bc0 + spin * cp.Bc1), f64(cp.Kc1), f64(cp.Bc1),
+    return ModelArrays(
+        f64(model.omega2), f64(model.damping), f64(cp.P), f64(cp.Kc0), f64(cp.Bc0),
+        f64(cp.Kc1), f64(cp.Bc1),
         f64(fo.F0), f64(fo.Fc), f64(fo.Fs),
         f64(ct.directions), f64(ct.k_hi), f64(ct.k_lo), f64(ct.gap_hi), f64(ct.gap_lo),
         f64(ct.exponent), f64(ct.damping), f64(ct.stiffness_cos), f64(ct.stiffness_sin),
@@ -45,7 +62,6 @@ def model_arrays(model, param: float) -> tuple:
                               ct.error_sin]) != 0.0, axis=1) if ct.count else np.zeros(0)),
         f64(ct.directions.T), f64(cp.P.T),     # column-wise copies for the projections
     )
-    return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
 
 
 @njit(cache=True, inline="always", _nrt=False)
