@@ -94,10 +94,12 @@ def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
     n = y.shape[0]
     for s in range(1, 7):
         for i in range(n):
-            acc = 0.0
-            for k in range(s):
-                acc += _A[s, k] * K[k, i]
-            Ys[s, i] = y[i] + h * acc
+            Ys[s, i] = y[i]
+        for k in range(s):               # axpy per earlier stage: vectorises
+            a = h * _A[s, k]
+            if a != 0.0:
+                for i in range(n):
+                    Ys[s, i] += a * K[k, i]
         accel(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s], cdS[s], tmp)
     for i in range(n):
         y1[i] = Ys[6, i]
@@ -109,9 +111,8 @@ def _error_norm(K, y, y1, h, rtol, atol):
     err = 0.0
     finite = True
     for i in range(n):
-        e = 0.0
-        for k in range(7):
-            e += _E[k] * K[k, i]
+        e = (_E[0] * K[0, i] + _E[2] * K[2, i] + _E[3] * K[3, i] + _E[4] * K[4, i]
+             + _E[5] * K[5, i] + _E[6] * K[6, i])
         sc = atol + rtol * max(abs(y[i]), abs(y1[i]))
         q = h * e / sc
         err += q * q
