@@ -95,6 +95,23 @@ def power(s, p):
     return np.exp(p * np.log(s))
 
 
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def project(Mt, y, px, pv):
+    """px = Mt^T y[:m], pv = Mt^T y[m:] for Mt (m x k), column-wise (vectorises)."""
+    m = Mt.shape[0]
+    k = Mt.shape[1]
+    for j in range(k):
+        px[j] = 0.0
+        pv[j] = 0.0
+    for i in range(m):
+        xi = y[i]
+        vi = y[m + i]
+        for j in range(k):
+            c = Mt[i, j]
+            px[j] += c * xi
+            pv[j] += c * vi
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def effective_mode(A, j, delta):
     """Contact mode from the sign of delta - gap."""
@@ -149,26 +166,9 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     # (vectorises without reductions; the row-wise scatter below uses C and P)
     nc = A.C.shape[0]
     r = A.P.shape[0]
-    for j in range(nc):
-        Cx[j] = 0.0
-        Cv[j] = 0.0
-    for i in range(m):
-        xi = y[i]
-        vi = y[m + i]
-        for j in range(nc):
-            c = A.Ct[i, j]
-            Cx[j] += c * xi
-            Cv[j] += c * vi
+    project(A.Ct, y, Cx, Cv)
     if r > 0:
-        for k in range(2 * r):
-            tmp[k] = 0.0
-        for i in range(m):
-            xi = y[i]
-            vi = y[m + i]
-            for k in range(r):
-                c = A.Pt[i, k]
-                tmp[k] += c * xi
-                tmp[r + k] += c * vi
+        project(A.Pt, y, tmp[:r], tmp[r:2 * r])
         for k in range(r):
             z = 0.0
             for l in range(r):
