@@ -51,6 +51,7 @@ def test_undamped_orbit_exists_on_unit_circle():
     assert ex.contact_sides == {1, -1} and sh.impacts == 2
     assert abs(np.prod(sh.floquet).real - 1.0) < 1e-8
     assert np.allclose(np.abs(sh.floquet), 1.0, atol=1e-6)
+    assert not sh.stable                       # neutral, not asymptotically stable
 
 
 def test_tiny_clearance_is_the_linear_system():

@@ -32,7 +32,7 @@ def main(argv: list[str] | None = None) -> int:
     from .config import ConfigError, load_scene
 
     if args.command == "cache":
-        from .pipeline.cache import cache_dir, clear_cache
+        from .cache import cache_dir, clear_cache
         if args.action == "clear":
             n = clear_cache()
             print(f"removed {n} cache entries from {cache_dir()}")

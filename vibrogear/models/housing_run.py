@@ -17,7 +17,7 @@ from pathlib import Path
 
 from ..config.housing import HousingConfig
 from ..geometry.housing import HousingMesh, bore_layout, build_housing_mesh
-from ..pipeline.cache import cache_key, entry_dir
+from ..cache import cache_key, entry_dir
 from .housing_result import HousingModes, load_modes, publish, save_modes
 
 __all__ = ["HousingModes", "housing_modes", "housing_cache_keys", "under_mpi"]

@@ -19,7 +19,7 @@ from typing import Callable
 import numpy as np
 
 from ..models.reduced import ReducedModel
-from .floquet import test_functions
+from .floquet import stability, test_functions
 from .integrate import IntegrationOptions, integrate
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
 
@@ -65,7 +65,7 @@ class BranchPoint:
 
     @property
     def stable(self) -> bool:
-        return bool(np.all(np.abs(self.floquet) < 1.0))
+        return stability(self.floquet)
 
 
 @dataclass(frozen=True, eq=False)

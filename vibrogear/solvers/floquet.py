@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["floquet_multipliers", "test_functions", "stability"]
+__all__ = ["floquet_multipliers", "test_functions", "stability", "NEUTRAL_MARGIN"]
 
 _IMAG_TOL = 1e-9
 
@@ -22,8 +22,13 @@ def floquet_multipliers(monodromy: np.ndarray) -> np.ndarray:
     return np.linalg.eigvals(monodromy)
 
 
-def stability(multipliers: np.ndarray, margin: float = 0.0) -> bool:
-    """Stable when every multiplier lies inside the unit circle (by ``margin``)."""
+#: multipliers within this distance of the unit circle count as neutral, not stable (an
+#: undamped orbit has |mu| = 1 up to round-off)
+NEUTRAL_MARGIN = 1e-9
+
+
+def stability(multipliers: np.ndarray, margin: float = NEUTRAL_MARGIN) -> bool:
+    """Asymptotically stable: every multiplier inside the unit circle by ``margin``."""
     return bool(np.all(np.abs(multipliers) < 1.0 - margin))
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models.reduced import ReducedModel
+from .floquet import stability
 from .integrate import IntegrationOptions, Trajectory, integrate
 
 __all__ = ["PeriodicFlow", "periodic_flow", "ShootingResult", "shoot", "residual_norm"]
@@ -73,7 +74,7 @@ class ShootingResult:
 
     @property
     def stable(self) -> bool:
-        return bool(np.all(np.abs(self.floquet) < 1.0))
+        return stability(self.floquet)
 
 
 def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,

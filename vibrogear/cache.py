@@ -8,7 +8,7 @@ import shutil
 from pathlib import Path
 from typing import Any
 
-from .. import __version__
+from . import __version__
 
 __all__ = ["cache_dir", "cache_key", "entry_dir", "clear_cache"]
 
