@@ -7,12 +7,14 @@ folds at the last zeta with folds 0.855433 / 0.855433 (gap 4.3e-7), and the
 """
 import json
 
+import numpy as np
 import pytest
 
 from vibrogear.analyses.critical_damping import critical_zeta, fold_scan
 from vibrogear.cli import main
 from vibrogear.config import load_scene
 from vibrogear.solvers.integrate import IntegrationOptions
+from vibrogear.verification import impact_exact as ex
 
 SCENE = "configs/impact_pair.toml"
 ZETA_C = 0.033752
@@ -25,6 +27,26 @@ def cfg():
     return load_scene(SCENE).impact_pair
 
 
+def _exact_sweep_end(cfg, zeta, omegas):
+    """Sequential continuation with the exact piecewise-linear solution (independent of the
+    solvers): each orbit seeds the next; returns the last orbit."""
+    p = ex.ImpactParams(zeta=zeta, kappa=cfg.kappa, f_m=cfg.f_m, f_p=cfg.f_p, b_r=cfg.b_r)
+    u = np.array([cfg.f_m, 0.0])
+    for om in omegas:
+        u = ex.exact_flow(p, om, u, 0.0, 150 * 2 * np.pi / om).u_end
+        orb = ex.periodic_orbit(p, om, u)
+        assert orb.converged
+        u = orb.u0
+    return orb
+
+
+def _coexist(cfg, zeta, om, lo, hi):
+    """Exact orbits at ``om`` reached from below the window and from above it."""
+    up = _exact_sweep_end(cfg, zeta, np.linspace(lo - 0.03, om, 4))
+    down = _exact_sweep_end(cfg, zeta, np.linspace(hi + 0.03, om, 4))
+    return up, down
+
+
 def test_fold_pair_below_none_above(cfg):
     below = fold_scan(cfg, ZETA_C - 0.003, integration=OPTS, shooting_tol=1e-8, **WINDOW)
     above = fold_scan(cfg, ZETA_C + 0.003, integration=OPTS, shooting_tol=1e-8, **WINDOW)
@@ -33,12 +55,25 @@ def test_fold_pair_below_none_above(cfg):
     lo, hi = below.folds
     assert 0.85 < lo < hi < 0.87          # hysteresis window of the primary resonance
     assert above.folds == ()
+    # independent check with the exact solution: two stable orbits coexist inside the window
+    # below zeta_c, a single one above it
+    up, down = _coexist(cfg, ZETA_C - 0.003, 0.5 * (lo + hi), lo, hi)
+    assert up.stable and down.stable and up.q_max - down.q_max > 0.1
+    up, down = _coexist(cfg, ZETA_C + 0.003, 0.5 * (lo + hi), lo, hi)
+    assert abs(up.q_max - down.q_max) < 1e-6
 
 
-def test_default_scene_folds_in_window(cfg):
-    """At the scene's zeta = 0.015 the two folds are the ones of the continuation plot."""
+def test_default_scene_folds_bound_the_hysteresis(cfg):
+    """At the scene's zeta = 0.015 the folds bound the window where the exact solution has two
+    stable orbits: inside they coexist, just outside either fold only one is left."""
     s = fold_scan(cfg, 0.015, integration=OPTS, shooting_tol=1e-8, **WINDOW)
-    assert s.folds == pytest.approx((0.87231, 0.92630), abs=2e-4)
+    lo, hi = s.folds
+    assert 0.8 < lo < hi < 1.0
+    up, down = _coexist(cfg, 0.015, 0.5 * (lo + hi), lo, hi)
+    assert up.stable and down.stable and up.q_max - down.q_max > 1.0
+    for om in (lo - 0.005, hi + 0.005):
+        up, down = _coexist(cfg, 0.015, om, lo, hi)
+        assert abs(up.q_max - down.q_max) < 1e-6
 
 
 def test_bisection_coarse(cfg):
