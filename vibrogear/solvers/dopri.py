@@ -271,7 +271,7 @@ def _variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, 
         jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], tmp)
         ts = t + _C[s] * h_used
         harmonics(ts, Om, cs, sn)
-        accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp)
+        accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp, tmp)
         for i in range(n):
             KP[s, i, n] += dfp[i]
     for i in range(n):

@@ -112,6 +112,21 @@ def project(Mt, y, px, pv):
             pv[j] += c * vi
 
 
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def scatter_coupling(A, Kc, Bc, px, pv, out, scale):
+    """out[m:] -= scale * P^T (Kc px + Bc pv): the low-rank linear coupling force."""
+    m = A.w2.shape[0]
+    r = A.P.shape[0]
+    for k in range(r):
+        z = 0.0
+        for l in range(r):
+            z += Kc[k, l] * px[l] + Bc[k, l] * pv[l]
+        z *= scale
+        if z != 0.0:
+            for i in range(m):
+                out[m + i] -= A.P[k, i] * z
+
+
 @njit(cache=True, inline="always", _nrt=False)
 def effective_mode(A, j, delta):
     """Contact mode from the sign of delta - gap."""
@@ -169,13 +184,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     project(A.Ct, y, Cx, Cv)
     if r > 0:
         project(A.Pt, y, tmp[:r], tmp[r:2 * r])
-        for k in range(r):
-            z = 0.0
-            for l in range(r):
-                z += A.Kc[k, l] * tmp[l] + A.Bc[k, l] * tmp[r + l]
-            if z != 0.0:
-                for i in range(m):
-                    out[m + i] -= A.P[k, i] * z
+        scatter_coupling(A, A.Kc, A.Bc, tmp[:r], tmp[r:2 * r], out, 1.0)
     for j in range(nc):
         sx = Cx[j]
         sv = Cv[j]
@@ -235,21 +244,8 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
     r = A.P.shape[0]
     if r > 0:
         for c in range(ncol):
-            for k in range(r):
-                sx = 0.0
-                sv = 0.0
-                for i in range(m):
-                    sx += A.P[k, i] * Phi[i, c]
-                    sv += A.P[k, i] * Phi[m + i, c]
-                tmp[k] = sx
-                tmp[r + k] = sv
-            for k in range(r):
-                z = 0.0
-                for l in range(r):
-                    z += A.Kc[k, l] * tmp[l] + A.Bc[k, l] * tmp[r + l]
-                if z != 0.0:
-                    for i in range(m):
-                        out[m + i, c] -= A.P[k, i] * z
+            project(A.Pt, Phi[:, c], tmp[:r], tmp[r:2 * r])
+            scatter_coupling(A, A.Kc, A.Bc, tmp[:r], tmp[r:2 * r], out[:, c], 1.0)
     for j in range(A.C.shape[0]):
         if kd[j] == 0.0 and cd[j] == 0.0:
             continue
@@ -266,7 +262,7 @@ def jac_times(Phi, mode, A, kd, cd, out, tmp):
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
-def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
+def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
     """out = d f / d param at fixed (t, y): forcing, transmission error, mesh stiffness, spin."""
     m = A.w2.shape[0]
     H = cs.shape[0]
@@ -279,17 +275,9 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out):
                 out[m + i] += w * (-A.Fc[h, i] * sn[h] + A.Fs[h, i] * cs[h])
     r = A.P.shape[0]
     if r > 0 and dspin != 0.0:
-        for k in range(r):
-            z = 0.0
-            for l in range(r):
-                sx = 0.0
-                sv = 0.0
-                for i in range(m):
-                    sx += A.P[l, i] * y[i]
-                    sv += A.P[l, i] * y[m + i]
-                z += A.Kc1[k, l] * sx + A.Bc1[k, l] * sv
-            for i in range(m):
-                out[m + i] -= dspin * A.P[k, i] * z
+        # projections once (not once per row of Kc1): O(r m), not O(r^2 m)
+        project(A.Pt, y, tmp[:r], tmp[r:2 * r])
+        scatter_coupling(A, A.Kc1, A.Bc1, tmp[:r], tmp[r:2 * r], out, dspin)
     if dOm == 0.0:
         return
     for j in range(A.C.shape[0]):
