@@ -44,7 +44,13 @@ def _figure(ncols: int):
     return fig, [fig.add_subplot(1, ncols, k + 1) for k in range(ncols)]
 
 
-def _save(fig, path, formats, dpi) -> list[Path]:
+def _finish(fig, axes, title, path, formats, dpi) -> list[Path]:
+    """Grid and legend on every axis, the title, and the files."""
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=7, loc="best")
+    if title:
+        fig.suptitle(title, fontsize=9)
     return save_figure(fig, path, formats, dpi)
 
 
@@ -90,12 +96,7 @@ def plot_work_precision(table: dict, slopes: dict, path, *, title: str = "",
     a2.set_xlabel("rtol (atol = rtol * 1e-2)")
     a2.set_ylabel("max |q - q_exact|")
     a2.set_title("tolerance proportionality", fontsize=9)
-    for ax in (a1, a2):
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7, loc="best")
-    if title:
-        fig.suptitle(title, fontsize=9)
-    return _save(fig, path, formats, dpi)
+    return _finish(fig, (a1, a2), title, path, formats, dpi)
 
 
 def plot_shooting_precision(table: dict, path, *, title: str = "",
@@ -120,9 +121,4 @@ def plot_shooting_precision(table: dict, path, *, title: str = "",
     a1.set_title("shooting: accuracy vs work", fontsize=9)
     a2.set_xlabel("shooting tol (integrator rtol = tol)")
     a2.set_title("shooting: accuracy vs tolerance", fontsize=9)
-    for ax in (a1, a2):
-        ax.grid(alpha=0.3, which="both")
-        ax.legend(fontsize=7, loc="best")
-    if title:
-        fig.suptitle(title, fontsize=9)
-    return _save(fig, path, formats, dpi)
+    return _finish(fig, (a1, a2), title, path, formats, dpi)
