@@ -46,8 +46,6 @@ class NumericalFailure(RuntimeError):
 class RunContext:
     out: Path
     quiet: bool = False
-    cache_dir: Path = dataclasses.field(default_factory=lambda: Path(
-        os.environ.get("VIBROGEAR_CACHE_DIR", Path.home() / ".cache" / "vibrogear")))
     results: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def progress(self, total: int, label: str) -> Progress:

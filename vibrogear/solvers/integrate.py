@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import time
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -51,7 +51,6 @@ class Trajectory:
     monodromy: np.ndarray | None = None   # d u_end / d u0
     dparam: np.ndarray | None = None      # d u_end / d param at fixed t_end
     wall_time: float = 0.0
-    extra: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
