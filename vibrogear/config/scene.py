@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, build, parse_override, set_path, spec
+from .gearbox import GearboxConfig, ReductionAccuracyConfig
 from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
@@ -17,7 +18,7 @@ from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConf
 __all__ = ["Scene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
 
 #: sections that define the mechanical model; a scene has exactly one kind of model
-MODEL_SECTIONS = ("impact_pair", "rotor", "housing")
+MODEL_SECTIONS = ("impact_pair", "gearbox", "rotor", "housing")
 
 #: analysis -> option section it needs (None: needs none)
 ANALYSIS_SECTION = {
@@ -30,19 +31,21 @@ ANALYSIS_SECTION = {
     "campbell": None,
     "housing_sweep": "housing_sweep",
     "housing_convergence": "housing_convergence",
+    "reduction_accuracy": "reduction_accuracy",
 }
 
 #: analysis -> model sections that support it
 ANALYSIS_MODELS = {
-    "time_response": ("impact_pair",),
-    "sweep": ("impact_pair",),
-    "continuation": ("impact_pair",),
+    "time_response": ("impact_pair", "gearbox"),
+    "sweep": ("impact_pair", "gearbox"),
+    "continuation": ("impact_pair", "gearbox"),
     "report": ("impact_pair",),
     "critical_damping": ("impact_pair",),
-    "modes": ("rotor", "housing"),
+    "modes": ("gearbox", "rotor", "housing"),
     "campbell": ("rotor",),
     "housing_sweep": ("housing",),
     "housing_convergence": ("housing",),
+    "reduction_accuracy": ("gearbox",),
 }
 
 
@@ -50,6 +53,7 @@ ANALYSIS_MODELS = {
 class Scene:
     scene: SceneInfo = spec()
     impact_pair: ImpactPairConfig | None = spec(None)
+    gearbox: GearboxConfig | None = spec(None)
     rotor: RotorConfig | None = spec(None)
     housing: HousingConfig | None = spec(None)
     housing_sweep: HousingSweepConfig | None = spec(None)
@@ -61,6 +65,7 @@ class Scene:
     time_response: TimeResponseConfig | None = spec(None)
     report: ReportConfig | None = spec(None)
     critical_damping: CriticalDampingConfig | None = spec(None)
+    reduction_accuracy: ReductionAccuracyConfig | None = spec(None)
 
     @property
     def model_kind(self) -> str:
@@ -74,6 +79,9 @@ class Scene:
         if len(present) > 1 and "impact_pair" in present:
             raise ConfigError("impact_pair", "an impact-pair scene cannot also have "
                               f"[{'], ['.join(p for p in present if p != 'impact_pair')}]")
+        if self.gearbox is not None and self.rotor is not None:
+            raise ConfigError("rotor", "a gearbox scene defines its shafts in [[gearbox.shafts]]; "
+                              "[rotor] is for single-rotor scenes")
         for i, analysis in enumerate(self.scene.analyses):
             allowed = ANALYSIS_MODELS[analysis]
             if not any(getattr(self, s) is not None for s in allowed):
@@ -102,12 +110,44 @@ def read_toml(path: str | Path) -> dict[str, Any]:
         raise ConfigError(str(path), "not a valid TOML file: not UTF-8 text") from None
 
 
+#: a gearbox scene's parameter is the driving-shaft speed: these sections name it in rpm
+_RPM_KEYS = {"sweep": (("rpm_min", "omega_min"), ("rpm_max", "omega_max")),
+             "continuation": (("rpm_min", "omega_min"), ("rpm_max", "omega_max")),
+             "time_response": (("rpm", "omega"),)}
+
+
+def _rpm_names(data: dict[str, Any]) -> None:
+    """In a gearbox scene, read ``rpm_min``/``rpm_max``/``rpm`` as the parameter fields."""
+    for section, pairs in _RPM_KEYS.items():
+        table = data.get(section)
+        if not isinstance(table, dict):
+            continue
+        for rpm_key, key in pairs:
+            if key in table:
+                raise ConfigError(f"{section}.{key}", f"a gearbox scene gives the driving-shaft "
+                                  f"speed as {rpm_key!r} [rpm]")
+            if rpm_key in table:
+                table[key] = table.pop(rpm_key)
+
+
+def _rpm_error(exc: ConfigError) -> ConfigError:
+    fix = lambda text: text.replace("omega_min", "rpm_min").replace(  # noqa: E731
+        "omega_max", "rpm_max").replace(".omega", ".rpm").replace("omega", "rpm")
+    return ConfigError(fix(exc.path), fix(str(exc)[len(exc.path) + 2:] if exc.path else str(exc)))
+
+
 def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Scene:
     data = copy.deepcopy(data)
     for text in overrides:
         keys, value = parse_override(text)
         set_path(data, keys, value)
-    return build(Scene, data)
+    if "gearbox" not in data:
+        return build(Scene, data)
+    _rpm_names(data)
+    try:
+        return build(Scene, data)
+    except ConfigError as exc:
+        raise _rpm_error(exc) from None
 
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:

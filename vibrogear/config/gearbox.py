@@ -1,0 +1,315 @@
+"""Gearbox scene schema: ``[gearbox]`` (shafts, gears, meshes, bearings, external couplings).
+
+Frames.  The *housing frame* is the one of ``[housing]``: x along the housing length, y along
+the shafts (front wall y = 0), z up.  Every shaft is a rotor of ``vibrogear.models.rotor``
+whose own axis is z; a shaft's *rotor frame* is (X, Y, Z) = (-x, z, y) of the housing frame
+(right-handed, Y up), so all shafts share one orientation.  A shaft's axis sits at the
+housing-frame (x, z) of its bore (or of its ``x``/``z`` fields when there is no housing) and
+its node at rotor coordinate ``position`` lies at housing y = ``y0 + position``.
+
+Speeds.  The driving shaft is ``shafts[0]``; it spins about +Z at the scene's speed (rpm).
+The other shafts' speed ratios follow from the tooth counts of the fixed gears that mesh
+(external pairs reverse the sense).  The excitation (mesh stiffness harmonics and the
+kinematic transmission error) belongs to ``meshes[0]``; its mesh frequency is the
+excitation frequency of every analysis.
+
+```toml
+[gearbox]
+name = "two-stage gearbox"
+
+[[gearbox.shafts]]
+name = "driving"
+bore = "input"              # housing bore pair carrying this shaft (or x = ..., z = ... without housing)
+y0 = -0.03                  # housing y of the shaft's node at position 0 [m]
+master_count = 30           # free-shaft master modes (incl. rigid-body) ... or master_cutoff_hz
+modal_damping = 0.01        # damping ratio of the elastic shaft modes
+[gearbox.shafts.material]   # as [rotor.material]
+[[gearbox.shafts.sections]] # as [[rotor.sections]]
+[[gearbox.shafts.discs]]    # rigid discs that are not gears (as [[rotor.discs]])
+
+[[gearbox.gears]]
+name = "z1"; shaft = "driving"; position = 0.12
+teeth = 25; module = 0.003  # normal module [m]
+helix_angle = 0.0           # [deg]
+width = 0.03; inner_diameter = 0.04
+free = false                # true: rotates freely on its own bearing (rattling gear)
+
+[[gearbox.meshes]]
+name = "G1"; gear_a = "z1"; gear_b = "z2"   # gear_a drives gear_b
+pressure_angle = 20.0       # normal pressure angle [deg]
+stiffness = 4e8             # mean mesh stiffness [N/m]
+damping = 300.0             # [N s/m], acts while in contact
+backlash = 1e-4             # [m]
+stiffness_cos = [0.15]      # relative mesh-stiffness harmonics of the mesh frequency
+te_cos = [5e-6]             # kinematic transmission error harmonics [m]
+
+[[gearbox.bearings]]
+name = "A"; shaft = "driving"; position = 0.02
+type = "ball"               # ball (Hertz 3/2), roller (10/9), linear (one-sided linear contacts)
+                            # or spring (linear isotropic spring, no contact loss)
+stiffness = 8e9             # contact constant [N/m^p] (spring: [N/m])
+clearance = 5e-6            # radial clearance [m]
+axial_stiffness = 5e7       # [N/m]
+damping = 200.0             # radial viscous damping [N s/m], always active
+
+[[gearbox.couplings]]
+name = "motor"; shaft = "driving"; position = 0.0
+role = "motor"              # motor: the disc leads the node; load: it lags
+stiffness = 2e4             # torsional [N m/rad]
+twist = 0.025               # static twist angle delta phi [rad]
+```
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .base import ConfigError, spec
+from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
+
+__all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
+           "ExternalCouplingConfig", "ReductionAccuracyConfig", "BEARING_EXPONENTS"]
+
+#: contact-law exponent of each bearing type ("spring" has no contacts)
+BEARING_EXPONENTS = {"ball": 1.5, "roller": 10.0 / 9.0, "linear": 1.0}
+
+
+@dataclass(frozen=True, kw_only=True)
+class ShaftConfig:
+    name: str = spec(doc="shaft name (gears, bearings and couplings refer to it)")
+    material: MaterialConfig = spec(doc="as [rotor.material]")
+    sections: tuple[ShaftSectionConfig, ...] = spec(min_len=1)
+    discs: tuple[DiscConfig, ...] = spec((), doc="rigid discs that are not gears")
+    bore: str = spec("", doc="name of the housing bore pair carrying the shaft")
+    x: float | None = spec(None, doc="axis x in the housing frame [m] (scenes without housing)")
+    z: float | None = spec(None, doc="axis height z in the housing frame [m] (no housing)")
+    y0: float = spec(0.0, doc="housing-frame y of the node at position 0 [m]")
+    master_count: int = spec(30, ge=1, le=10_000, doc="free-shaft master modes (incl. rigid)")
+    master_cutoff_hz: float | None = spec(None, gt=0.0, doc="all free-shaft modes up to this")
+    modal_damping: float = spec(0.0, ge=0.0, lt=1.0, doc="damping ratio of the elastic modes")
+
+    def node(self, position: float, path: str) -> int:
+        return _node_at(node_positions(self.sections), position, path)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GearConfig:
+    name: str = spec()
+    shaft: str = spec(doc="shaft name")
+    position: float = spec(ge=0.0, doc="[m] along the shaft; must be a node")
+    teeth: int = spec(ge=5, le=10_000)
+    module: float = spec(gt=0.0, lt=1.0, doc="normal module [m]")
+    helix_angle: float = spec(0.0, gt=-60.0, lt=60.0, doc="[deg]")
+    width: float = spec(gt=0.0, doc="face width [m]")
+    inner_diameter: float = spec(0.0, ge=0.0, doc="bore [m]")
+    density: float | None = spec(None, gt=0.0, doc="[kg/m^3], default: the shaft's material")
+    free: bool = spec(False, doc="freely rotating on its own bearing (extra torsional DOF)")
+    torsional_damping: float = spec(0.0, ge=0.0, doc="free gear: drag to its shaft [N m s/rad]")
+
+    @property
+    def pitch_diameter(self) -> float:
+        return self.module * self.teeth / math.cos(math.radians(self.helix_angle))
+
+    def validate(self, path: str) -> None:
+        if not self.inner_diameter < self.pitch_diameter:
+            raise ConfigError(f"{path}.inner_diameter", f"must be < the pitch diameter "
+                              f"{self.pitch_diameter:g} m, got {self.inner_diameter:g}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class MeshConfig:
+    name: str = spec()
+    gear_a: str = spec(doc="driving gear of the pair")
+    gear_b: str = spec(doc="driven gear of the pair")
+    pressure_angle: float = spec(20.0, gt=0.0, lt=45.0, doc="normal pressure angle [deg]")
+    hand: int = spec(1, choices=(1, -1), doc="helix hand of gear_a (helical pairs)")
+    stiffness: float = spec(gt=0.0, le=1e13, doc="mean mesh stiffness [N/m]")
+    damping: float = spec(0.0, ge=0.0, doc="mesh damping while in contact [N s/m]")
+    backlash: float = spec(ge=0.0, lt=0.01, doc="circumferential backlash on the line of action [m]")
+    stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
+    stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
+    te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics [m]")
+    te_sin: tuple[float, ...] = spec((), max_len=50)
+
+    def validate(self, path: str) -> None:
+        if self.gear_a == self.gear_b:
+            raise ConfigError(f"{path}.gear_b", "must differ from gear_a")
+        amp = sum(abs(a) for a in self.stiffness_cos + self.stiffness_sin)
+        if amp >= 1.0:
+            raise ConfigError(f"{path}.stiffness_cos", f"sum of |harmonics| must be < 1 (mesh "
+                              f"stiffness stays positive), got {amp:g}")
+
+    @property
+    def has_excitation(self) -> bool:
+        return any(self.stiffness_cos + self.stiffness_sin + self.te_cos + self.te_sin)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GearboxBearingConfig:
+    name: str = spec()
+    shaft: str = spec()
+    position: float = spec(ge=0.0, doc="[m]; must be a node")
+    type: str = spec("ball", choices=("ball", "roller", "linear", "spring"))
+    stiffness: float = spec(gt=0.0, le=1e14, doc="contact constant [N/m^p] (spring: [N/m])")
+    clearance: float = spec(0.0, ge=0.0, lt=0.01, doc="radial clearance [m]")
+    elements: int | None = spec(None, ge=3, le=200, doc="rolling elements (default: the bore's)")
+    angle_offset: float = spec(0.0, doc="angle of element 0 without housing [deg]")
+    axial_stiffness: float = spec(0.0, ge=0.0, doc="[N/m]")
+    damping: float = spec(0.0, ge=0.0, doc="radial viscous damping [N s/m], always active")
+    contact_damping: float = spec(0.0, ge=0.0, doc="per element, only in contact [N s/m]")
+
+    @property
+    def exponent(self) -> float:
+        return BEARING_EXPONENTS.get(self.type, 1.0)
+
+    def validate(self, path: str) -> None:
+        if self.type == "spring" and self.clearance:
+            raise ConfigError(f"{path}.clearance", "a 'spring' bearing has no clearance (0); "
+                              "use type 'linear' for one-sided linear contacts")
+
+
+@dataclass(frozen=True, kw_only=True)
+class ExternalCouplingConfig:
+    name: str = spec()
+    shaft: str = spec()
+    position: float = spec(ge=0.0, doc="[m]; must be a node")
+    role: str = spec(choices=("motor", "load"))
+    stiffness: float = spec(gt=0.0, doc="torsional stiffness [N m/rad]")
+    twist: float = spec(ge=0.0, lt=1.0, doc="static twist angle [rad] (the static load)")
+    damping: float = spec(0.0, ge=0.0, doc="torsional damping [N m s/rad]")
+
+
+@dataclass(frozen=True, kw_only=True)
+class GearboxConfig:
+    shafts: tuple[ShaftConfig, ...] = spec(min_len=1, max_len=20)
+    gears: tuple[GearConfig, ...] = spec(())
+    meshes: tuple[MeshConfig, ...] = spec((), max_len=20)
+    bearings: tuple[GearboxBearingConfig, ...] = spec(min_len=1)
+    couplings: tuple[ExternalCouplingConfig, ...] = spec(())
+    name: str = spec("gearbox")
+
+    def shaft_index(self, name: str, path: str) -> int:
+        for i, s in enumerate(self.shafts):
+            if s.name == name:
+                return i
+        raise ConfigError(path, f"unknown shaft {name!r}; shafts are "
+                          f"{', '.join(repr(s.name) for s in self.shafts)}")
+
+    def gear_index(self, name: str, path: str) -> int:
+        for i, g in enumerate(self.gears):
+            if g.name == name:
+                return i
+        raise ConfigError(path, f"unknown gear {name!r}; gears are "
+                          f"{', '.join(repr(g.name) for g in self.gears) or 'none'}")
+
+    def validate(self, path: str) -> None:
+        for group in ("shafts", "gears", "meshes", "bearings", "couplings"):
+            seen = set()
+            for i, item in enumerate(getattr(self, group)):
+                if item.name in seen:
+                    raise ConfigError(f"{path}.{group}[{i}].name", f"{item.name!r} used twice")
+                seen.add(item.name)
+        occupied: dict[tuple[int, int], str] = {}
+        for group in ("gears", "bearings", "couplings"):
+            for i, item in enumerate(getattr(self, group)):
+                p = f"{path}.{group}[{i}]"
+                s = self.shaft_index(item.shaft, f"{p}.shaft")
+                node = self.shafts[s].node(item.position, f"{p}.position")
+                if group == "gears":
+                    if (s, node) in occupied:
+                        raise ConfigError(f"{p}.position", f"node already carries gear "
+                                          f"{occupied[(s, node)]!r}")
+                    occupied[(s, node)] = item.name
+        bearing_nodes: dict[tuple[int, int], int] = {}
+        for i, b in enumerate(self.bearings):
+            s = self.shaft_index(b.shaft, "")
+            key = (s, self.shafts[s].node(b.position, ""))
+            if key in bearing_nodes:
+                raise ConfigError(f"{path}.bearings[{i}].position",
+                                  f"node already has bearing {bearing_nodes[key]}")
+            bearing_nodes[key] = i
+        for i, m in enumerate(self.meshes):
+            p = f"{path}.meshes[{i}]"
+            ga = self.gears[self.gear_index(m.gear_a, f"{p}.gear_a")]
+            gb = self.gears[self.gear_index(m.gear_b, f"{p}.gear_b")]
+            if ga.shaft == gb.shaft:
+                raise ConfigError(f"{p}.gear_b", "gears of a mesh must sit on different shafts")
+            if abs(ga.module - gb.module) > 1e-9 * ga.module:
+                raise ConfigError(f"{p}.gear_b", f"module {gb.module:g} differs from gear_a's "
+                                  f"{ga.module:g}")
+            if abs(ga.helix_angle - gb.helix_angle) > 1e-9:
+                raise ConfigError(f"{p}.gear_b", f"helix angle {gb.helix_angle:g} differs from "
+                                  f"gear_a's {ga.helix_angle:g} (the hand is the mesh's `hand`)")
+            if i > 0 and m.has_excitation:
+                raise ConfigError(f"{p}.stiffness_cos", "only meshes[0] (whose mesh frequency is "
+                                  "the excitation frequency) may carry stiffness or "
+                                  "transmission-error harmonics")
+        if self.meshes:
+            first = self.meshes[0]
+            ga = self.gears[self.gear_index(first.gear_a, "")]
+            gb = self.gears[self.gear_index(first.gear_b, "")]
+            if ga.free or gb.free:
+                raise ConfigError(f"{path}.meshes[0]", "the excitation mesh (meshes[0]) must "
+                                  "join fixed gears: it carries the power")
+        self.speed_ratios(path)
+
+    def speed_ratios(self, path: str = "gearbox") -> tuple[list[float], list[float]]:
+        """(shaft spin / driving-shaft spin per shaft, gear spin / driving-shaft spin per
+        gear): fixed-gear meshes carry the kinematics from shafts[0]; a free gear takes the
+        speed of the fixed gear it meshes with."""
+        shaft_p: list[float | None] = [1.0] + [None] * (len(self.shafts) - 1)
+        gear_shaft = [self.shaft_index(g.shaft, "") for g in self.gears]
+        pairs = [(self.gear_index(m.gear_a, ""), self.gear_index(m.gear_b, ""))
+                 for m in self.meshes]
+        changed = True
+        while changed:
+            changed = False
+            for a, b in pairs:
+                ga, gb = self.gears[a], self.gears[b]
+                if ga.free or gb.free:
+                    continue
+                pa, pb = shaft_p[gear_shaft[a]], shaft_p[gear_shaft[b]]
+                if pa is not None and pb is None:
+                    shaft_p[gear_shaft[b]] = -pa * ga.teeth / gb.teeth
+                    changed = True
+                elif pb is not None and pa is None:
+                    shaft_p[gear_shaft[a]] = -pb * gb.teeth / ga.teeth
+                    changed = True
+        for i, p in enumerate(shaft_p):
+            if p is None:
+                raise ConfigError(f"{path}.shafts[{i}]", f"shaft {self.shafts[i].name!r} is not "
+                                  "driven: no chain of fixed-gear meshes joins it to shafts[0]")
+        gear_p = [shaft_p[gear_shaft[k]] for k in range(len(self.gears))]
+        for a, b in pairs:
+            ga, gb = self.gears[a], self.gears[b]
+            if ga.free and gb.free:
+                raise ConfigError(f"{path}.meshes", f"mesh of two free gears ({ga.name!r}, "
+                                  f"{gb.name!r}) has no defined speed")
+            if ga.free:
+                gear_p[a] = -gear_p[b] * gb.teeth / ga.teeth
+            elif gb.free:
+                gear_p[b] = -gear_p[a] * ga.teeth / gb.teeth
+        return [float(p) for p in shaft_p], [float(p) for p in gear_p]
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReductionAccuracyConfig:
+    """Reduction-level study: master-mode counts -> frequency error, response error against
+    the largest level, and run time; plus the linearised reduced model against the full
+    (non-reduced) linearised model (all housing DOF) below ``f_max_hz``."""
+    shaft_counts: tuple[int, ...] = spec((10, 20, 30), min_len=1, max_len=20, ge=7, le=10_000,
+                                         doc="master modes per shaft, one entry per level")
+    housing_counts: tuple[int, ...] = spec((20, 50, 100), min_len=1, max_len=20, ge=1,
+                                           le=10_000, doc="housing master modes per level")
+    rpm: float = spec(gt=0.0, le=1e6, doc="speed of the response comparison")
+    transient_periods: int = spec(50, ge=0, le=100_000, doc="mesh periods dropped")
+    record_periods: int = spec(20, ge=1, le=100_000, doc="mesh periods compared")
+    f_max_hz: float = spec(5000.0, gt=0.0, doc="modes compared up to this frequency")
+    full_model: bool = spec(True, doc="also compare with the full linearised model "
+                                      "(assembles the housing's K and M)")
+
+    def validate(self, path: str) -> None:
+        if len(self.shaft_counts) != len(self.housing_counts):
+            raise ConfigError(f"{path}.housing_counts", f"needs one entry per level: "
+                              f"{len(self.shaft_counts)} (as shaft_counts), got "
+                              f"{len(self.housing_counts)}")

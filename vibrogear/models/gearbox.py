@@ -1,0 +1,293 @@
+"""A gearbox scene -> subsystems, physical couplings and the reduced model (paper II-III).
+
+Subsystems: one free-free shaft per ``[[gearbox.shafts]]`` (Timoshenko rotor with its
+discs, fixed gears and free gears; master modes incl. rigid-body modes) and, when the scene
+has ``[housing]``, the housing fixed at its base (master modes and their values at the
+rolling-element points of the bores).  Couplings in physical coordinates
+(:mod:`vibrogear.models.couplings`): gear meshes (dead zone with backlash, mesh stiffness
+and transmission-error harmonics on ``meshes[0]``), rolling elements (one-sided Hertzian
+contacts with clearance, journal node to bore point, or to ground without housing), linear
+links (axial bearing springs, radial bearing damping, spring bearings, external torsional
+couplings).  :func:`build_gearbox` joins them by :func:`~vibrogear.models.synthesis.synthesize`.
+
+The coordinates q are deviations from the steady rigid-body rotation fixed by the motor and
+load discs (they spin at omega_s with prescribed angles), so the paper's spin velocities of
+eq. (9) are the frame itself: the initial state is the static equilibrium with zero
+velocity.  The scene's parameter is the driving-shaft speed in rpm.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..config.base import ConfigError
+from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
+from .couplings import bearing_geometry, gear_mesh_geometry
+from .rotor import build_rotor_model, master_modes
+from .synthesis import (ContactLaw, LinearLink, PhysicalVector, Subsystem, subsystem_offsets,
+                        synthesize)
+
+__all__ = ["GearboxModel", "build_gearbox", "OMEGA_REF", "RPM", "housing_to_rotor"]
+
+#: model time unit 1 / OMEGA_REF s (tau = OMEGA_REF t)
+OMEGA_REF = 2.0 * math.pi * 1000.0
+#: rad/s per rpm
+RPM = 2.0 * math.pi / 60.0
+_PSI = 5
+
+
+def housing_to_rotor(v) -> np.ndarray:
+    """Housing frame (x, y, z) -> rotor frame (X, Y, Z) = (-x, z, y); the map is its own
+    inverse."""
+    v = np.asarray(v, dtype=float)
+    return np.stack([-v[..., 0], v[..., 2], v[..., 1]], axis=-1)
+
+
+@dataclass(frozen=True, eq=False)
+class GearboxModel:
+    reduced: object                       # ReducedModel
+    subsystems: tuple
+    contacts: tuple                       # ContactLaw, in the reduced model's contact order
+    links: tuple                          # LinearLink
+    static_force: PhysicalVector
+    shaft_ratios: tuple                   # p_s per shaft
+    rotors: tuple                         # RotorModel per shaft
+    mesh_teeth: int                       # teeth of meshes[0].gear_a: mesh frequency = z n / 60
+    omega_ref: float = OMEGA_REF
+    housing: object = None                # HousingModes or None
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def time_unit_s(self) -> float:
+        return 1.0 / self.omega_ref
+
+    def mesh_frequency_hz(self, rpm: float) -> float:
+        return self.mesh_teeth * rpm / 60.0
+
+    def contact_indices(self, kind: str) -> np.ndarray:
+        return np.array([j for j, c in enumerate(self.contacts) if c.kind == kind], dtype=int)
+
+
+def _rotor_config(sh, gears, gear_p, shaft_p) -> tuple[RotorConfig, list[int]]:
+    discs, free, free_ids = list(sh.discs), [], []
+    for k, g in gears:
+        geo = dict(position=g.position, outer_diameter=g.pitch_diameter,
+                   inner_diameter=g.inner_diameter, width=g.width, density=g.density, name=g.name)
+        if g.free:
+            free.append(FreeGearConfig(**geo, torsional_damping=g.torsional_damping,
+                                       speed_ratio=gear_p[k] / shaft_p))
+            free_ids.append(k)
+        else:
+            discs.append(DiscConfig(**geo))
+    return RotorConfig(material=sh.material, sections=sh.sections, discs=tuple(discs),
+                       free_gears=tuple(free), name=sh.name), free_ids
+
+
+def _shaft_subsystem(sh, rotor, count, p) -> Subsystem:
+    mm = master_modes(rotor, count=count if sh.master_cutoff_hz is None else None,
+                      cutoff_hz=sh.master_cutoff_hz)
+    V = mm.vectors
+    proj = lambda A: V.T @ (A @ V)  # noqa: E731
+    B, G, C = proj(rotor.B), proj(rotor.G), proj(rotor.C)
+    zeta = np.where(mm.frequencies_hz > 0, sh.modal_damping, 0.0)
+    return Subsystem(name=sh.name, kind="shaft", n_dofs=rotor.n_dofs, freqs_hz=mm.frequencies_hz,
+                     vectors=V, damping_ratio=zeta, spin_ratio=p,
+                     B=B if np.any(B) else None, G=G if np.any(G) else None,
+                     C=C if np.any(C) else None, labels={"n_rigid": mm.n_rigid})
+
+
+def _housing_subsystem(scene, count):
+    from .housing_run import housing_modes
+
+    hm = housing_modes(scene.housing)
+    m = hm.freqs_hz.size if count is None else min(count, hm.freqs_hz.size)
+    vals = np.nan_to_num(hm.bore_values[..., :m])        # (B, P, 3, m), NaN padding -> 0
+    w = 2 * np.pi * hm.freqs_hz[:m]
+    sub = Subsystem(name="housing", kind="housing", n_dofs=hm.n_dofs, freqs_hz=hm.freqs_hz[:m],
+                    vectors=vals.reshape(-1, m), damping_ratio=0.5 * hm.beta * w,
+                    labels={"points": vals.shape[1]})
+    return sub, hm
+
+
+def _shaft_axis(scene, sh, i) -> tuple[float, float]:
+    """Housing-frame (x, z) of shaft i's axis."""
+    path = f"gearbox.shafts[{i}]"
+    if scene.housing is not None:
+        for b in scene.housing.bores:
+            if b.name == sh.bore:
+                if sh.x is not None or sh.z is not None:
+                    raise ConfigError(f"{path}.x", "with a housing the axis is the bore's: "
+                                      "leave x and z out")
+                return b.x, b.z
+        names = ", ".join(repr(b.name) for b in scene.housing.bores)
+        raise ConfigError(f"{path}.bore", f"unknown bore {sh.bore!r}; housing bores are {names}")
+    if sh.x is None or sh.z is None:
+        raise ConfigError(f"{path}.x", "without a housing each shaft needs its axis x and z")
+    return sh.x, sh.z
+
+
+def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxModel:
+    """Build the reduced gearbox model of ``scene``; ``master_counts`` (one per shaft) and
+    ``housing_count`` override the scene's reduction level (the reduction study)."""
+    cfg = scene.gearbox
+    t0 = time.perf_counter()
+    shaft_p, gear_p = cfg.speed_ratios()
+    axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    subsystems, rotors, free_dof = [], [], {}
+    for i, sh in enumerate(cfg.shafts):
+        gears = [(k, g) for k, g in enumerate(cfg.gears) if g.shaft == sh.name]
+        rcfg, free_ids = _rotor_config(sh, gears, gear_p, shaft_p[i])
+        rotor = build_rotor_model(rcfg)
+        free_dof.update({k: rotor.free_gear_dofs[j] for j, k in enumerate(free_ids)})
+        count = sh.master_count if master_counts is None else int(master_counts[i])
+        subsystems.append(_shaft_subsystem(sh, rotor, count, shaft_p[i]))
+        rotors.append(rotor)
+    t_shafts = time.perf_counter()
+    hm = None
+    if scene.housing is not None:
+        sub, hm = _housing_subsystem(scene, housing_count)
+        subsystems.append(sub)
+    t_housing = time.perf_counter()
+    contacts, links, forces = [], [], []
+    contacts += _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
+    bc, bl = _bearings(scene, cfg, rotors, hm)
+    contacts += bc
+    links += bl
+    cl, forces = _external_couplings(cfg, rotors, shaft_p)
+    links += cl
+    static_force = PhysicalVector.of(*forces)
+    teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
+    reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
+                         omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
+                         monitor=0, name=cfg.name, param_name="rpm")
+    t_end = time.perf_counter()
+    return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
+                        links=tuple(links), static_force=static_force,
+                        shaft_ratios=tuple(shaft_p), rotors=tuple(rotors), mesh_teeth=teeth,
+                        housing=hm, timings={"shafts_s": t_shafts - t0,
+                                             "housing_s": t_housing - t_shafts,
+                                             "synthesis_s": t_end - t_housing})
+
+
+def _gear_psi(rotor, node, k, free_dof) -> int:
+    return free_dof[k] if k in free_dof else rotor.dof(node, "psi")
+
+
+def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof) -> list[ContactLaw]:
+    out = []
+    for i, m in enumerate(cfg.meshes):
+        path = f"gearbox.meshes[{i}]"
+        ka, kb = cfg.gear_index(m.gear_a, ""), cfg.gear_index(m.gear_b, "")
+        ga, gb = cfg.gears[ka], cfg.gears[kb]
+        sa, sb = cfg.shaft_index(ga.shaft, ""), cfg.shaft_index(gb.shaft, "")
+        ya, yb = cfg.shafts[sa].y0 + ga.position, cfg.shafts[sb].y0 + gb.position
+        if abs(ya - yb) > 1e-3 * max(ga.width, gb.width):
+            raise ConfigError(f"{path}.gear_b", f"gears of the mesh lie in different planes: "
+                              f"housing y = {ya:.6g} m (gear_a) and {yb:.6g} m (gear_b); "
+                              "adjust the shafts' y0 or the gear positions")
+        ca = housing_to_rotor([axes[sa][0], 0.0, axes[sa][1]])[:2]
+        cb = housing_to_rotor([axes[sb][0], 0.0, axes[sb][1]])[:2]
+        try:
+            geom = gear_mesh_geometry(ca, cb, ga.pitch_diameter / 2, gb.pitch_diameter / 2,
+                                      math.radians(m.pressure_angle),
+                                      helix_angle=math.radians(ga.helix_angle), hand=m.hand,
+                                      drive_sense=1 if gear_p[ka] > 0 else -1)
+        except ValueError as exc:
+            raise ConfigError(path, str(exc)) from None
+        parts = []
+        for s, g, k, c in ((sa, ga, ka, geom.c_a), (sb, gb, kb, geom.c_b)):
+            rotor = rotors[s]
+            node = rotor.node_at(g.position)
+            idx = list(rotor.node_dofs(node)[:5]) + [_gear_psi(rotor, node, k, free_dof)]
+            parts.append((s, idx, c))
+        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), k_hi=m.stiffness,
+                              k_lo=m.stiffness, gap_hi=0.0, gap_lo=-m.backlash, exponent=1.0,
+                              damping=m.damping, stiffness_cos=m.stiffness_cos,
+                              stiffness_sin=m.stiffness_sin, error_cos=m.te_cos,
+                              error_sin=m.te_sin, kind="mesh", group=m.name))
+    return out
+
+
+def _bore_of(hm, shaft_bore_names, y) -> int:
+    """Index of the bore (front or back) of this shaft nearest to housing y."""
+    cand = [b for b, n in enumerate(hm.bore_names) if n in shaft_bore_names]
+    return min(cand, key=lambda b: abs(hm.bore_centers[b, 1] - y))
+
+
+def _bearings(scene, cfg, rotors, hm):
+    contacts, links = [], []
+    used: dict[int, str] = {}
+    for i, b in enumerate(cfg.bearings):
+        path = f"gearbox.bearings[{i}]"
+        s = cfg.shaft_index(b.shaft, "")
+        sh, rotor = cfg.shafts[s], rotors[s]
+        jd = rotor.node_dofs(rotor.node_at(b.position))
+        ring = None
+        if hm is not None:
+            names = {f"{sh.bore}/front", f"{sh.bore}/back"}
+            bore = _bore_of(hm, names, sh.y0 + b.position)
+            if bore in used:
+                raise ConfigError(f"{path}.position", f"bore {hm.bore_names[bore]!r} already "
+                                  f"carries bearing {used[bore]!r}")
+            used[bore] = b.name
+            n = hm.bore_n_points[bore]
+            if b.elements is not None and b.elements != n:
+                raise ConfigError(f"{path}.elements", f"the housing bore has {n} coupling "
+                                  f"points (housing.bores rolling_elements); got {b.elements}")
+            radial = housing_to_rotor(hm.bore_points[bore, :n] - hm.bore_centers[bore])
+            angles = np.arctan2(radial[:, 1], radial[:, 0])
+            P = hm.bore_values.shape[1]
+            ring = [(bore * P + k) * 3 for k in range(n)]          # first housing index
+        else:
+            if b.elements is None and b.type != "spring":
+                raise ConfigError(f"{path}.elements", "without a housing give the number of "
+                                  "rolling elements (3..200)")
+            n = b.elements or 0
+            angles = math.radians(b.angle_offset) + 2 * np.pi * np.arange(n) / max(n, 1)
+
+        def centre(direction_rotor):
+            """Journal minus bore-centre displacement along a rotor-frame unit vector."""
+            parts = [(s, jd[:3], direction_rotor)]
+            if ring is not None:
+                h = housing_to_rotor(direction_rotor)           # same map back
+                idx = [r0 + c for r0 in ring for c in range(3)]
+                parts.append((len(rotors), idx, -np.tile(h, len(ring)) / len(ring)))
+            return PhysicalVector.of(*parts)
+
+        ex, ey, ez = np.eye(3)
+        if b.axial_stiffness:
+            links.append(LinearLink(f"{b.name}:axial", centre(ez), b.axial_stiffness))
+        if b.type == "spring":
+            for lab, e in (("x", ex), ("y", ey)):
+                links.append(LinearLink(f"{b.name}:{lab}", centre(e), b.stiffness, b.damping))
+            continue
+        if b.damping:
+            for lab, e in (("x", ex), ("y", ey)):
+                links.append(LinearLink(f"{b.name}:damping {lab}", centre(e), 0.0, b.damping))
+        geom = bearing_geometry(angles)
+        for k in range(n):
+            parts = [(s, jd, geom.journal[k])]
+            if ring is not None:
+                parts.append((len(rotors), [ring[k] + c for c in range(3)],
+                              housing_to_rotor(geom.housing[k])))
+            contacts.append(ContactLaw(name=f"{b.name}:{k}", vector=PhysicalVector.of(*parts),
+                                       k_hi=b.stiffness, k_lo=0.0, gap_hi=b.clearance,
+                                       gap_lo=-np.inf, exponent=b.exponent,
+                                       damping=b.contact_damping, kind="bearing", group=b.name))
+    return contacts, links
+
+
+def _external_couplings(cfg, rotors, shaft_p):
+    links, forces = [], []
+    for c in cfg.couplings:
+        s = cfg.shaft_index(c.shaft, "")
+        dof = rotors[s].dof(rotors[s].node_at(c.position), "psi")
+        sense = 1.0 if shaft_p[s] > 0 else -1.0
+        disc_angle = sense * c.twist * (1.0 if c.role == "motor" else -1.0)
+        links.append(LinearLink(c.name, PhysicalVector.of((s, [dof], [1.0])), c.stiffness,
+                                c.damping))
+        forces.append((s, [dof], [c.stiffness * disc_angle]))
+    return links, forces
