@@ -23,7 +23,7 @@ from ..geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
 from .block_lanczos import Breakdown, block_lanczos
 from .housing_result import HousingModes
 
-__all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes"]
+__all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes", "assemble_mesh_matrices"]
 
 _PREVIEW_MODES = 6
 _PREVIEW_POINTS = 4000
@@ -39,52 +39,12 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
                      solver: str = "block", support: str = "fixed", foundation_stiffness: float = 0.0, shapes: int = 0,
                      shapes_dir: Path | None = None) -> HousingModes:
     """Master modes of the solid in ``mesh`` with its ``base_tag`` facets clamped (or on springs)."""
-    os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
     from mpi4py import MPI
-    import dolfinx
-    import dolfinx.fem.petsc  # noqa: F401  (explicit import needed in 0.5.2)
-    import ufl
-    from dolfinx import fem
-    from petsc4py import PETSc
 
     comm = MPI.COMM_WORLD
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    dmesh, facet_tags = _read_mesh(mesh.path, comm)
-    timings["mesh_read"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    V = fem.VectorFunctionSpace(dmesh, ("Lagrange", degree))
-    E, nu, rho = material.E, material.nu, material.rho
-    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
-    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
-    sig = lambda w: 2 * mu * eps(w) + lmbda * ufl.tr(eps(w)) * ufl.Identity(3)  # noqa: E731
-    a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx
-    fdim = dmesh.topology.dim - 1
-    dmesh.topology.create_connectivity(fdim, dmesh.topology.dim)
-    base_facets = facet_tags.indices[facet_tags.values == mesh.base_tag]
-    bcs = []
-    if support == "elastic":
-        ds = ufl.Measure("ds", domain=dmesh, subdomain_data=facet_tags)
-        a_ufl = a_ufl + foundation_stiffness * ufl.inner(u, v) * ds(mesh.base_tag)
-    else:
-        dofs = fem.locate_dofs_topological(V, fdim, base_facets)
-        bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), dofs, V)]
-    rho_c = fem.Constant(dmesh, PETSc.ScalarType(rho))
-    a = fem.form(a_ufl)
-    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx)
-    mass_form = fem.form(rho_c * ufl.dx)
-    timings["form_compilation"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    K = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
-    K.assemble()
-    M = dolfinx.fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
-    M.assemble()
-    mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
+    dmesh, V, K, M, _, mass, timings = _assemble(mesh, material, degree, support, foundation_stiffness, comm)
     n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-    timings["assembly"] = time.perf_counter() - t0
+    from dolfinx import fem  # after _assemble, which sets XDG_CACHE_HOME before the first dolfinx import
 
     t0 = time.perf_counter()
     lam, Vloc, reason, nconv, status, message, info = _eigensolve(
@@ -134,6 +94,103 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
         shapes_path=shapes_path, preview_points=prev_pts, preview_values=prev_vals,
     )
 
+
+def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support: str,
+              foundation_stiffness: float, comm):
+    """(dolfinx mesh, V, K, M, bcs, mass, timings): Dirichlet rows 1 in K and 0 in M."""
+    os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
+    from mpi4py import MPI
+    import dolfinx
+    import dolfinx.fem.petsc  # noqa: F401  (explicit import needed in 0.5.2)
+    import ufl
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    dmesh, facet_tags = _read_mesh(mesh.path, comm)
+    timings["mesh_read"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    V = fem.VectorFunctionSpace(dmesh, ("Lagrange", degree))
+    E, nu, rho = material.E, material.nu, material.rho
+    mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
+    sig = lambda w: 2 * mu * eps(w) + lmbda * ufl.tr(eps(w)) * ufl.Identity(3)  # noqa: E731
+    a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx
+    fdim = dmesh.topology.dim - 1
+    dmesh.topology.create_connectivity(fdim, dmesh.topology.dim)
+    base_facets = facet_tags.indices[facet_tags.values == mesh.base_tag]
+    bcs = []
+    if support == "elastic":
+        ds = ufl.Measure("ds", domain=dmesh, subdomain_data=facet_tags)
+        a_ufl = a_ufl + foundation_stiffness * ufl.inner(u, v) * ds(mesh.base_tag)
+    else:
+        dofs = fem.locate_dofs_topological(V, fdim, base_facets)
+        bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), dofs, V)]
+    rho_c = fem.Constant(dmesh, PETSc.ScalarType(rho))
+    a = fem.form(a_ufl)
+    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx)
+    mass_form = fem.form(rho_c * ufl.dx)
+    timings["form_compilation"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    K = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
+    K.assemble()
+    M = dolfinx.fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
+    M.assemble()
+    mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
+    timings["assembly"] = time.perf_counter() - t0
+    return dmesh, V, K, M, bcs, mass, timings
+
+
+def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degree: int = 2,
+                           bores: tuple[BoreGeometry, ...] = (), support: str = "fixed",
+                           foundation_stiffness: float = 0.0) -> dict:
+    """Serial only: K, M (scipy CSR over all DOF, Dirichlet rows 1 in K and 0 in M), ``free`` (the
+    unclamped DOF), and T (B*P*3, all DOF): displacement at the bore coupling points, rows in the
+    (B, P, 3) C-order of ``HousingModes.bore_values`` (padding rows empty).  T comes from the same
+    point location and ``Function.eval`` as the modes' bore values: T @ x reproduces them."""
+    import scipy.sparse as sp
+    from mpi4py import MPI
+    from dolfinx import fem
+
+    comm = MPI.COMM_WORLD
+    if comm.size > 1:
+        raise HousingSolveError("the full housing matrices are built in serial only (run without mpirun)")
+    dmesh, V, K, M, bcs, mass, timings = _assemble(mesh, material, degree, support, foundation_stiffness,
+                                                    comm)
+    t0 = time.perf_counter()
+    n = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    mask = np.ones(n)
+    fem.set_bc(mask, bcs)
+    Ks, Ms = (sp.csr_matrix(A.getValuesCSR()[::-1], shape=A.getSize()) for A in (K, M))
+    for A in (K, M):
+        A.destroy()
+    nb, P = len(bores), max((b.n_points for b in bores), default=0)
+    pts, rows, cols, vals, n_fallback = np.full((nb, P, 3), np.nan), [], [], [], 0
+    if nb:
+        flat = np.vstack([b.points() for b in bores])
+        cells, _, n_fallback = _locate(dmesh, flat, comm)
+        uh = fem.Function(V)
+        arr = uh.x.array
+        arr[:] = 0.0
+        k = 0
+        for j, b in enumerate(bores):
+            pts[j, :b.n_points] = flat[k:k + b.n_points]
+            for p in range(b.n_points):
+                for d in V.dofmap.cell_dofs(cells[k]):     # one probe per node: (phi_d, phi_d, phi_d)
+                    arr[3 * d:3 * d + 3] = 1.0
+                    vals.extend(uh.eval(flat[k:k + 1], cells[k:k + 1]).reshape(3))
+                    arr[3 * d:3 * d + 3] = 0.0
+                    rows.extend((j * P + p) * 3 + np.arange(3))
+                    cols.extend(3 * d + np.arange(3))
+                k += 1
+    T = sp.csr_matrix((vals, (rows, cols)), shape=(nb * P * 3, n))
+    timings["extract"] = time.perf_counter() - t0
+    return dict(K=Ks, M=Ms, free=np.flatnonzero(mask != 0.0), T=T, bore_points=pts, mass_kg=float(mass),
+                n_fallback_points=int(n_fallback), timings=timings)
 
 def _read_mesh(path: Path, comm):
     """Distributed dolfinx mesh + facet tags (Debian's gmshio.read_from_msh is broken in 0.5.2)."""

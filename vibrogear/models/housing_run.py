@@ -4,6 +4,9 @@
 one dolfinx/PETSc/SLEPc module) and caches; a cache hit does no FE work and never imports
 dolfinx.  Under ``mpirun`` every rank returns the same :class:`HousingModes`; only rank 0
 writes cache entries; an exception on one rank aborts all of them (no hang).
+
+:func:`housing_matrices` (serial only) gives the full, non-reduced free-DOF K and M and the bore
+interpolation operators on the same mesh, for checks of the modal reduction; cached likewise.
 """
 from __future__ import annotations
 
@@ -13,14 +16,20 @@ import sys
 import tempfile
 import time
 import traceback
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Mapping
+
+import numpy as np
 
 from ..config.housing import HousingConfig
 from ..geometry.housing import HousingMesh, bore_layout, build_housing_mesh
 from ..cache import cache_key, entry_dir
 from .housing_result import HousingModes, load_modes, publish, save_modes
 
-__all__ = ["HousingModes", "housing_modes", "housing_cache_keys", "under_mpi"]
+__all__ = ["HousingModes", "HousingMatrices", "housing_modes", "housing_matrices", "housing_matrices_key",
+           "housing_cache_keys",
+           "under_mpi"]
 
 
 def under_mpi() -> bool:
@@ -75,25 +84,8 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     rank = _rank(comm)
     root = (entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir()))
     work = _bcast(comm, Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root)) if rank == 0 else None)
-    mesh_dir = entry_dir(mesh_key)
-    t_mesh = 0.0
-    if rank == 0:
-        if cache and (mesh_dir / "mesh.msh").is_file():
-            hm = _load_mesh_meta(mesh_dir)
-        else:
-            tmp = Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
-            hm = build_housing_mesh(cfg, tmp / "mesh.msh")
-            t_mesh = hm.seconds
-            _save_mesh_meta(hm, tmp)
-            if cache:
-                publish(tmp, mesh_dir)
-                hm = hm._replace(path=mesh_dir / "mesh.msh")
-            if not (hm.path.is_file()):
-                hm = _load_mesh_meta(mesh_dir)
-        msg = hm
-    else:
-        msg = None
-    hm = _bcast(comm, msg)
+    hm, t_mesh = _mesh(cfg, mesh_key, root, cache) if rank == 0 else (None, 0.0)
+    hm = _bcast(comm, hm)
     if comm is not None and os.environ.get("VIBROGEAR_HOUSING_FAIL_RANK") == str(comm.rank):
         raise RuntimeError("injected failure (VIBROGEAR_HOUSING_FAIL_RANK, for the MPI abort test)")
     m = cfg.modes
@@ -113,6 +105,23 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     return _bcast(comm, res) if comm is not None else res
 
 
+def _mesh(cfg, mesh_key, root, cache) -> tuple[HousingMesh, float]:
+    """The housing mesh from the mesh cache or gmsh (one process), and the meshing seconds."""
+    mesh_dir = entry_dir(mesh_key)
+    if cache and (mesh_dir / "mesh.msh").is_file():
+        return _load_mesh_meta(mesh_dir), 0.0
+    tmp = Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
+    hm = build_housing_mesh(cfg, tmp / "mesh.msh")
+    seconds = hm.seconds
+    _save_mesh_meta(hm, tmp)
+    if cache:
+        publish(tmp, mesh_dir)
+        hm = hm._replace(path=mesh_dir / "mesh.msh")
+    if not hm.path.is_file():
+        hm = _load_mesh_meta(mesh_dir)
+    return hm, seconds
+
+
 def _save_mesh_meta(hm: HousingMesh, folder: Path) -> None:
     import json
     d = hm._asdict()
@@ -126,3 +135,104 @@ def _load_mesh_meta(folder: Path) -> HousingMesh:
     d["path"] = folder / d["path"]
     d["bore_tags"] = tuple(d["bore_tags"])
     return HousingMesh(**d)
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class HousingMatrices:
+    """The non-reduced housing on the mesh of :func:`housing_modes` (same config, same DOF).
+
+    N = number of free (unclamped) DOF, B bores, P the largest rolling-element count.
+
+    - ``K``, ``M``       (N, N) scipy CSR, symmetric; K SPD (clamped DOF removed); B_S = beta K
+    - ``T``              (B*P*3, N) CSR: x -> displacements at the bore coupling points, row
+                         (b*P + p)*3 + c, i.e. ``(T @ X).reshape(B, P, 3, -1)`` is laid out like
+                         ``HousingModes.bore_values`` (padding points: empty rows, value 0, not NaN)
+    - ``T_center``       (B*3, N) CSR: row b*3 + c = mean of bore b's ring rows, as
+                         ``bore_center_values``
+    - ``free_dofs``      (N,) indices of the free DOF in dolfinx's serial numbering (3*node + c)
+    - ``bore_points``    (B, P, 3) coupling points (NaN padding), as ``HousingModes.bore_points``
+    """
+    K: object
+    M: object
+    T: object
+    T_center: object
+    free_dofs: np.ndarray
+    n_dofs_total: int
+    bore_points: np.ndarray
+    bore_n_points: tuple[int, ...]
+    bore_names: tuple[str, ...]
+    beta: float
+    degree: int
+    mass_kg: float
+    n_fallback_points: int
+    timings: Mapping[str, float] = field(default_factory=dict)
+    cached: bool = False
+    cache_key: str = ""
+
+    @property
+    def n_dofs(self) -> int:
+        return int(self.K.shape[0])
+
+
+_SPARSE = ("K", "M", "T", "T_center")
+_META = ("n_dofs_total", "bore_n_points", "bore_names", "beta", "degree", "mass_kg", "n_fallback_points")
+
+
+def housing_matrices_key(cfg: HousingConfig) -> str:
+    """The modes entry's config hash under the stage name ``housing-matrices``."""
+    return "housing-matrices-" + housing_cache_keys(cfg)[1].rsplit("-", 1)[1]
+
+
+def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatrices:
+    """Full free-DOF K, M and bore operators T, T_center (serial; a cache hit does no FE work)."""
+    import json
+    import scipy.sparse as sp
+
+    if under_mpi():
+        raise RuntimeError("housing_matrices is serial: call it without mpirun")
+    key = housing_matrices_key(cfg)
+    final = entry_dir(key)
+    if cache and (final / "meta.json").is_file():
+        t0 = time.perf_counter()
+        meta = json.loads((final / "meta.json").read_text())
+        with np.load(final / "matrices.npz") as z:
+            arrays = {k: sp.csr_matrix((z[k + "_data"], z[k + "_indices"], z[k + "_indptr"]),
+                                       shape=tuple(z[k + "_shape"])) for k in _SPARSE}
+            arrays.update(free_dofs=z["free_dofs"], bore_points=z["bore_points"])
+        meta.update(bore_n_points=tuple(meta["bore_n_points"]), bore_names=tuple(meta["bore_names"]),
+                    timings={**meta["timings"], "cache_load": time.perf_counter() - t0})
+        return HousingMatrices(**arrays, **meta, cached=True, cache_key=key)
+    root = final.parent if cache else Path(tempfile.gettempdir())
+    hm, t_mesh = _mesh(cfg, housing_cache_keys(cfg)[0], root, cache)
+    from .housing import assemble_mesh_matrices
+
+    bores = bore_layout(cfg)
+    raw = assemble_mesh_matrices(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bores,
+                                 support=cfg.support, foundation_stiffness=cfg.foundation_stiffness)
+    free = raw["free"]
+    T = raw["T"][:, free].tocsr()
+    T.eliminate_zeros()
+    B, P = raw["bore_points"].shape[:2]
+    C = sp.lil_matrix((B * 3, B * P * 3))                 # bore centre = mean of its ring rows
+    for j, b in enumerate(bores):
+        for c in range(3):
+            C[3 * j + c, (j * P + np.arange(b.n_points)) * 3 + c] = 1.0 / b.n_points
+    res = HousingMatrices(
+        K=raw["K"][free][:, free].tocsr(), M=raw["M"][free][:, free].tocsr(), T=T,
+        T_center=(C.tocsr() @ T).tocsr(), free_dofs=free, n_dofs_total=int(raw["K"].shape[0]),
+        bore_points=raw["bore_points"], bore_n_points=tuple(b.n_points for b in bores),
+        bore_names=tuple(b.name for b in bores), beta=cfg.material.beta, degree=cfg.mesh.degree,
+        mass_kg=raw["mass_kg"], n_fallback_points=raw["n_fallback_points"],
+        timings={"meshing": t_mesh, **raw["timings"]}, cache_key=key)
+    if cache:
+        tmp = Path(tempfile.mkdtemp(prefix=f".{key}.", dir=root))
+        arrays = {"free_dofs": free, "bore_points": res.bore_points}
+        for k in _SPARSE:
+            A = getattr(res, k)
+            arrays.update({k + "_data": A.data, k + "_indices": A.indices, k + "_indptr": A.indptr,
+                           k + "_shape": np.array(A.shape)})
+        np.savez(tmp / "matrices.npz", **arrays)
+        meta = {k: getattr(res, k) for k in _META}
+        (tmp / "meta.json").write_text(json.dumps({**meta, "timings": dict(res.timings)}, indent=1))
+        publish(tmp, final)
+    return res
