@@ -50,7 +50,7 @@ type = "ball"               # ball (Hertz 3/2), roller (10/9), linear (one-sided
 stiffness = 8e9             # contact constant [N/m^p] (spring: [N/m])
 clearance = 5e-6            # radial clearance [m]
 axial_stiffness = 5e7       # [N/m]
-damping = 200.0             # radial viscous damping [N s/m], always active
+damping = 200.0             # radial and axial viscous damping [N s/m], always active
 
 [[gearbox.couplings]]
 name = "motor"; shaft = "driving"; position = 0.0
@@ -105,12 +105,16 @@ class GearConfig:
     density: float | None = spec(None, gt=0.0, doc="[kg/m^3], default: the shaft's material")
     free: bool = spec(False, doc="freely rotating on its own bearing (extra torsional DOF)")
     torsional_damping: float = spec(0.0, ge=0.0, doc="free gear: drag to its shaft [N m s/rad]")
+    drag_torque: float = spec(0.0, ge=0.0, doc="free gear: steady drag torque of its bearing "
+                              "[N m], opposing its spin relative to the shaft")
 
     @property
     def pitch_diameter(self) -> float:
         return self.module * self.teeth / math.cos(math.radians(self.helix_angle))
 
     def validate(self, path: str) -> None:
+        if self.drag_torque and not self.free:
+            raise ConfigError(f"{path}.drag_torque", "only a free gear has a drag torque")
         if not self.inner_diameter < self.pitch_diameter:
             raise ConfigError(f"{path}.inner_diameter", f"must be < the pitch diameter "
                               f"{self.pitch_diameter:g} m, got {self.inner_diameter:g}")
@@ -155,7 +159,7 @@ class GearboxBearingConfig:
     elements: int | None = spec(None, ge=3, le=200, doc="rolling elements (default: the bore's)")
     angle_offset: float = spec(0.0, doc="angle of element 0 without housing [deg]")
     axial_stiffness: float = spec(0.0, ge=0.0, doc="[N/m]")
-    damping: float = spec(0.0, ge=0.0, doc="radial viscous damping [N s/m], always active")
+    damping: float = spec(0.0, ge=0.0, doc="radial and axial viscous damping [N s/m], always active")
     contact_damping: float = spec(0.0, ge=0.0, doc="per element, only in contact [N s/m]")
 
     @property

@@ -158,6 +158,11 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
     links += bl
     cl, forces = _external_couplings(cfg, rotors, shaft_p)
     links += cl
+    for k, g in enumerate(cfg.gears):
+        if g.free and g.drag_torque:
+            s = cfg.shaft_index(g.shaft, "")
+            sense = -np.sign(gear_p[k] - shaft_p[s])      # opposes the relative spin
+            forces.append((s, [free_dof[k]], [sense * g.drag_torque]))
     static_force = PhysicalVector.of(*forces)
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
@@ -259,7 +264,7 @@ def _bearings(scene, cfg, rotors, hm):
 
         ex, ey, ez = np.eye(3)
         if b.axial_stiffness:
-            links.append(LinearLink(f"{b.name}:axial", centre(ez), b.axial_stiffness))
+            links.append(LinearLink(f"{b.name}:axial", centre(ez), b.axial_stiffness, b.damping))
         if b.type == "spring":
             for lab, e in (("x", ex), ("y", ey)):
                 links.append(LinearLink(f"{b.name}:{lab}", centre(e), b.stiffness, b.damping))
