@@ -1,0 +1,67 @@
+"""Reduction-level study: tables and the error-against-run-time figure."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from .figure import new_figure, save_figure
+from .sweep_io import atomic_write_bytes
+
+__all__ = ["write_reduction_tables", "plot_reduction_study"]
+
+_COLS = ("shaft_modes", "housing_modes", "m", "modes_compared", "max_freq_error", "min_mac",
+         "response_error", "extrema_error", "sim_wall_s", "steps", "status")
+
+
+def write_reduction_tables(out_dir, rows) -> dict:
+    """reduction_levels.csv (a row per level) and reduction_modes.csv (full vs reduced
+    frequency and MAC per mode at the largest level)."""
+    out = Path(out_dir)
+    lines = [",".join(_COLS)]
+    for r in rows:
+        lines.append(",".join("" if r.get(c) is None else
+                              (f"{r[c]:.6g}" if isinstance(r.get(c), float) else str(r.get(c, "")))
+                              for c in _COLS))
+    p1 = atomic_write_bytes(out / "reduction_levels.csv", ("\n".join(lines) + "\n").encode())
+    pairs = rows[-1].get("pairs", [])
+    lines = ["index,f_full_hz,f_reduced_hz,rel_error,mac"]
+    lines += [f"{i},{p['f_full_hz']:.6g},{p['f_reduced_hz']:.6g},{p['rel_error']:.4g},"
+              f"{p['mac']:.5f}" for i, p in enumerate(pairs)]
+    p2 = atomic_write_bytes(out / "reduction_modes.csv", ("\n".join(lines) + "\n").encode())
+    p3 = atomic_write_bytes(out / "reduction_levels.json",
+                            json.dumps(rows, indent=1, default=float).encode())
+    return {"levels": p1, "modes": p2, "json": p3}
+
+
+def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
+                         dpi: int = 150) -> list[Path]:
+    fig = new_figure((11.0, 4.2))
+    a1, a2, a3 = fig.subplots(1, 3)
+    m = np.array([r["m"] for r in rows], float)
+    wall = np.array([r["sim_wall_s"] for r in rows], float)
+    ferr = np.array([r.get("max_freq_error", np.nan) for r in rows], float)
+    rerr = np.array([r.get("response_error", np.nan) for r in rows], float)
+    if np.any(np.isfinite(ferr)):
+        a1.semilogy(m, np.abs(ferr), "o-")
+    a1.set_xlabel("master modes m")
+    a1.set_ylabel("max rel. frequency error vs full model")
+    a1.set_title("linearised: reduced vs full", fontsize=8)
+    ok = np.isfinite(rerr) & (rerr > 0)
+    a2.loglog(wall[ok], rerr[ok], "s-")
+    for x, y, mm in zip(wall[ok], rerr[ok], m[ok]):
+        a2.annotate(f"m={mm:.0f}", (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+    a2.set_xlabel("simulation wall time [s]")
+    a2.set_ylabel("mesh-deformation error vs largest level")
+    a2.set_title("nonlinear response: error against run time", fontsize=8)
+    pairs = rows[-1].get("pairs", [])
+    if pairs:
+        f = [p["f_full_hz"] for p in pairs]
+        a3.plot(f, [p["mac"] for p in pairs], "o", ms=3)
+        a3.set_ylim(0.0, 1.05)
+        a3.set_xlabel("full-model frequency [Hz]")
+        a3.set_ylabel("MAC (shaft DOF + bore points)")
+        a3.set_title(f"largest level, m = {rows[-1]['m']}", fontsize=8)
+    fig.suptitle(title, fontsize=9)
+    return save_figure(fig, path, formats, dpi)
