@@ -73,23 +73,26 @@ def jumps(param, q, rel: float = 0.15) -> list[float]:
 
 
 def run_sweep(scene, ctx: RunContext) -> dict:
-    from ..report.sweep_io import (PartialWriter, read_partial, read_sweep_npz, sweep_signature,
-                                   write_sweep)
+    from ..pipeline.executors import is_root
+    from ..report.sweep_io import (NOT_IN_SIGNATURE, PartialWriter, read_partial, read_sweep_npz,
+                                   sweep_arrays, sweep_signature, write_sweep)
     from ..report.sweep_plots import plot_bifurcation
 
     cfg = scene.sweep
     model = impact_pair_from_config(scene.impact_pair)
     params = np.linspace(cfg.omega_min, cfg.omega_max, cfg.n_points)
     opts = integration_options(scene)
+    settings = [(k, v) for k, v in cfg.__dict__.items() if k not in NOT_IN_SIGNATURE]
     sig = sweep_signature(model, params, impact_pair=list(scene.impact_pair.__dict__.items()),
-                          sweep=list(cfg.__dict__.items()), rtol=opts.rtol, atol=opts.atol)
+                          sweep=settings, rtol=opts.rtol, atol=opts.atol)
     partial = ctx.out / "sweep.partial.jsonl"
+    root = is_root()                     # under mpirun only rank 0 touches files
     try:
-        done = read_partial(partial, sig)
+        done = read_partial(partial, sig) if root else {}
     except ValueError:
         partial.unlink()
         done = {}
-    writer = PartialWriter(partial, sig)
+    writer = PartialWriter(partial, sig) if root else None
     total = len(cfg.directions) * params.size
     with ctx.progress(total, "sweep") as bar:
         bar.update(len(done))
@@ -102,13 +105,18 @@ def run_sweep(scene, ctx: RunContext) -> dict:
                     transient_periods=cfg.transient_periods, record_periods=cfg.record_periods,
                     extra_transient_periods=cfg.extra_transient_periods,
                     max_period=cfg.max_period, period_tol=cfg.period_tol, options=opts,
-                    u0=_start_state(model), callback=on_point, done=done)
-    write_sweep(res, ctx.out)
-    data = read_sweep_npz(ctx.out / "sweep.npz")
-    b = scene.impact_pair.b_r
-    plot_bifurcation(data, ctx.out / "bifurcation", param_label="Omega",
-                     deformation_label="q", zero_line=False, bounds=(-b, b), title=_title(scene))
-    writer.remove()
+                    u0=_start_state(model), callback=on_point, done=done,
+                    segments=cfg.segments, workers=cfg.workers)
+    if root:
+        write_sweep(res, ctx.out)
+        data = read_sweep_npz(ctx.out / "sweep.npz")
+        b = scene.impact_pair.b_r
+        plot_bifurcation(data, ctx.out / "bifurcation", param_label="Omega",
+                         deformation_label="q", zero_line=False, bounds=(-b, b),
+                         title=_title(scene))
+        writer.remove()
+    else:
+        data = sweep_arrays(res)
     ctx.results["sweep"] = data
     if "branch" in ctx.results:
         _overlay(scene, ctx)

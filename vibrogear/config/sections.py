@@ -74,6 +74,10 @@ class SweepConfig:
     directions: tuple[str, ...] = spec(("up", "down"), min_len=1, max_len=2, choices=("up", "down"))
     max_period: int = spec(8, ge=1, le=64, doc="largest n classified as period-n")
     period_tol: float = spec(1e-5, gt=0.0, lt=1.0, doc="relative Poincare-sample tolerance")
+    segments: int = spec(1, ge=1, le=1000, doc="independent pieces per direction, each "
+                         "starting from the static equilibrium (parallel work units)")
+    workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
+                               "(default: all cores; 1: serial; under mpirun: the ranks)")
 
     def validate(self, path: str) -> None:
         _check_range(self, path, "omega_min", "omega_max")

@@ -9,7 +9,8 @@
 * ``sweep.partial.jsonl``: one JSON line per finished point (first line: a header with
   the sweep's signature), flushed and fsynced as each point completes, so that a killed
   sweep resumes with :func:`read_partial` -> ``sweep(..., done=...)`` and loses nothing.
-  Floats are written with ``repr`` precision (exact round trip); NaN is written as null.
+  With parallel units only the coordinating process (rank 0 under MPI) writes it, in
+  the order the points arrive.  Floats are written with ``repr`` precision (exact round trip); NaN is written as null.
 
 All final files are written atomically (temporary file in the same folder + rename).
 """
@@ -25,12 +26,18 @@ from pathlib import Path
 
 import numpy as np
 
+from ..pipeline.executors import is_root
 from ..solvers.sweep import PointRecord, SweepResult, sweep
 
-__all__ = ["write_sweep", "read_sweep_npz", "PartialWriter", "read_partial",
+__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "PartialWriter", "read_partial",
            "sweep_signature", "atomic_write_bytes", "PARTIAL_NAME", "resumable_sweep"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
+#: bumped when the meaning of a sweep's points changes (2: independent units, each
+#: starting from u0), so that an older partial file is never resumed
+SWEEP_SEMANTICS = 2
+#: sweep keywords that do not change the results (left out of the signature)
+NOT_IN_SIGNATURE = ("options", "u0", "workers")
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
                "clusters", "defect", "status", "message", "wall_time")
 
@@ -64,11 +71,10 @@ def _cell(x) -> str:
     return str(x)
 
 
-def write_sweep(result: SweepResult, out_dir, *, stem: str = "sweep") -> dict:
-    """Write ``stem.npz`` and ``stem.csv`` into ``out_dir``; returns {kind: path}."""
-    out_dir = Path(out_dir)
+def sweep_arrays(result: SweepResult) -> dict:
+    """The arrays that ``sweep.npz`` holds (NaN/inf replaced), as a plain dict."""
     ok = result.status == 0
-    arrays = dict(
+    return dict(
         param=_finite(result.param), direction=np.asarray(result.direction, dtype="<U4"),
         qmin=_finite(result.qmin), qmax=_finite(result.qmax),
         poincare=_finite(result.poincare), period_n=np.asarray(result.period_n, np.int64),
@@ -77,10 +83,16 @@ def write_sweep(result: SweepResult, out_dir, *, stem: str = "sweep") -> dict:
         defect=_finite(result.defect), clusters=np.asarray(result.clusters, np.int64),
         u_end=_finite(result.u_end), point_wall=_finite(result.point_wall),
         message=np.asarray(result.message, dtype=str) if result.message else np.zeros(0, "<U1"),
-        rtol=np.float64(result.rtol), atol=np.float64(result.atol),
-        period_tol=np.float64(result.period_tol),
+        rtol=np.asarray(result.rtol, np.float64), atol=np.asarray(result.atol, np.float64),
+        period_tol=np.asarray(result.period_tol, np.float64),
         param_name=np.asarray(result.param_name),
     )
+
+
+def write_sweep(result: SweepResult, out_dir, *, stem: str = "sweep") -> dict:
+    """Write ``stem.npz`` and ``stem.csv`` into ``out_dir``; returns {kind: path}."""
+    out_dir = Path(out_dir)
+    arrays = sweep_arrays(result)
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     npz = atomic_write_bytes(out_dir / f"{stem}.npz", buf.getvalue())
@@ -107,9 +119,10 @@ def read_sweep_npz(path) -> dict:
 
 def sweep_signature(model, params, **settings) -> dict:
     """What must match for a partial file to be resumed: the model's name, the grid and
-    the sweep settings (the caller decides which; they must be JSON-serialisable)."""
+    the sweep settings (the caller decides which; they must be JSON-serialisable; leave
+    out ``workers``, which does not change the results)."""
     p = np.asarray(params, dtype=float).ravel()
-    return {"model": getattr(model, "name", str(model)),
+    return {"semantics": SWEEP_SEMANTICS, "model": getattr(model, "name", str(model)),
             "n_states": int(model.n_states),
             "params": [repr(float(x)) for x in p],
             "settings": {k: _jsonable(v) for k, v in sorted(settings.items())}}
@@ -255,26 +268,32 @@ def read_partial(path, signature: dict | None = None) -> dict:
 
 def resumable_sweep(model, params, out_dir, *, callback=None, keep_partial: bool = False,
                     **sweep_kw) -> tuple[SweepResult, dict]:
-    """Run :func:`~vibrogear.solvers.sweep.sweep` writing each finished point to
-    ``out_dir/sweep.partial.jsonl``, resuming from it if present (same signature), then
+    """Run :func:`~vibrogear.solvers.sweep.sweep` (parallel units: ``segments``,
+    ``workers``) writing each finished point to ``out_dir/sweep.partial.jsonl`` as it
+    arrives, resuming from it if present (same signature; ``workers`` may differ), then
     write ``sweep.npz`` / ``sweep.csv`` and drop the partial file.  Returns
     (result, {kind: path}).  ``callback(record)`` is called after the point is saved.
+    Under ``mpirun`` (collective) only rank 0 reads and writes files; every rank
+    returns the same result.
     """
     opts = sweep_kw.get("options")
-    settings = {k: v for k, v in sweep_kw.items() if k not in ("options", "u0")}
+    settings = {k: v for k, v in sweep_kw.items() if k not in NOT_IN_SIGNATURE}
     if opts is not None:
         settings.update(rtol=opts.rtol, atol=opts.atol, max_steps=opts.max_steps)
     sig = sweep_signature(model, params, **settings)
     part = Path(out_dir) / PARTIAL_NAME
-    done = read_partial(part, sig)
-    writer = PartialWriter(part, sig)
+    root = is_root()
+    done = read_partial(part, sig) if root else {}
+    writer = PartialWriter(part, sig) if root else None
 
     def on_point(rec):
         writer(rec)
         return None if callback is None else callback(rec)
 
     result = sweep(model, params, callback=on_point, done=done, **sweep_kw)
-    paths = write_sweep(result, out_dir)
-    if not keep_partial and result.status_code != 2:
-        writer.remove()
+    paths = {"npz": Path(out_dir) / "sweep.npz", "csv": Path(out_dir) / "sweep.csv"}
+    if root:
+        paths = write_sweep(result, out_dir)
+        if not keep_partial and result.status_code != 2:
+            writer.remove()
     return result, paths

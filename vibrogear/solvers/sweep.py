@@ -1,10 +1,14 @@
 """Sequential continuation (brute-force bifurcation diagram, the paper's Fig. 2).
 
-For each direction the parameter values are walked in order ("up": as given, "down":
-reversed); each point starts from the end state of the previous good point (the first
-from ``u0`` or zeros; a later direction continues from where the previous one ended),
-integrates ``transient_periods`` excitation periods that are dropped and then
-``record_periods`` periods that are recorded:
+The work is split into independent *units* (direction, segment): the parameter values
+of each direction ("up": as given, "down": reversed) are cut into ``segments``
+contiguous pieces; every unit starts from ``u0`` (or zeros) at its first point and walks
+its points in order, each point starting from the end state of the previous good point
+of the same unit.  Units never depend on each other, so they run in parallel (local
+processes or MPI ranks, :mod:`vibrogear.pipeline.executors`) and the results do not
+depend on the number of workers.  Each point integrates ``transient_periods``
+excitation periods that are dropped (plus up to ``extra_transient_periods`` more while
+the motion is not yet periodic) and then ``record_periods`` periods that are recorded:
 
 * stroboscopic (Poincare) samples of the full state at t = (N_tr + k) T, k = 1..R, and
   of the monitored deformation delta_mon = c_mon . x - e_mon(t) at the same instants;
@@ -18,21 +22,23 @@ with |P_{k+n} - P_k| <= period_tol * scale for every recorded k (scales: the lar
 sampled |x| for the displacements, the largest |x'| for the velocities), else 0 (not
 periodic: quasi-periodic or chaotic).  A cheap chaos indicator is the number of distinct
 Poincare clusters.  A failed point keeps NaN values and its integrator status and
-message; the sweep goes on from the last good state.  Solvers never print.
+message; the unit goes on from its last good state.  Solvers never print.
 """
 from __future__ import annotations
 
 import math
 import time
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
 from ..models.reduced import ReducedModel
+from ..pipeline.executors import broadcast, is_root, run_units, under_mpi
 from .integrate import IntegrationOptions, integrate
 
-__all__ = ["PointRecord", "SweepResult", "sweep", "classify_period", "count_clusters",
-           "monitored_deformation", "assemble_result"]
+__all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
+           "count_clusters", "monitored_deformation", "assemble_result"]
 
 DIRECTIONS = ("up", "down")
 
@@ -67,7 +73,8 @@ class PointRecord:
 
 @dataclass(frozen=True, eq=False)
 class SweepResult:
-    """All points of a sweep in the order computed (up points first, then down)."""
+    """All points of a sweep in unit order (up units first, then down; each unit in
+    walk order), whatever order the workers finished them in."""
     param: np.ndarray            # (N,)
     direction: np.ndarray        # (N,) "up" / "down"
     index: np.ndarray            # (N,) index into the parameter grid
@@ -249,17 +256,52 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
 
 # ---------------------------------------------------------------- the sweep
 
+def sweep_units(n_params: int, directions=DIRECTIONS, segments: int = 1) -> list:
+    """[(direction, indices in walk order)]: each direction's walk cut into ``segments``
+    contiguous pieces (at most one point each when segments > n_params)."""
+    out = []
+    for d in directions:
+        order = np.arange(n_params) if d == "up" else np.arange(n_params - 1, -1, -1)
+        for piece in np.array_split(order, max(1, min(int(segments), n_params))):
+            out.append((d, tuple(int(i) for i in piece)))
+    return out
+
+
+def _walk_unit(model, kw, unit, emit) -> int:
+    """Walk one unit (direction, indices, params, seed, done): each new point goes to
+    ``emit``; done points are skipped and their end states seed the next point."""
+    direction, indices, params, seed, done = unit
+    seed = np.array(seed, dtype=float)
+    new = 0
+    for i, p in zip(indices, params):
+        rec = done.get(i)
+        if rec is None:
+            rec = _run_point(model, float(p), seed, direction, i, **kw)
+            emit(rec)
+            new += 1
+        if rec.ok:
+            seed = np.array(rec.u_end, dtype=float)
+    return new
+
+
 def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_periods: int = 200,
           record_periods: int = 32, max_period: int = 8, period_tol: float = 1e-5,
           options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
           done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
-          extra_transient_periods: int = 0) -> SweepResult:
-    """Sequential continuation of ``model`` over ``params`` (see the module docstring).
+          extra_transient_periods: int = 0, segments: int = 1,
+          workers: int | None = None) -> SweepResult:
+    """Sequential continuation of ``model`` over ``params`` in independent units (see the
+    module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
 
-    ``callback(record)`` is called after each newly computed point; returning ``False``
-    stops the sweep.  ``done``: {(direction, index): PointRecord} of points already
-    finished (e.g. read back from a partial file): they are not recomputed, and their end
-    states seed the next point exactly as in an uninterrupted run.
+    ``segments``: pieces per direction (each starts again from ``u0``).  ``workers``:
+    local processes (None: min(units, cores); 1: in this process); under ``mpirun``
+    with several ranks the units go to the ranks instead, every rank must call
+    :func:`sweep` with the same arguments and gets the same result.
+    ``callback(record)`` is called in this process (rank 0) after each newly computed
+    point, as it arrives; returning ``False`` stops the sweep.  ``done``:
+    {(direction, index): PointRecord} of points already finished (e.g. read back from
+    a partial file): they are not recomputed, and their end states seed the next point
+    exactly as in an uninterrupted run.  Results do not depend on ``workers``.
     """
     wall = time.perf_counter()
     params = np.asarray(params, dtype=float).ravel()
@@ -273,6 +315,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
                          "max_period >= 1")
     if not 0 < period_tol < 1:
         raise ValueError("sweep: need 0 < period_tol < 1")
+    if int(segments) < 1 or (workers is not None and int(workers) < 1):
+        raise ValueError("sweep: need segments >= 1 and workers >= 1 (or None)")
     n_states = model.n_states
     seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
     if seed.shape != (n_states,):
@@ -282,23 +326,26 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
               max_period=int(max_period), period_tol=float(period_tol),
               cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
               extra_transient_periods=int(extra_transient_periods))
-    records: list[PointRecord] = []
+    layout = sweep_units(params.size, directions, int(segments))
+    units = [(d, idx, params[list(idx)], seed, {i: done[(d, i)] for i in idx if (d, i) in done})
+             for d, idx in layout]
+    todo = [u for u in units if len(u[4]) < len(u[1])]
+    new: dict = {}
     stopped = False
-    for direction in directions:
-        order = range(params.size) if direction == "up" else range(params.size - 1, -1, -1)
-        for i in order:
-            rec = done.get((direction, i))
-            if rec is None:
-                rec = _run_point(model, float(params[i]), seed, direction, i, **kw)
-                if callback is not None and callback(rec) is False:
-                    stopped = True
-            records.append(rec)
-            if rec.ok:
-                seed = np.array(rec.u_end, dtype=float)
-            if stopped:
-                break
-        if stopped:
-            break
+
+    def on_result(_k, rec):
+        nonlocal stopped
+        new[(rec.direction, rec.index)] = rec
+        if callback is not None and callback(rec) is False:
+            stopped = True
+            return False
+        return None
+
+    run_units(partial(_walk_unit, model, kw), todo, workers=workers, on_result=on_result)
+    if under_mpi() and not is_root():
+        return broadcast(None)                  # rank 0's result, identical everywhere
+    records = [r for d, idx in layout for i in idx
+               for r in (done.get((d, i)) or new.get((d, i)),) if r is not None]
     failed = sum(1 for r in records if not r.ok)
     if stopped:
         code, msg = 2, f"stopped by the callback after {len(records)} points"
@@ -306,10 +353,11 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
         code, msg = 1, f"{failed} of {len(records)} points failed"
     else:
         code, msg = 0, "ok"
-    return assemble_result(records, n_states=n_states, record_periods=int(record_periods),
-                           options=options, period_tol=period_tol,
-                           param_name=model.param_name, status_code=code,
-                           status_message=msg, wall_time=time.perf_counter() - wall)
+    result = assemble_result(records, n_states=n_states, record_periods=int(record_periods),
+                             options=options, period_tol=period_tol,
+                             param_name=model.param_name, status_code=code,
+                             status_message=msg, wall_time=time.perf_counter() - wall)
+    return broadcast(result)
 
 
 def assemble_result(records, *, n_states: int, record_periods: int, options, period_tol,

@@ -1,0 +1,319 @@
+"""Run independent work units serially, on local processes or on MPI ranks.
+
+:func:`run_units` calls ``fn(unit, emit)`` once per unit; ``fn`` hands each partial
+result (e.g. one finished sweep point) to ``emit(item)`` as soon as it has it, and the
+item travels to the coordinating process, where ``on_result(unit_index, item)`` is called
+at once (returning ``False`` stops all work).  Only the coordinator calls ``on_result``,
+so it is the one writer of files.  The backend is chosen automatically:
+
+* **MPI** when the program runs under ``mpirun`` with more than one rank (detected from
+  ``OMPI_COMM_WORLD_SIZE`` / ``PMI_SIZE`` before :mod:`mpi4py` is imported): rank 0
+  coordinates (hands out units, receives the items), the other ranks compute.  Every
+  rank must call :func:`run_units` (collective).  An exception inside ``fn`` is sent back
+  to rank 0 and re-raised as :class:`UnitError` on every rank after an orderly shutdown;
+  any other exception aborts all ranks (``MPI.Abort``) so that ``mpirun`` never hangs.
+* **processes** (``multiprocessing``, ``fork`` context) when ``workers > 1``; default
+  ``workers = min(len(units), os.cpu_count())``.  Items come back through a queue;
+  an exception in a worker (or a worker that dies) stops the others and raises
+  :class:`UnitError` in the parent.  Workers die with the parent (``PR_SET_PDEATHSIG``).
+* **serial** when ``workers == 1`` (or one unit): same calls, in unit order.
+
+Workers set ``OPENBLAS_NUM_THREADS=1``.  Results depend only on the units, never on the
+backend or the number of workers, as long as ``fn`` is deterministic.
+"""
+from __future__ import annotations
+
+import os
+import queue as _queue
+import signal
+import sys
+import time
+import traceback
+
+__all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
+           "default_workers"]
+
+
+class UnitError(RuntimeError):
+    """A work unit raised an exception (``unit``: its index; ``remote``: the traceback
+    text from the worker; ``original``: the exception when it could be transported)."""
+
+    def __init__(self, unit: int, remote: str, original: BaseException | None = None):
+        self.unit = unit
+        self.remote = remote
+        self.original = original
+        super().__init__(f"work unit {unit} failed:\n{remote}")
+
+
+class _Stop(Exception):
+    """Raised inside ``emit`` to abandon the current unit (stop requested)."""
+
+
+def under_mpi() -> bool:
+    """True under ``mpirun`` with more than one rank (environment only; no import)."""
+    size = os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))
+    try:
+        return int(size) > 1
+    except ValueError:
+        return False
+
+
+def _comm():
+    from mpi4py import MPI
+    return MPI.COMM_WORLD
+
+
+def is_root() -> bool:
+    """True except on the MPI ranks other than 0."""
+    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"
+
+
+def broadcast(value):
+    """``value`` from rank 0 on every rank under MPI; ``value`` itself otherwise."""
+    return _comm().bcast(value, root=0) if under_mpi() else value
+
+
+def default_workers(n_units: int) -> int:
+    return max(1, min(int(n_units), os.cpu_count() or 1))
+
+
+def backend_for(n_units: int, workers: int | None = None) -> str:
+    """'mpi', 'processes' or 'serial': what :func:`run_units` will use."""
+    if under_mpi():
+        return "mpi"
+    w = default_workers(n_units) if workers is None else min(int(workers), max(int(n_units), 1))
+    return "processes" if w > 1 else "serial"
+
+
+def run_units(fn, units, *, workers: int | None = None, on_result=None) -> list:
+    """Run ``fn(unit, emit)`` for every unit; returns the list of ``fn``'s return values
+    in unit order (None for units left unfinished after a stop).  ``on_result(i, item)``
+    receives every emitted item in the coordinating process; returning ``False`` stops.
+    An exception in ``fn`` propagates as is when serial, as :class:`UnitError` (with the
+    remote traceback) from processes or ranks.  Under MPI this is collective and every
+    rank gets the same list."""
+    units = list(units)
+    if workers is not None and int(workers) < 1:
+        raise ValueError("run_units: workers must be >= 1 (or None: all cores)")
+    kind = backend_for(len(units), workers)
+    if kind == "mpi":
+        return _run_mpi(fn, units, on_result)
+    if kind == "processes":
+        w = default_workers(len(units)) if workers is None else min(int(workers), len(units))
+        return _run_processes(fn, units, w, on_result)
+    return _run_serial(fn, units, on_result)
+
+
+def _deliver(on_result, i, item) -> bool:
+    return on_result is None or on_result(i, item) is not False
+
+
+# ---------------------------------------------------------------- serial
+
+def _run_serial(fn, units, on_result) -> list:
+    results: list = [None] * len(units)
+    for i, unit in enumerate(units):
+        def emit(item, i=i):
+            if not _deliver(on_result, i, item):
+                raise _Stop
+        try:
+            results[i] = fn(unit, emit)
+        except _Stop:
+            break
+    return results
+
+
+# ---------------------------------------------------------------- processes
+
+def _die_with_parent() -> None:
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL)           # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+def _transportable(exc: BaseException):
+    import pickle
+    try:
+        return pickle.loads(pickle.dumps(exc))
+    except Exception:
+        return None
+
+
+def _process_worker(fn, units, tasks, results, parent_pid) -> None:
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    _die_with_parent()
+    if os.getppid() != parent_pid:
+        os._exit(1)
+    while True:
+        i = tasks.get()
+        if i is None:
+            break
+        results.put(("start", i, os.getpid()))
+
+        def emit(item, i=i):
+            if os.getppid() != parent_pid:
+                os._exit(1)
+            results.put(("item", i, item))
+
+        try:
+            out = fn(units[i], emit)
+        except BaseException as exc:            # noqa: BLE001 - sent back to the parent
+            results.put(("error", i, (traceback.format_exc(), _transportable(exc))))
+            break
+        results.put(("done", i, out))
+
+
+def _run_processes(fn, units, workers, on_result) -> list:
+    import multiprocessing as mp
+
+    ctx = mp.get_context("fork")
+    tasks, res_q = ctx.Queue(), ctx.Queue()
+    procs = [ctx.Process(target=_process_worker, args=(fn, units, tasks, res_q, os.getpid()),
+                         daemon=True) for _ in range(workers)]
+    results: list = [None] * len(units)
+    owner: dict[int, int] = {}                  # unit -> pid while it runs
+    finished = 0
+    try:
+        for p in procs:
+            p.start()
+        for i in [*range(len(units)), *([None] * workers)]:
+            tasks.put(i)                        # after the forks: no feeder thread yet
+        while finished < len(units):
+            try:
+                kind, i, payload = res_q.get(timeout=0.2)
+            except _queue.Empty:
+                dead = [p for p in procs if p.exitcode not in (None, 0)]
+                lost = [i for i, pid in owner.items() if any(p.pid == pid for p in dead)]
+                if lost or (dead and all(p.exitcode is not None for p in procs)):
+                    code = dead[0].exitcode
+                    raise UnitError(lost[0] if lost else -1,
+                                    f"worker process died (exit code {code})") from None
+                continue
+            if kind == "start":
+                owner[i] = payload
+            elif kind == "item":
+                if not _deliver(on_result, i, payload):
+                    break
+            elif kind == "done":
+                results[i] = payload
+                owner.pop(i, None)
+                finished += 1
+            else:
+                text, exc = payload
+                raise UnitError(i, text, exc) from exc
+    finally:
+        for p in procs:
+            if p.is_alive():
+                p.terminate()
+        for p in procs:
+            p.join(timeout=5)
+        for q in (tasks, res_q):
+            q.cancel_join_thread()
+            q.close()
+    return results
+
+
+# ---------------------------------------------------------------- MPI
+
+_CTRL, _DATA = 11, 12
+
+
+def _run_mpi(fn, units, on_result) -> list:
+    comm = _comm()
+    try:
+        if comm.size < 2:
+            return _run_serial(fn, units, on_result)
+        if comm.rank == 0:
+            outcome = _mpi_root(comm, units, on_result)
+        else:
+            _mpi_worker(comm, fn)
+            outcome = None
+        outcome = comm.bcast(outcome, root=0)
+    except BaseException:                       # noqa: BLE001 - never leave mpirun hanging
+        sys.stderr.write(f"[rank {comm.rank}] work-unit executor failed; aborting all ranks\n")
+        traceback.print_exc()
+        sys.stderr.flush()
+        comm.Abort(1)
+        raise
+    if outcome[0] == "error":
+        _, i, text, exc = outcome
+        raise UnitError(i, text, exc)
+    return outcome[1]
+
+
+def _mpi_root(comm, units, on_result):
+    from mpi4py import MPI
+
+    results: list = [None] * len(units)
+    todo = list(range(len(units)))
+    active = set(range(1, comm.size))
+    stop_sent: set[int] = set()
+    stopping = False
+    error = None
+
+    def next_task(r):
+        if todo and not stopping:
+            i = todo.pop(0)
+            comm.send(("unit", i, units[i]), dest=r, tag=_CTRL)
+        elif r not in stop_sent:
+            stop_sent.add(r)
+            comm.send(("stop",), dest=r, tag=_CTRL)
+
+    def stop_all():
+        for r in sorted(active - stop_sent):
+            stop_sent.add(r)
+            comm.send(("stop",), dest=r, tag=_CTRL)
+
+    for r in sorted(active):
+        next_task(r)
+    status = MPI.Status()
+    while active:
+        while not comm.iprobe(source=MPI.ANY_SOURCE, tag=_DATA, status=status):
+            time.sleep(0.002)                   # leave the cores to the computing ranks
+        r = status.Get_source()
+        msg = comm.recv(source=r, tag=_DATA)
+        kind = msg[0]
+        if kind == "bye":
+            active.discard(r)
+        elif kind == "item":
+            if not stopping and not _deliver(on_result, msg[1], msg[2]):
+                stopping = True
+                stop_all()
+        elif kind == "done":
+            results[msg[1]] = msg[2]
+            next_task(r)
+        elif kind == "error":
+            if error is None:
+                error = ("error", msg[1], msg[2], msg[3])
+            stopping = True
+            stop_all()
+    return error if error is not None else ("ok", results)
+
+
+def _mpi_worker(comm, fn) -> None:
+    os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    while True:
+        msg = comm.recv(source=0, tag=_CTRL)
+        if msg[0] == "stop":
+            comm.send(("bye",), dest=0, tag=_DATA)
+            return
+        _, i, unit = msg
+
+        def emit(item, i=i):
+            comm.send(("item", i, item), dest=0, tag=_DATA)
+            if comm.iprobe(source=0, tag=_CTRL):
+                raise _Stop                     # the pending message is the stop
+
+        try:
+            out = fn(unit, emit)
+        except _Stop:
+            continue
+        except Exception as exc:                # noqa: BLE001 - sent back to rank 0
+            comm.send(("error", i, traceback.format_exc(), _transportable(exc)), dest=0,
+                      tag=_DATA)
+            continue
+        comm.send(("done", i, out), dest=0, tag=_DATA)
