@@ -20,6 +20,7 @@ ANALYSES = {
     "campbell": "Campbell diagram of a rotor",
     "housing_sweep": "housing geometry sweep: first frequencies against one housing parameter",
     "housing_convergence": "housing mesh convergence: frequency error vs DOF vs wall time, P1 and P2",
+    "reduction_accuracy": "gearbox reduction level: frequency error, MAC and response error vs run time",
 }
 
 
