@@ -7,6 +7,8 @@ OUT    ?= out
 export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
+# gearbox scenes and their studies
+.PHONY: two-stage two-stage-helical single-stage gear-pair gearboxes housing-dynamics bench-gearbox
 .PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
@@ -14,8 +16,8 @@ setup: $(STAMP)
 $(STAMP): pyproject.toml constraints.txt scripts/setup.sh
 	./scripts/setup.sh
 
-## main job on the default scene: impact-pair figures (paper Figs 4-8)
-demo: figures
+## main job on the default scene: the two-stage gearbox (paper Figs 1-2; docs/gearbox.md)
+demo: two-stage
 
 ## the CI test suite (fast; slow cases: make test-slow)
 test: $(STAMP)
@@ -27,6 +29,30 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py
 
+## gearbox scenes: modes, reduction accuracy, time response, sweep (Fig. 2), continuation
+two-stage: $(STAMP)
+	$(VG) run configs/two_stage.toml --out $(OUT)/two_stage
+
+two-stage-helical: $(STAMP)
+	$(VG) run configs/two_stage_helical.toml --out $(OUT)/two_stage_helical
+
+single-stage: $(STAMP)
+	$(VG) run configs/single_stage.toml --out $(OUT)/single_stage
+
+gear-pair: $(STAMP)
+	$(VG) run configs/gear_pair.toml --out $(OUT)/gear_pair
+
+gearboxes: two-stage two-stage-helical single-stage gear-pair
+
+## housing wall thickness -> resonance speeds and bifurcation diagram of the two-stage gearbox
+housing-dynamics: $(STAMP)
+	$(PY) scripts/housing_dynamics.py --out $(OUT)/housing_dynamics
+
+## two_stage: sweep speed vs scipy RK45 + dense numpy RHS; orbit + monodromy time
+bench-gearbox: $(STAMP)
+	$(PY) benchmarks/bench_gearbox.py
+
+## impact-pair figures (paper Figs 4-8)
 figures: fig4 fig5 fig7
 
 fig4: $(STAMP)
