@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     except NumericalFailure as exc:
         print(f"vibrogear: numerical failure: {exc}", file=sys.stderr)
         return 1
-    except NotImplementedError as exc:
+    except (NotImplementedError, ConfigError) as exc:   # ConfigError: found building the model
         print(f"vibrogear: invalid input: {exc}", file=sys.stderr)
         return 2
     if not args.quiet:

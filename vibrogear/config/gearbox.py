@@ -284,10 +284,10 @@ class GearboxConfig:
                 raise ConfigError(f"{path}.shafts[{i}]", f"shaft {self.shafts[i].name!r} is not "
                                   "driven: no chain of fixed-gear meshes joins it to shafts[0]")
         gear_p = [shaft_p[gear_shaft[k]] for k in range(len(self.gears))]
-        for a, b in pairs:
+        for i, (a, b) in enumerate(pairs):
             ga, gb = self.gears[a], self.gears[b]
             if ga.free and gb.free:
-                raise ConfigError(f"{path}.meshes", f"mesh of two free gears ({ga.name!r}, "
+                raise ConfigError(f"{path}.meshes[{i}]", f"mesh of two free gears ({ga.name!r}, "
                                   f"{gb.name!r}) has no defined speed")
             if ga.free:
                 gear_p[a] = -gear_p[b] * gb.teeth / ga.teeth

@@ -30,7 +30,8 @@ from .rotor import build_rotor_model, master_modes
 from .synthesis import (ContactLaw, LinearLink, PhysicalVector, Subsystem, subsystem_offsets,
                         synthesize)
 
-__all__ = ["GearboxModel", "build_gearbox", "OMEGA_REF", "RPM", "housing_to_rotor"]
+__all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
+           "housing_to_rotor"]
 
 #: model time unit 1 / OMEGA_REF s (tau = OMEGA_REF t)
 OMEGA_REF = 2.0 * math.pi * 1000.0
@@ -181,27 +182,46 @@ def _gear_psi(rotor, node, k, free_dof) -> int:
     return free_dof[k] if k in free_dof else rotor.dof(node, "psi")
 
 
+def _mesh_geometry(cfg, i, axes, gear_p):
+    """(geometry, (shaft, gear index) of gear_a and of gear_b) of ``meshes[i]``; a
+    ConfigError where the gears lie in different planes or the centre distance does not
+    match the pitch radii."""
+    m, path = cfg.meshes[i], f"gearbox.meshes[{i}]"
+    ka, kb = cfg.gear_index(m.gear_a, ""), cfg.gear_index(m.gear_b, "")
+    ga, gb = cfg.gears[ka], cfg.gears[kb]
+    sa, sb = cfg.shaft_index(ga.shaft, ""), cfg.shaft_index(gb.shaft, "")
+    ya, yb = cfg.shafts[sa].y0 + ga.position, cfg.shafts[sb].y0 + gb.position
+    if abs(ya - yb) > 1e-3 * max(ga.width, gb.width):
+        raise ConfigError(f"{path}.gear_b", f"gears of the mesh lie in different planes: "
+                          f"housing y = {ya:.6g} m (gear_a) and {yb:.6g} m (gear_b); "
+                          "adjust the shafts' y0 or the gear positions")
+    ca = housing_to_rotor([axes[sa][0], 0.0, axes[sa][1]])[:2]
+    cb = housing_to_rotor([axes[sb][0], 0.0, axes[sb][1]])[:2]
+    try:
+        geom = gear_mesh_geometry(ca, cb, ga.pitch_diameter / 2, gb.pitch_diameter / 2,
+                                  math.radians(m.pressure_angle),
+                                  helix_angle=math.radians(ga.helix_angle), hand=m.hand,
+                                  drive_sense=1 if gear_p[ka] > 0 else -1)
+    except ValueError as exc:
+        raise ConfigError(path, str(exc)) from None
+    return geom, (sa, ka), (sb, kb)
+
+
+def check_layout(scene) -> None:
+    """The gearbox checks that need no FE model (shaft axes, mesh planes and centre
+    distances), run by the scene's validation so that ``vibrogear check`` reports them."""
+    cfg = scene.gearbox
+    _, gear_p = cfg.speed_ratios()
+    axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    for i in range(len(cfg.meshes)):
+        _mesh_geometry(cfg, i, axes, gear_p)
+
+
 def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof) -> list[ContactLaw]:
     out = []
     for i, m in enumerate(cfg.meshes):
-        path = f"gearbox.meshes[{i}]"
-        ka, kb = cfg.gear_index(m.gear_a, ""), cfg.gear_index(m.gear_b, "")
+        geom, (sa, ka), (sb, kb) = _mesh_geometry(cfg, i, axes, gear_p)
         ga, gb = cfg.gears[ka], cfg.gears[kb]
-        sa, sb = cfg.shaft_index(ga.shaft, ""), cfg.shaft_index(gb.shaft, "")
-        ya, yb = cfg.shafts[sa].y0 + ga.position, cfg.shafts[sb].y0 + gb.position
-        if abs(ya - yb) > 1e-3 * max(ga.width, gb.width):
-            raise ConfigError(f"{path}.gear_b", f"gears of the mesh lie in different planes: "
-                              f"housing y = {ya:.6g} m (gear_a) and {yb:.6g} m (gear_b); "
-                              "adjust the shafts' y0 or the gear positions")
-        ca = housing_to_rotor([axes[sa][0], 0.0, axes[sa][1]])[:2]
-        cb = housing_to_rotor([axes[sb][0], 0.0, axes[sb][1]])[:2]
-        try:
-            geom = gear_mesh_geometry(ca, cb, ga.pitch_diameter / 2, gb.pitch_diameter / 2,
-                                      math.radians(m.pressure_angle),
-                                      helix_angle=math.radians(ga.helix_angle), hand=m.hand,
-                                      drive_sense=1 if gear_p[ka] > 0 else -1)
-        except ValueError as exc:
-            raise ConfigError(path, str(exc)) from None
         parts = []
         for s, g, k, c in ((sa, ga, ka, geom.c_a), (sb, gb, kb, geom.c_b)):
             rotor = rotors[s]
