@@ -241,11 +241,15 @@ def run_continuation(scene, ctx: RunContext) -> dict:
                      max(cfg.transient_periods, 1) * r.excitation_period(p0), options=opts)
     if not warm.ok:
         raise NumericalFailure(f"continuation start at {p0:g} rpm: {warm.message}")
-    copts = ContinuationOptions(param_min=cfg.omega_min, param_max=cfg.omega_max, ds=cfg.ds,
-                                ds_min=cfg.ds_min, ds_max=cfg.ds_max, max_points=cfg.max_points,
+    # arclength in rpm-equivalents: the state (~1e-5) and the speed (~1e3 rpm) are balanced
+    # by scaling the speed with range / |u|; ds, ds_min, ds_max are given in rpm
+    scale = (cfg.omega_max - cfg.omega_min) / max(float(np.linalg.norm(warm.u_end)), 1e-300)
+    copts = ContinuationOptions(param_min=cfg.omega_min, param_max=cfg.omega_max,
+                                ds=cfg.ds / scale, ds_min=cfg.ds_min / scale,
+                                ds_max=cfg.ds_max / scale, max_points=cfg.max_points,
                                 max_corrector_iter=cfg.max_corrector_iter, tol=scene.shooting.tol,
                                 period_doubling_branch=cfg.period_doubling_branch,
-                                param_scale=cfg.omega_max - cfg.omega_min)
+                                param_scale=scale)
     with ctx.progress(cfg.max_points, "continuation") as bar:
         branches = continue_orbits(r, warm.u_end, p0, copts,
                                    direction=-1 if cfg.start == "max" else 1, integration=opts,
