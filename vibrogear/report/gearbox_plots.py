@@ -98,7 +98,10 @@ def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearin
         fx.plot(tp, f, lw=0.6, label=name)
     fx.set_xlabel("time / mesh period")
     fx.set_ylabel("sum of element forces [N]")
-    fx.legend(fontsize=6)
+    if bearing_forces:
+        fx.legend(fontsize=6)
+    else:
+        fx.text(0.5, 0.5, "no rolling-element bearings", ha="center", transform=fx.transAxes)
     if len(mesh_names) < 2:
         axes[1, 0].set_visible(False)
         axes[1, 1].set_visible(False)
