@@ -80,8 +80,10 @@ def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearin
         ax, ph = axes[j]
         ax.plot(tp, delta[j] * 1e6, lw=0.6)
         ax.axhline(0.0, color="k", lw=0.7)
-        if j < len(backlash) and np.isfinite(backlash[j]):
-            ax.axhline(backlash[j] * 1e6, color="0.5", ls=":", lw=0.8)
+        # the back flank (-backlash) only when the motion comes near it
+        if j < len(backlash) and np.isfinite(backlash[j]) and \
+                np.min(delta[j]) < 0.5 * backlash[j]:
+            ax.axhline(backlash[j] * 1e6, color="0.5", ls=":", lw=0.8, label="back flank")
         ax.set_ylabel(f"{name} deformation [um]")
         ph.plot(delta[j, half] * 1e6, ddot[j, half] * 1e3, lw=0.5)
         ph.axvline(0.0, color="k", lw=0.7)
