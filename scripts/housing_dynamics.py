@@ -21,7 +21,7 @@ import numpy as np
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", default="configs/two_stage.toml")
-    ap.add_argument("--walls", default="0.008,0.012,0.016", help="wall thicknesses [m]")
+    ap.add_argument("--walls", default="0.010,0.012,0.015", help="wall thicknesses [m]")
     ap.add_argument("--points", type=int, default=61, help="speeds per sweep")
     ap.add_argument("--out", default="out/housing_dynamics")
     ap.add_argument("--set", action="append", default=[], help="extra overrides")
