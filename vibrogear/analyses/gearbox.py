@@ -205,10 +205,15 @@ def run_sweep(scene, ctx: RunContext) -> dict:
             segments=cfg.segments, workers=cfg.workers)
     data = read_sweep_npz(paths["npz"]) if is_root() else sweep_arrays(res)
     if is_root():
-        plot_bifurcation(data, ctx.out / "bifurcation", param_label="driving speed [rpm]",
-                         deformation_label=f"{gm.contacts[0].name} mesh deformation [m]",
-                         zero_line=True, bounds=(-_monitor_backlash(scene),),
-                         title=_title(scene, gm))
+        um = dict(data)                               # the figure in micrometres
+        for key in ("qmin", "qmax", "poincare"):
+            um[key] = np.asarray(data[key], dtype=float) * 1e6
+        back = -_monitor_backlash(scene) * 1e6
+        near = np.nanmin(um["qmin"], initial=0.0) < 0.5 * back
+        plot_bifurcation(um, ctx.out / "bifurcation", param_label="driving speed [rpm]",
+                         deformation_label=f"{gm.contacts[0].name} mesh deformation [um]",
+                         zero_line=True, bounds=(back,) if near else (),
+                         title=_title(scene, gm) + ": below 0 the mesh is interrupted")
     ctx.results["sweep"] = data
     up = res.direction == "up"
     classes = {str(int(k)): int(np.sum(res.period_n == k)) for k in np.unique(res.period_n)}
