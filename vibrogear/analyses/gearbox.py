@@ -232,7 +232,6 @@ def run_sweep(scene, ctx: RunContext) -> dict:
 
 def run_continuation(scene, ctx: RunContext) -> dict:
     from ..report.branch_io import branch_arrays, write_branches
-    from ..report.branch_plots import plot_branches
     from ..solvers.continuation import ContinuationOptions, continue_orbits
     from ..solvers.integrate import integrate
 
@@ -265,12 +264,7 @@ def run_continuation(scene, ctx: RunContext) -> dict:
     write_branches(branches, r.omega_per_param, ctx.out)
     arrays = branch_arrays(branches, r.omega_per_param)
     ctx.results["branch"] = arrays
-    b = _monitor_backlash(scene)
-    for q, lab in (("qmax", "max"), ("qmin", "min")):
-        plot_branches(arrays, ctx.out / f"branch_{lab}", quantity=q,
-                      ylabel=f"{lab} {gm.contacts[0].name} mesh deformation [m]",
-                      xlabel="driving speed [rpm]", title=_title(scene, gm),
-                      sweep=ctx.results.get("sweep"), bounds=(0.0, -b))
+    _plot_branches(scene, gm, ctx, arrays)
     special = [{"label": str(lab), "rpm": float(p), "branch": int(bb)}
                for lab, p, bb in zip(arrays["label"], arrays["param"], arrays["branch"]) if lab]
     return {"status": "ok",
@@ -280,3 +274,28 @@ def run_continuation(scene, ctx: RunContext) -> dict:
             "special_points": special, "solver_wall_s": wall,
             "error_estimate": {"max_periodicity_residual": float(np.max(arrays["residual"])),
                                "shooting_tol": scene.shooting.tol, "rtol": opts.rtol}}
+
+
+def _um(data: dict | None, keys) -> dict | None:
+    if data is None:
+        return None
+    out = dict(data)
+    for k in keys:
+        out[k] = np.asarray(data[k], dtype=float) * 1e6
+    return out
+
+
+def _plot_branches(scene, gm, ctx, arrays) -> None:
+    """Branch figures in micrometres with the sweep overlaid (the back-flank line only when
+    the branch reaches it)."""
+    from ..report.branch_plots import plot_branches
+
+    br = _um(arrays, ("qmin", "qmax"))
+    sw = _um(ctx.results.get("sweep"), ("qmin", "qmax", "poincare"))
+    back = -_monitor_backlash(scene) * 1e6
+    near = np.nanmin(br["qmin"], initial=0.0) < 0.5 * back
+    for q, lab in (("qmax", "max"), ("qmin", "min")):
+        plot_branches(br, ctx.out / f"branch_{lab}", quantity=q,
+                      ylabel=f"{lab} {gm.contacts[0].name} mesh deformation [um]",
+                      xlabel="driving speed [rpm]", title=_title(scene, gm), sweep=sw,
+                      bounds=(0.0, back) if near else (0.0,))
