@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .kernels import FAST, accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times
+from .kernels import (FAST, accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times,
+                      range_dot)
 
 __all__ = ["dopri_loop", "STATUS_TEXT"]
 
@@ -88,18 +89,26 @@ def _violation(A, j, md, delta):
     return v1 if v1 > v2 else v2
 
 
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+def _axpy1(a, x, y):
+    """y += a x (a branch-free helper: loops written inside a branch of the caller do not
+    always vectorise)."""
+    for i in range(x.shape[0]):
+        y[i] += a * x[i]
+
+
 @njit(cache=True, _nrt=False, fastmath=FAST)
 def _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1):
     """Fill stages 1..6 (stage 0 given), y1 and the FSAL stage 6."""
     n = y.shape[0]
     for s in range(1, 7):
+        ys = Ys[s]
         for i in range(n):
-            Ys[s, i] = y[i]
+            ys[i] = y[i]
         for k in range(s):               # axpy per earlier stage: vectorises
             a = h * _A[s, k]
             if a != 0.0:
-                for i in range(n):
-                    Ys[s, i] += a * K[k, i]
+                _axpy1(a, K[k], ys)
         accel(t + _C[s] * h, Ys[s], mode, A, Om, cs, sn, K[s], CxS[s], CvS[s], kdS[s], cdS[s], tmp)
     for i in range(n):
         y1[i] = Ys[6, i]
@@ -205,10 +214,7 @@ def _extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext
     m = A.w2.shape[0]
     for k in range(7):
         pk[k] = CvS[k, mon]
-        s_ = 0.0
-        for i in range(m):
-            s_ += A.C[mon, i] * K[k, m + i]
-        qk[k] = s_
+        qk[k] = range_dot(A.G, mon, A.glo[mon], A.ghi[mon], K[k, m:])
     x0 = CxS[0, mon]
     v0 = CvS[0, mon]
     th_lo = 0.0 if t >= rec_t0 else (rec_t0 - t) / h_used
@@ -250,36 +256,42 @@ def _extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext
         prev_th = th
 
 
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+def _axpy2(a, X, Y):
+    """Y += a X for (n, ncol) C-contiguous arrays, row by row."""
+    for i in range(X.shape[0]):
+        xi = X[i]
+        yi = Y[i]
+        for c in range(X.shape[1]):
+            yi[c] += a * xi[c]
+
+
 @njit(cache=True, _nrt=False, inline="always")
 def _variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS, cs, sn,
-                      dfp, tmp):
+                      dfp, tmp, W):
     """Advance Phi = [d u / d u0, d u / d param] with the stages of the accepted step."""
     n = Phi.shape[0]
     ncol = Phi.shape[1]
     for s in range(7):
-        if s == 0:
-            for i in range(n):
-                for c in range(ncol):
-                    Ph[i, c] = Phi[i, c]
-        else:
-            for i in range(n):
-                for c in range(ncol):
-                    acc = 0.0
-                    for k in range(s):
-                        acc += _A[s, k] * KP[k, i, c]
-                    Ph[i, c] = Phi[i, c] + h_used * acc
-        jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], tmp)
+        for i in range(n):
+            phr = Ph[i]
+            pir = Phi[i]
+            for c in range(ncol):
+                phr[c] = pir[c]
+        for k in range(s):
+            a = h_used * _A[s, k]
+            if a != 0.0:
+                _axpy2(a, KP[k], Ph)
+        jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], W)
         ts = t + _C[s] * h_used
         harmonics(ts, Om, cs, sn)
         accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp, tmp)
         for i in range(n):
             KP[s, i, n] += dfp[i]
-    for i in range(n):
-        for c in range(ncol):
-            acc = 0.0
-            for k in range(6):
-                acc += _B[k] * KP[k, i, c]
-            Phi[i, c] += h_used * acc
+    for k in range(6):
+        a = h_used * _B[k]
+        if a != 0.0:
+            _axpy2(a, KP[k], Phi)
 
 
 @njit(cache=True)
@@ -310,6 +322,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             Phi[i, i] = 1.0
     KP = np.empty((7, n, ncol)) if variational else np.empty((1, 1, 1))
     Ph = np.empty((n, ncol)) if variational else np.empty((1, 1))
+    W = np.empty((3 * r + 1, ncol)) if variational else np.empty((1, 1))   # jac_times workspace
     dfp = np.empty(n)
     bw = np.empty(7)
     pk = np.empty(7)
@@ -399,7 +412,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
                 _extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext)
         if variational and h_used > 0.0:
             _variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS,
-                              cs, sn, dfp, tmp)
+                              cs, sn, dfp, tmp, W)
         t = t_new
         for i in range(n):
             y[i] = y1[i]
@@ -413,10 +426,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             newm = m_ev
             harmonics(t, Om, cs, sn)
             e, ed = error_and_rate(A, j, Om, cs, sn)
-            sv = 0.0
-            for i in range(m):
-                sv += A.C[j, i] * y[m + i]
-            rate = sv - ed
+            rate = range_dot(A.G, j, A.glo[j], A.ghi[j], y[m:]) - ed
             if nev < ev_cap:
                 ev_t[nev] = t
                 ev_j[nev] = j

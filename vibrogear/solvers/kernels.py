@@ -5,6 +5,14 @@ compiles one loop for every model.  The linear part is modal diagonal + low-rank
 coupling; contacts act on delta = C x - e(t).  The contact *mode* (-1, 0, +1) is
 an input, not recomputed from the sign: the integrator switches it at located
 events, so that every step sees one smooth vector field.
+
+The packing detects the structure the products can skip (exact: only zeros are
+skipped, results change by round-off only): rows of P with a single nonzero (identity
+rows over the shaft modes of a gearbox) are projected by one product and their part of
+the coupling force is folded into WT = Pu^T [Kc | Bc] (one short axpy per nonzero
+projection); the contact directions and the dense rows of P are stacked in G and used
+over each row's nonzero column range; contacts without stiffness / error harmonics and
+zero forcing harmonics skip their harmonic loops (cos / sin are computed once per call).
 """
 from __future__ import annotations
 
@@ -15,12 +23,24 @@ import numpy as np
 from numba import njit
 
 __all__ = ["ModelArrays", "model_arrays", "FAST", "effective_mode", "accel", "jac_times", "accel_dparam",
-           "contact_modes", "harmonics", "error_and_rate"]
+           "jac_workspace", "contact_modes", "harmonics", "error_and_rate", "range_dot"]
 
 ModelArrays = namedtuple("ModelArrays", [
     "w2", "damp", "P", "Kc", "Bc", "Kc1", "Bc1", "F0", "Fc", "Fs",
     "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es", "smooth",
-    "harm", "Ct", "Pt",
+    "harm", "eharm", "kharm", "fharm",
+    # Structure, detected at pack time (see _pack).  G = [C; dense rows of P], with the
+    # nonzero column range [glo, ghi) of each row and gdst its output slot (contact j, or
+    # the row of P).  Row k of P is row pg[k] of G (pg[k] >= 0, k in pdk) or has at most
+    # one nonzero, pval[k] at column pcol[k] (pg[k] = -1: identity rows over shaft modes).
+    "G", "glo", "ghi", "gdst", "pg", "pcol", "pval", "pdk",
+    # Coupling at the parameter: WT[l] (row ranges [wlo, whi)) = column l of
+    # Pu^T [Kc | Bc], Pu = P restricted to its single-entry rows, so that their part of
+    # P^T (Kc px + Bc pv) is sum_l WT[l] q[l], q = [px; pv]; the dense rows of P take
+    # Kc, Bc row by row over the nonzero ranges [klo, khi), [blo, bhi).  Same for the
+    # spin derivative (Kc1, Bc1).
+    "WT", "wlo", "whi", "klo", "khi", "blo", "bhi",
+    "W1T", "w1lo", "w1hi", "k1lo", "k1hi", "b1lo", "b1hi",
 ])
 
 #: safe fast-math: reassociation (vectorised reductions) but no finite-math assumptions
@@ -40,27 +60,74 @@ def model_arrays(model, param: float) -> tuple:
     spin = model.spin_per_param * param
     cp = model.coupling
     if spin != 0.0 and cp.P.shape[0]:
-        arrs = arrs._replace(Kc=np.ascontiguousarray(cp.Kc0 + spin * cp.Kc1, dtype=np.float64),
-                             Bc=np.ascontiguousarray(cp.Bc0 + spin * cp.Bc1, dtype=np.float64))
+        Kc = np.ascontiguousarray(cp.Kc0 + spin * cp.Kc1, dtype=np.float64)
+        Bc = np.ascontiguousarray(cp.Bc0 + spin * cp.Bc1, dtype=np.float64)
+        arrs = arrs._replace(Kc=Kc, Bc=Bc, **_coupling_ops(Kc, Bc, arrs.P, arrs.pg))
     return arrs, model.omega_per_param * param, spin, model.omega_per_param, model.spin_per_param
+
+
+def _col_ranges(M: np.ndarray) -> tuple:
+    """Per row of M, the range [lo, hi) of columns holding its nonzeros (0, 0 if none):
+    the products skip the zeros outside it (block-diagonal Kc, Bc; local contact rows)."""
+    if M.shape[1] == 0:
+        return np.zeros(M.shape[0], np.int64), np.zeros(M.shape[0], np.int64)
+    nz = M != 0.0
+    any_ = nz.any(axis=1)
+    lo = np.where(any_, np.argmax(nz, axis=1), 0).astype(np.int64)
+    hi = np.where(any_, M.shape[1] - np.argmax(nz[:, ::-1], axis=1), 0).astype(np.int64)
+    return lo, hi
+
+
+def _coupling_ops(Kc, Bc, P, pg, suffix: str = "") -> dict:
+    """WT, its row ranges and the row ranges of Kc, Bc (see ModelArrays)."""
+    Pu = np.where((pg < 0)[:, None], P, 0.0)
+    # one nonzero per row of Pu: every entry of WT is a single product (no rounding sums)
+    WT = np.ascontiguousarray(np.vstack([Kc.T @ Pu, Bc.T @ Pu]), dtype=np.float64)
+    out = dict(zip(("WT", "wlo", "whi"), (WT, *_col_ranges(WT))))
+    out.update(zip(("klo", "khi"), _col_ranges(Kc)))
+    out.update(zip(("blo", "bhi"), _col_ranges(Bc)))
+    return {k[0] + suffix + k[1:]: v for k, v in out.items()}
 
 
 def _pack(model) -> tuple:
     cp, fo, ct = model.coupling, model.forcing, model.contacts
     f64 = lambda a: np.ascontiguousarray(a, dtype=np.float64)  # noqa: E731
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)  # noqa: E731
+    P = f64(cp.P)
+    r = P.shape[0]
+    nc = ct.count
+    # rows of P with at most one nonzero (identity rows over the shaft modes) need no
+    # dense product: their projection is one scaled entry of the state
+    nnz = np.count_nonzero(P, axis=1)
+    single = nnz <= 1
+    pcol = np.where(nnz == 1, np.argmax(P != 0.0, axis=1), 0)
+    pval = np.where(single, P[np.arange(r), pcol] if r else np.zeros(0), 0.0)
+    dense = np.flatnonzero(~single)
+    pg = np.full(r, -1, dtype=np.int64)
+    pg[dense] = nc + np.arange(dense.size)
+    G = f64(np.vstack([f64(ct.directions), P[dense]]))
+
+    def flags(*arrs):
+        return f64(np.any(np.hstack(arrs) != 0.0, axis=1) if arrs[0].shape[0] else np.zeros(0))
+
+    Kc, Bc, Kc1, Bc1 = (f64(M) for M in (cp.Kc0, cp.Bc0, cp.Kc1, cp.Bc1))
     return ModelArrays(
-        f64(model.omega2), f64(model.damping), f64(cp.P), f64(cp.Kc0), f64(cp.Bc0),
-        f64(cp.Kc1), f64(cp.Bc1),
-        f64(fo.F0), f64(fo.Fc), f64(fo.Fs),
-        f64(ct.directions), f64(ct.k_hi), f64(ct.k_lo), f64(ct.gap_hi), f64(ct.gap_lo),
-        f64(ct.exponent), f64(ct.damping), f64(ct.stiffness_cos), f64(ct.stiffness_sin),
-        f64(ct.error_cos), f64(ct.error_sin),
+        w2=f64(model.omega2), damp=f64(model.damping), P=P, Kc=Kc, Bc=Bc, Kc1=Kc1, Bc1=Bc1,
+        F0=f64(fo.F0), Fc=f64(fo.Fc), Fs=f64(fo.Fs),
+        C=f64(ct.directions), k_hi=f64(ct.k_hi), k_lo=f64(ct.k_lo), g_hi=f64(ct.gap_hi),
+        g_lo=f64(ct.gap_lo), expo=f64(ct.exponent), cdamp=f64(ct.damping),
+        kmc=f64(ct.stiffness_cos), kms=f64(ct.stiffness_sin), ec=f64(ct.error_cos),
+        es=f64(ct.error_sin),
         # C1 contacts (Hertzian exponent > 1, no damping) switch without located events
-        f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
-        # contacts with mesh-stiffness or transmission-error harmonics
-        f64(np.any(np.hstack([ct.stiffness_cos, ct.stiffness_sin, ct.error_cos,
-                              ct.error_sin]) != 0.0, axis=1) if ct.count else np.zeros(0)),
-        f64(ct.directions.T), f64(cp.P.T),     # column-wise copies for the projections
+        smooth=f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
+        # contacts with mesh-stiffness or transmission-error harmonics (any / error / stiffness)
+        harm=flags(ct.stiffness_cos, ct.stiffness_sin, ct.error_cos, ct.error_sin),
+        eharm=flags(ct.error_cos, ct.error_sin), kharm=flags(ct.stiffness_cos, ct.stiffness_sin),
+        fharm=flags(f64(fo.Fc), f64(fo.Fs)),   # forcing harmonics present
+        G=G, glo=_col_ranges(G)[0], ghi=_col_ranges(G)[1],
+        gdst=i64(np.concatenate([np.arange(nc), dense])), pg=pg, pcol=i64(pcol),
+        pval=f64(pval), pdk=i64(dense),
+        **_coupling_ops(Kc, Bc, P, pg), **_coupling_ops(Kc1, Bc1, P, pg, "1"),
     )
 
 
@@ -95,36 +162,110 @@ def power(s, p):
     return np.exp(p * np.log(s))
 
 
+# Index only with loop counters that start at 0 (range(n)) and slice for offsets:
+# numba wraps negative indices, and an index it cannot prove non-negative (m + i,
+# lo + i) keeps that select in the loop, which then does not vectorise.  Every loop
+# over a slice lives in one of the small branch-free helpers below: a loop over slices
+# taken inside a branch or a data-dependent loop of the caller does not vectorise
+# (measured: 4-8x slower).
+
 @njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
-def project(Mt, y, px, pv):
-    """px = Mt^T y[:m], pv = Mt^T y[m:] for Mt (m x k), column-wise (vectorises)."""
-    m = Mt.shape[0]
-    k = Mt.shape[1]
-    for j in range(k):
-        px[j] = 0.0
-        pv[j] = 0.0
-    for i in range(m):
-        xi = y[i]
-        vi = y[m + i]
-        for j in range(k):
-            c = Mt[i, j]
-            px[j] += c * xi
-            pv[j] += c * vi
+def axpy_range(M, k, lo, hi, z, acc):
+    """acc[lo:hi] -= z M[k, lo:hi]."""
+    Mr = M[k, lo:hi]
+    ac = acc[lo:hi]
+    for i in range(hi - lo):
+        ac[i] -= Mr[i] * z
 
 
 @njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
-def scatter_coupling(A, Kc, Bc, px, pv, out, scale):
-    """out[m:] -= scale * P^T (Kc px + Bc pv): the low-rank linear coupling force."""
-    m = A.w2.shape[0]
+def range_dot(M, k, lo, hi, p):
+    """M[k, lo:hi] . p[lo:hi]."""
+    s = 0.0
+    Mr = M[k, lo:hi]
+    pr = p[lo:hi]
+    for i in range(hi - lo):
+        s += Mr[i] * pr[i]
+    return s
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def _dot2x2(G, ga, gb, lo, hi, x, v):
+    """(G[ga] . x, G[ga] . v, G[gb] . x, G[gb] . v) over [lo, hi): x, v loaded once."""
+    G0 = G[ga, lo:hi]
+    G1 = G[gb, lo:hi]
+    X = x[lo:hi]
+    V = v[lo:hi]
+    a0 = 0.0
+    a1 = 0.0
+    b0 = 0.0
+    b1 = 0.0
+    for i in range(hi - lo):
+        xi = X[i]
+        vi = V[i]
+        c0 = G0[i]
+        c1 = G1[i]
+        a0 += c0 * xi
+        b0 += c0 * vi
+        a1 += c1 * xi
+        b1 += c1 * vi
+    return a0, b0, a1, b1
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def rows_project(A, g0, g1, x, v, ox, ov):
+    """ox[d] = G[g] . x, ov[d] = G[g] . v (d = gdst[g]) for the rows g0 <= g < g1 of G,
+    over their nonzero column ranges, two rows per pass (an odd last row pairs with
+    itself).  Branch-free for loop: a while loop or a branch around the pass measured
+    up to 2x slower."""
+    for p in range((g1 - g0 + 1) // 2):
+        ga = g0 + 2 * p
+        gb = min(ga + 1, g1 - 1)
+        lo = min(A.glo[ga], A.glo[gb])
+        hi = max(A.ghi[ga], A.ghi[gb])
+        a0, b0, a1, b1 = _dot2x2(A.G, ga, gb, lo, hi, x, v)
+        ox[A.gdst[ga]] = a0
+        ov[A.gdst[ga]] = b0
+        ox[A.gdst[gb]] = a1
+        ov[A.gdst[gb]] = b1
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def row_axpy(A, g, z, acc):
+    """acc -= z G[g] over the nonzero column range of row g of G."""
+    axpy_range(A.G, g, A.glo[g], A.ghi[g], z, acc)
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def project_coupling(A, x, v, px, pv):
+    """px = P x, pv = P v: single-entry rows of P by one product, dense rows through G."""
     r = A.P.shape[0]
     for k in range(r):
-        z = 0.0
-        for l in range(r):
-            z += Kc[k, l] * px[l] + Bc[k, l] * pv[l]
+        if A.pg[k] < 0:
+            c = A.pcol[k]
+            px[k] = A.pval[k] * x[c]
+            pv[k] = A.pval[k] * v[c]
+    rows_project(A, A.C.shape[0], A.G.shape[0], x, v, px, pv)
+
+
+@njit(cache=True, inline="always", _nrt=False, fastmath=FAST)
+def scatter_coupling(A, WT, wlo, whi, Kc, Bc, klo, khi, blo, bhi, q, acc, scale):
+    """acc -= scale * P^T (Kc px + Bc pv), q = [px; pv]: the low-rank linear coupling force.
+    Single-entry rows of P: one axpy per nonzero q[l] with column l of WT (no reductions);
+    dense rows of P: Kc, Bc row by row over their nonzero ranges, scattered through G."""
+    r = A.P.shape[0]
+    px = q[:r]
+    pv = q[r:2 * r]
+    for l in range(2 * r):
+        z = q[l] * scale
+        if z != 0.0:
+            axpy_range(WT, l, wlo[l], whi[l], z, acc)
+    for d in range(A.pdk.shape[0]):
+        k = A.pdk[d]
+        z = range_dot(Kc, k, klo[k], khi[k], px) + range_dot(Bc, k, blo[k], bhi[k], pv)
         z *= scale
         if z != 0.0:
-            for i in range(m):
-                out[m + i] -= A.P[k, i] * z
+            row_axpy(A, A.pg[k], z, acc)
 
 
 @njit(cache=True, inline="always", _nrt=False)
@@ -165,26 +306,37 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
 
     Also fills Cx[j] = c_j . x, Cv[j] = c_j . v (raw projections), kd[j] = df_j/ddelta,
     cd[j] = df_j/ddelta' (0 out of contact), for the Jacobian and the dense output.
+    ``tmp``: workspace of at least 2 r entries (r = rows of P).
     """
     m = A.w2.shape[0]
-    harmonics(t, Om, cs, sn)
+    harmonics(t, Om, cs, sn)    # once per call, shared by forcing and every contact
     H = cs.shape[0]
+    x = y[:m]
+    v = y[m:2 * m]
+    acc = out[m:2 * m]
+    w2 = A.w2
+    damp = A.damp
+    F0 = A.F0
     for i in range(m):
-        out[i] = y[m + i]
-        out[m + i] = A.F0[i] - A.damp[i] * y[m + i] - A.w2[i] * y[i]
+        out[i] = v[i]
+        acc[i] = F0[i] - damp[i] * v[i] - w2[i] * x[i]
     for h in range(H):
-        c_ = cs[h]
-        s_ = sn[h]
-        for i in range(m):
-            out[m + i] += A.Fc[h, i] * c_ + A.Fs[h, i] * s_
-    # projections c_j . x, c_j . v, p_k . x, p_k . v in one column-wise pass each
-    # (vectorises without reductions; the row-wise scatter below uses C and P)
+        if A.fharm[h] != 0.0:
+            c_ = cs[h]
+            s_ = sn[h]
+            Fc = A.Fc[h]
+            Fs = A.Fs[h]
+            for i in range(m):
+                acc[i] += Fc[i] * c_ + Fs[i] * s_
+    # projections c_j . x, c_j . v (rows of G over their nonzero ranges); the coupling
+    # P x, P v: single-entry (identity) rows of P by one product, dense rows through G
     nc = A.C.shape[0]
     r = A.P.shape[0]
-    project(A.Ct, y, Cx, Cv)
+    rows_project(A, 0, nc, x, v, Cx, Cv)
     if r > 0:
-        project(A.Pt, y, tmp[:r], tmp[r:2 * r])
-        scatter_coupling(A, A.Kc, A.Bc, tmp[:r], tmp[r:2 * r], out, 1.0)
+        project_coupling(A, x, v, tmp[:r], tmp[r:2 * r])
+        scatter_coupling(A, A.WT, A.wlo, A.whi, A.Kc, A.Bc, A.klo, A.khi, A.blo, A.bhi,
+                         tmp[:2 * r], acc, 1.0)
     for j in range(nc):
         sx = Cx[j]
         sv = Cv[j]
@@ -193,7 +345,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
             kd[j] = 0.0
             cd[j] = 0.0
             continue
-        e, ed = error_and_rate(A, j, Om, cs, sn) if A.harm[j] != 0.0 else (0.0, 0.0)
+        e, ed = error_and_rate(A, j, Om, cs, sn) if A.eharm[j] != 0.0 else (0.0, 0.0)
         if A.smooth[j] != 0.0:
             md = effective_mode(A, j, sx - e)
             if md == 0:
@@ -201,7 +353,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
                 cd[j] = 0.0
                 continue
         mod = 1.0
-        if A.harm[j] != 0.0:
+        if A.kharm[j] != 0.0:
             for h in range(H):
                 mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
         delta = sx - e
@@ -228,37 +380,143 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
         f += A.cdamp[j] * ddot
         cd[j] = A.cdamp[j]
         if f != 0.0:
-            for i in range(m):
-                out[m + i] -= A.C[j, i] * f
+            row_axpy(A, j, f, acc)
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
-def jac_times(Phi, mode, A, kd, cd, out, tmp):
-    """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``."""
+def _rows_combine(M, k, lo, hi, Q, z):
+    """z += sum_l M[k, l] Q[l] over the nonzeros of M[k, lo:hi] (rows of Q contiguous)."""
+    Mr = M[k, lo:hi]
+    Qs = Q[lo:hi]
+    ncol = z.shape[0]
+    for l in range(hi - lo):
+        w = Mr[l]
+        if w != 0.0:
+            q = Qs[l]
+            for c in range(ncol):
+                z[c] += w * q[c]
+
+
+def jac_workspace(A, ncol: int) -> np.ndarray:
+    """Workspace for :func:`jac_times` on ``ncol`` columns."""
+    return np.empty((3 * A.P.shape[0] + 1, ncol))
+
+
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+def jac_times(Phi, mode, A, kd, cd, out, W):
+    """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``.
+
+    Phi, out: (2 m, ncol) C-contiguous; every product runs along the contiguous rows
+    (length ncol).  W: workspace of shape (3 r + 1, ncol) (:func:`jac_workspace`)."""
     m = A.w2.shape[0]
     ncol = Phi.shape[1]
+    X = Phi[:m]
+    V = Phi[m:2 * m]
+    OX = out[:m]
+    OV = out[m:2 * m]
     for i in range(m):
+        a = A.w2[i]
+        b = A.damp[i]
+        xi = X[i]
+        vi = V[i]
+        oxi = OX[i]
+        ovi = OV[i]
         for c in range(ncol):
-            out[i, c] = Phi[m + i, c]
-            out[m + i, c] = -A.w2[i] * Phi[i, c] - A.damp[i] * Phi[m + i, c]
+            oxi[c] = vi[c]
+            ovi[c] = -a * xi[c] - b * vi[c]
     r = A.P.shape[0]
     if r > 0:
-        for c in range(ncol):
-            project(A.Pt, Phi[:, c], tmp[:r], tmp[r:2 * r])
-            scatter_coupling(A, A.Kc, A.Bc, tmp[:r], tmp[r:2 * r], out[:, c], 1.0)
+        QX = W[:r]
+        QV = W[r:2 * r]
+        Z = W[2 * r:3 * r]
+        # Q = P Phi
+        for k in range(r):
+            qx = QX[k]
+            qv = QV[k]
+            g = A.pg[k]
+            if g < 0:
+                val = A.pval[k]
+                xc = X[A.pcol[k]]
+                vc = V[A.pcol[k]]
+                for c in range(ncol):
+                    qx[c] = val * xc[c]
+                    qv[c] = val * vc[c]
+                continue
+            for c in range(ncol):
+                qx[c] = 0.0
+                qv[c] = 0.0
+            lo = A.glo[g]
+            hi = A.ghi[g]
+            Gr = A.G[g, lo:hi]
+            Xs = X[lo:hi]
+            Vs = V[lo:hi]
+            for i in range(hi - lo):
+                w = Gr[i]
+                if w != 0.0:
+                    xi = Xs[i]
+                    vi = Vs[i]
+                    for c in range(ncol):
+                        qx[c] += w * xi[c]
+                        qv[c] += w * vi[c]
+        # out[m:] -= P^T (Kc QX + Bc QV)
+        for k in range(r):
+            z = Z[k]
+            for c in range(ncol):
+                z[c] = 0.0
+            _rows_combine(A.Kc, k, A.klo[k], A.khi[k], QX, z)
+            _rows_combine(A.Bc, k, A.blo[k], A.bhi[k], QV, z)
+            g = A.pg[k]
+            if g < 0:
+                val = A.pval[k]
+                if val != 0.0:
+                    o = OV[A.pcol[k]]
+                    for c in range(ncol):
+                        o[c] -= val * z[c]
+                continue
+            lo = A.glo[g]
+            hi = A.ghi[g]
+            Gr = A.G[g, lo:hi]
+            OVs = OV[lo:hi]
+            for i in range(hi - lo):
+                w = Gr[i]
+                if w != 0.0:
+                    o = OVs[i]
+                    for c in range(ncol):
+                        o[c] -= w * z[c]
+    S = W[3 * r]
     for j in range(A.C.shape[0]):
-        if kd[j] == 0.0 and cd[j] == 0.0:
+        a = kd[j]
+        b = cd[j]
+        if a == 0.0 and b == 0.0:
             continue
+        lo = A.glo[j]
+        hi = A.ghi[j]
+        Gr = A.G[j, lo:hi]
+        Xs = X[lo:hi]
+        Vs = V[lo:hi]
+        OVs = OV[lo:hi]
         for c in range(ncol):
-            sx = 0.0
-            sv = 0.0
-            for i in range(m):
-                sx += A.C[j, i] * Phi[i, c]
-                sv += A.C[j, i] * Phi[m + i, c]
-            z = kd[j] * sx + cd[j] * sv
-            if z != 0.0:
-                for i in range(m):
-                    out[m + i, c] -= A.C[j, i] * z
+            S[c] = 0.0
+        for i in range(hi - lo):
+            w = Gr[i]
+            if w != 0.0:
+                xi = Xs[i]
+                if b == 0.0:
+                    wa = w * a
+                    for c in range(ncol):
+                        S[c] += wa * xi[c]
+                else:
+                    vi = Vs[i]
+                    wa = w * a
+                    wb = w * b
+                    for c in range(ncol):
+                        S[c] += wa * xi[c] + wb * vi[c]
+        for i in range(hi - lo):
+            w = Gr[i]
+            if w != 0.0:
+                o = OVs[i]
+                for c in range(ncol):
+                    o[c] -= w * S[c]
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
@@ -266,29 +524,37 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
     """out = d f / d param at fixed (t, y): forcing, transmission error, mesh stiffness, spin."""
     m = A.w2.shape[0]
     H = cs.shape[0]
+    x = y[:m]
+    v = y[m:2 * m]
+    acc = out[m:2 * m]
     for i in range(2 * m):
         out[i] = 0.0
     if dOm != 0.0:
         for h in range(H):
+            if A.fharm[h] == 0.0:
+                continue
             w = (h + 1) * t * dOm
+            Fc = A.Fc[h]
+            Fs = A.Fs[h]
+            c_ = cs[h]
+            s_ = sn[h]
             for i in range(m):
-                out[m + i] += w * (-A.Fc[h, i] * sn[h] + A.Fs[h, i] * cs[h])
+                acc[i] += w * (-Fc[i] * s_ + Fs[i] * c_)
     r = A.P.shape[0]
     if r > 0 and dspin != 0.0:
         # projections once (not once per row of Kc1): O(r m), not O(r^2 m)
-        project(A.Pt, y, tmp[:r], tmp[r:2 * r])
-        scatter_coupling(A, A.Kc1, A.Bc1, tmp[:r], tmp[r:2 * r], out, dspin)
+        project_coupling(A, x, v, tmp[:r], tmp[r:2 * r])
+        scatter_coupling(A, A.W1T, A.w1lo, A.w1hi, A.Kc1, A.Bc1, A.k1lo, A.k1hi, A.b1lo, A.b1hi,
+                         tmp[:2 * r], acc, dspin)
     if dOm == 0.0:
         return
     for j in range(A.C.shape[0]):
         md = mode[j]
+        sx = range_dot(A.G, j, A.glo[j], A.ghi[j], x)
+        e = 0.0
+        for h in range(H):
+            e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
         if A.smooth[j] != 0.0:
-            sx = 0.0
-            for i in range(m):
-                sx += A.C[j, i] * y[i]
-            e = 0.0
-            for h in range(H):
-                e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
             md = effective_mode(A, j, sx - e)
         if md == 0:
             continue
@@ -306,12 +572,6 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
             dmod += n * t * (-A.kmc[j, h] * sn[h] + A.kms[j, h] * cs[h])
             mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
         # stiffness force / k(t), to differentiate the modulation
-        sx = 0.0
-        for i in range(m):
-            sx += A.C[j, i] * y[i]
-        e = 0.0
-        for h in range(H):
-            e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
         delta = sx - e
         p = A.expo[j]
         if md > 0:
@@ -323,5 +583,4 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
         df = fk * dmod - kd[j] * de - cd[j] * ded
         df *= dOm
         if df != 0.0:
-            for i in range(m):
-                out[m + i] -= A.C[j, i] * df
+            row_axpy(A, j, df, acc)
