@@ -27,8 +27,7 @@ from ..config.base import ConfigError
 from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import bearing_geometry, gear_mesh_geometry
 from .rotor import build_rotor_model, master_modes
-from .synthesis import (ContactLaw, LinearLink, PhysicalVector, Subsystem, subsystem_offsets,
-                        synthesize)
+from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
 
 __all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
            "housing_to_rotor"]
@@ -37,7 +36,6 @@ __all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
 OMEGA_REF = 2.0 * math.pi * 1000.0
 #: rad/s per rpm
 RPM = 2.0 * math.pi / 60.0
-_PSI = 5
 
 
 def housing_to_rotor(v) -> np.ndarray:
