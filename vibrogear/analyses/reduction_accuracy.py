@@ -26,7 +26,6 @@ def _physical_vector_full(vec, offsets, hous_T, n_shafts) -> sp.csc_matrix:
     """A PhysicalVector as a sparse column over the full DOF (housing through T)."""
     n = int(offsets[-1])
     rows, vals = [], []
-    out = sp.csc_matrix((n, 1))
     for s, idx, val in vec.parts:
         if s < n_shafts:
             rows.extend(offsets[s] + idx)
@@ -37,9 +36,7 @@ def _physical_vector_full(vec, offsets, hous_T, n_shafts) -> sp.csc_matrix:
             w = w.tocoo()
             rows.extend(offsets[s] + w.col)
             vals.extend(w.data)
-    if rows:
-        out = sp.csc_matrix((vals, (rows, np.zeros(len(rows), dtype=int))), shape=(n, 1))
-    return out
+    return sp.csc_matrix((vals, (rows, np.zeros(len(rows), dtype=int))), shape=(n, 1))
 
 
 def full_linear_model(gm, scene, x0):
