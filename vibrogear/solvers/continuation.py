@@ -225,7 +225,10 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
             status, message = 1, "maximum number of points reached"
             break
         p = z[-1] * options.param_scale
-        if p < options.param_min or p > options.param_max:
+        # a start on the range's end (p = param_max / scale * scale) may lie an ulp
+        # outside it: only a point beyond the range by more than round-off ends the branch
+        slack = 1e-9 * (abs(options.param_max) + abs(options.param_min))
+        if p < options.param_min - slack or p > options.param_max + slack:
             break
         pred = z + ds * t
         if t_prev is not None:

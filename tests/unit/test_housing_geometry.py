@@ -15,7 +15,7 @@ from vibrogear.geometry.housing import (BASE_TAG, bore_layout, build_housing_mes
                                         read_msh_arrays)
 from pathlib import Path
 
-SMALL = Path(__file__).resolve().parents[1] / "configs" / "housing_small.toml"
+SMALL = Path(__file__).resolve().parents[2] / "configs" / "housing_small.toml"
 
 
 def _tet_volume(x, tets):

@@ -23,7 +23,7 @@ from vibrogear.solvers.integrate import IntegrationOptions
 from vibrogear.solvers.sweep import sweep, sweep_units
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
+ROOT = HERE.parents[1]
 MPIRUN = shutil.which("mpirun")
 HYST = dict(zeta=0.015, kappa=0.2, f_m=0.1, f_p=0.2, b_r=1.0)
 GRID = np.round(np.linspace(0.6, 0.95, 6), 10)

@@ -15,7 +15,7 @@ import pytest
 
 from vibrogear.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = str(ROOT / "configs" / "gear_pair.toml")
 SINGLE_STAGE = str(ROOT / "configs" / "single_stage.toml")
 

@@ -11,7 +11,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene, scene_from_dict
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "configs" / "impact_pair.toml"
 
 

@@ -22,7 +22,7 @@ from vibrogear.models.synthesis import subsystem_offsets
 from vibrogear.solvers.contact_eval import contact_history
 from vibrogear.solvers.static import static_equilibrium
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = ROOT / "configs" / "gear_pair.toml"
 RPM0 = 5800.0
 F_MAX = 5000.0

@@ -16,7 +16,7 @@ from vibrogear.config import load_scene
 from vibrogear.models.gearbox import build_gearbox
 from vibrogear.solvers.static import static_equilibrium
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = str(ROOT / "configs" / "gear_pair.toml")
 
 CI = ["scene.analyses=[\"modes\",\"time_response\",\"sweep\"]",

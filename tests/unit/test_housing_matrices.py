@@ -18,7 +18,7 @@ from vibrogear.config.base import as_data, build
 from vibrogear.config.housing import HousingConfig
 from vibrogear.models.full_linear import mac_matrix
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"
 VG = Path(sys.executable).parent / "vibrogear"
 MPIRUN = shutil.which("mpirun")

@@ -17,7 +17,7 @@ from vibrogear.config.base import as_data
 from vibrogear.config.housing import HousingConfig
 from vibrogear.geometry.housing import housing_volume
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from vibrogear.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FRISWELL = str(ROOT / "configs" / "rotor_friswell_5_9_1.toml")
 STEPPED = str(ROOT / "configs" / "rotor_stepped_free_gear.toml")
 

@@ -14,7 +14,7 @@ from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import build
 from vibrogear.config.housing import HousingConfig
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"
 
 
