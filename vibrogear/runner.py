@@ -1,72 +1,77 @@
 """Scene runner: resolves which stages a scene's analyses need and runs only those.
 
-Each (model kind, analysis) pair maps to a function ``fn(scene, ctx) -> dict`` named by
-a ``"module:function"`` string and imported only when that analysis runs, so a scene
-without FE parts never imports dolfinx or gmsh.
+Each (model kind, analysis) pair maps to an analysis and its report writer, named by
+``"module:function"`` strings and imported only when that analysis runs, so a scene
+without FE parts never imports dolfinx or gmsh.  The contract between them is in
+:mod:`vibrogear.pipeline.outcome`: the analysis computes and returns an
+:class:`AnalysisOutcome`, the report writer writes files and figures from it.
 """
 from __future__ import annotations
 
-import dataclasses
 import importlib
 import json
 import math
-import os
 import platform
 import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Callable
 
 from . import __version__
 from .config import Scene
-from .pipeline.progress import Progress
+from .pipeline.files import atomic_write_text
+from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 
-__all__ = ["RunContext", "ANALYSIS_TABLE", "run_scene", "resolve", "NumericalFailure"]
+__all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure"]
 
-ANALYSIS_TABLE: dict[tuple[str, str], str] = {
-    ("impact_pair", "time_response"): "vibrogear.analyses.impact:run_time_response",
-    ("impact_pair", "sweep"): "vibrogear.analyses.impact:run_sweep",
-    ("impact_pair", "continuation"): "vibrogear.analyses.impact:run_continuation",
-    ("impact_pair", "report"): "vibrogear.analyses.impact_report:run_report",
-    ("impact_pair", "critical_damping"): "vibrogear.analyses.critical_damping:run_critical_damping",
-    ("gearbox", "modes"): "vibrogear.analyses.gearbox:run_modes",
-    ("gearbox", "time_response"): "vibrogear.analyses.gearbox:run_time_response",
-    ("gearbox", "sweep"): "vibrogear.analyses.gearbox:run_sweep",
-    ("gearbox", "continuation"): "vibrogear.analyses.gearbox:run_continuation",
-    ("gearbox", "reduction_accuracy"): "vibrogear.analyses.reduction_accuracy:run_reduction_accuracy",
-    ("rotor", "modes"): "vibrogear.analyses.rotor:run_modes",
-    ("rotor", "campbell"): "vibrogear.analyses.rotor:run_campbell",
-    ("housing", "modes"): "vibrogear.analyses.housing:run_modes",
-    ("housing", "housing_sweep"): "vibrogear.analyses.housing_sweep:run_sweep",
-    ("housing", "housing_convergence"): "vibrogear.analyses.housing_study:run_convergence",
+
+@dataclass(frozen=True)
+class Entry:
+    """One (model kind, analysis): the analysis and its report writer as ``"module:function"``
+    (imported only when the analysis runs); ``study``: the analysis takes the scene's
+    reduced-model study (:mod:`vibrogear.analyses.study`), built once per run."""
+    analysis: str
+    report: str | None = None
+    study: bool = False
+
+
+_V = "vibrogear.analyses"
+_R = "vibrogear.report"
+ANALYSIS_TABLE: dict[tuple[str, str], Entry] = {
+    ("impact_pair", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
+    ("impact_pair", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
+    ("impact_pair", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
+    ("impact_pair", "report"): Entry(f"{_V}.impact_report:run_report"),
+    ("impact_pair", "critical_damping"): Entry(f"{_V}.critical_damping:run_critical_damping"),
+    ("gearbox", "modes"): Entry(f"{_V}.gearbox_modes:run", None, True),
+    ("gearbox", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
+    ("gearbox", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
+    ("gearbox", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
+    ("gearbox", "reduction_accuracy"): Entry(f"{_V}.reduction_accuracy:run_reduction_accuracy", None, True),
+    ("rotor", "modes"): Entry(f"{_V}.rotor:run_modes"),
+    ("rotor", "campbell"): Entry(f"{_V}.rotor:run_campbell"),
+    ("housing", "modes"): Entry(f"{_V}.housing:run_modes"),
+    ("housing", "housing_sweep"): Entry(f"{_V}.housing_sweep:run_sweep"),
+    ("housing", "housing_convergence"): Entry(f"{_V}.housing_study:run_convergence"),
 }
 
 
-class NumericalFailure(RuntimeError):
-    """A numerical failure that could not be recovered (exit code 1)."""
+def _load(target: str) -> Callable:
+    module, func = target.split(":")
+    return getattr(importlib.import_module(module), func)
 
 
-@dataclass
-class RunContext:
-    out: Path
-    quiet: bool = False
-    results: dict[str, Any] = dataclasses.field(default_factory=dict)
-
-    def progress(self, total: int, label: str) -> Progress:
-        return Progress(total, label, quiet=self.quiet)
-
-
-def resolve(scene: Scene) -> list[tuple[str, Callable]]:
-    """The analysis functions this scene needs, imported lazily, in order."""
+def resolve(scene: Scene) -> list[tuple[str, Entry]]:
+    """The table entries this scene's analyses need, in order (nothing imported yet)."""
     kind = scene.model_kind
     plan = []
     for analysis in scene.scene.analyses:
         key = (kind, analysis)
         if key not in ANALYSIS_TABLE:
             raise NotImplementedError(f"analysis {analysis!r} is not available for a {kind} scene")
-        module, func = ANALYSIS_TABLE[key].split(":")
-        plan.append((analysis, getattr(importlib.import_module(module), func)))
+        plan.append((analysis, ANALYSIS_TABLE[key]))
     return plan
 
 
@@ -84,15 +89,20 @@ def _finite_json(obj: Any) -> Any:
 
 
 def write_summary(out: Path, summary: dict) -> None:
-    if os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) != "0":
+    if not is_root_process():
         return  # under mpirun only rank 0 writes files
-    tmp = out / "summary.json.tmp"
-    tmp.write_text(json.dumps(_finite_json(summary), indent=2, sort_keys=False))
-    tmp.replace(out / "summary.json")
+    atomic_write_text(out / "summary.json", json.dumps(_finite_json(summary), indent=2))
+
+
+def _as_outcome(value) -> AnalysisOutcome:
+    """Analyses return an AnalysisOutcome; a plain dict is a summary without a result."""
+    return value if isinstance(value, AnalysisOutcome) else AnalysisOutcome(summary=dict(value))
 
 
 def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
-    """Run every analysis of ``scene``; write ``summary.json``; return the summary."""
+    """Run every analysis of ``scene`` and its report writer; write ``summary.json``
+    after each; return the summary.  The reduced-model study is built once, before the
+    first analysis that takes it, and handed to each explicitly."""
     plan = resolve(scene)
     ctx.out.mkdir(parents=True, exist_ok=True)
     summary: dict[str, Any] = {
@@ -104,10 +114,30 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
     }
     t_all = time.perf_counter()
     failure = None
-    for name, fn in plan:
+    study = None
+    previous: dict[str, AnalysisOutcome] = {}
+    for name, entry in plan:
         t0 = time.perf_counter()
         try:
-            summary["results"][name] = fn(scene, ctx)
+            if entry.study and study is None:
+                from .analyses.study import build_study
+                study = build_study(scene)
+                summary["wall_time_s"]["model"] = time.perf_counter() - t0
+                t0 = time.perf_counter()
+            fn = _load(entry.analysis)
+            args = (study, scene, ctx) if entry.study else (scene, ctx)
+            outcome = _as_outcome(fn(*args))
+            record = dict(outcome.summary)
+            if outcome.warnings:
+                record["warnings"] = list(outcome.warnings)
+            if entry.report is not None and ctx.root:
+                files = _load(entry.report)(scene, outcome, ctx.out, MappingProxyType(previous))
+                if files:
+                    record["files"] = files
+            for path in outcome.partial_files:      # the final files exist now
+                Path(path).unlink(missing_ok=True)
+            summary["results"][name] = record
+            previous[name] = outcome
         except NumericalFailure as exc:
             summary["results"][name] = {"status": "failed", "message": str(exc)}
             summary["status"] = "failed"

@@ -25,7 +25,7 @@ from typing import Callable
 import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
-from ..runner import NumericalFailure, RunContext
+from ..pipeline.outcome import NumericalFailure, RunContext
 from ..solvers.continuation import ContinuationOptions, continue_orbits
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium

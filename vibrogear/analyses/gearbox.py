@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from ..runner import NumericalFailure, RunContext
+from ..pipeline.outcome import NumericalFailure, RunContext
 from .impact import integration_options, jumps
 
 __all__ = ["gearbox_model", "start_state", "run_modes", "run_time_response", "run_sweep",

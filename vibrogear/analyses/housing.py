@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..runner import NumericalFailure
+from ..pipeline.outcome import NumericalFailure
 
 __all__ = ["run_modes", "is_root", "compute_modes", "modes_summary", "write_modes_outputs"]
 

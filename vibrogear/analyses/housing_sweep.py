@@ -16,7 +16,7 @@ import time
 
 import numpy as np
 
-from ..runner import NumericalFailure
+from ..pipeline.outcome import NumericalFailure
 from .housing import is_root
 
 __all__ = ["run_sweep", "sweep_point"]

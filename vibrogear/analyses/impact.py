@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
-from ..runner import NumericalFailure, RunContext
+from ..pipeline.outcome import NumericalFailure, RunContext
 from ..solvers.continuation import ContinuationOptions, continue_orbits
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium

@@ -23,7 +23,7 @@ import itertools
 import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
-from ..runner import NumericalFailure, RunContext
+from ..pipeline.outcome import NumericalFailure, RunContext
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.shooting import shoot
 from ..solvers.static import static_equilibrium

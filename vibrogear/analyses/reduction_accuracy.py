@@ -15,9 +15,9 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from ..runner import NumericalFailure, RunContext
-from .gearbox import start_state
-from .impact import integration_options
+from ..pipeline.outcome import NumericalFailure, RunContext
+from .study import integration_options
+from .study import start_state as _model_start
 
 __all__ = ["run_reduction_accuracy", "full_linear_model", "reduced_linear_modes"]
 
@@ -106,6 +106,10 @@ def _compare(f_full, v_full, f_red, v_red, f_max):
             for i, j in pairs]
 
 
+def _start(gm, rpm: float) -> np.ndarray:
+    return _model_start(gm.reduced, rpm)
+
+
 def _response(gm, scene, cfg):
     from ..solvers.contact_eval import contact_history
     from ..solvers.integrate import integrate
@@ -114,7 +118,7 @@ def _response(gm, scene, cfg):
     T = r.excitation_period(rpm)
     n0, n1 = cfg.transient_periods, cfg.transient_periods + cfg.record_periods
     t_eval = np.linspace(n0 * T, n1 * T, 32 * cfg.record_periods + 1)
-    tr = integrate(r, rpm, start_state(gm, rpm), 0.0, n1 * T, t_eval=t_eval,
+    tr = integrate(r, rpm, _start(gm, rpm), 0.0, n1 * T, t_eval=t_eval,
                    options=integration_options(scene))
     if not tr.ok:
         return None, tr
@@ -125,11 +129,11 @@ def _warm_up(gm, scene, cfg) -> None:
     from ..solvers.integrate import integrate
 
     r = gm.reduced
-    integrate(r, cfg.rpm, start_state(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
+    integrate(r, cfg.rpm, _start(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
               options=integration_options(scene))
 
 
-def run_reduction_accuracy(scene, ctx: RunContext) -> dict:
+def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
     from ..models.gearbox import build_gearbox
     from ..report.reduction_plots import plot_reduction_study, write_reduction_tables
 
@@ -145,7 +149,7 @@ def run_reduction_accuracy(scene, ctx: RunContext) -> dict:
         from ..models.full_linear import lowest_modes_full
 
         gm = models[-1]
-        x0 = start_state(gm, cfg.rpm)[:gm.reduced.n_modes]
+        x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
         t1 = time.perf_counter()
         full, obs = full_linear_model(gm, scene, x0)
         f_full, vec = lowest_modes_full(full, cfg.f_max_hz)
@@ -154,7 +158,7 @@ def run_reduction_accuracy(scene, ctx: RunContext) -> dict:
     rows, responses = [], []
     _warm_up(models[0], scene, cfg)           # compile first: the times compare solvers, not JIT
     for (s, h), gm in zip(levels, models):
-        x0 = start_state(gm, cfg.rpm)[:gm.reduced.n_modes]
+        x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
         row = {"shaft_modes": s, "housing_modes": h, "m": gm.reduced.n_modes}
         if f_full is not None and gm.reduced.n_modes:
             f_red, v_red = reduced_linear_modes(gm, x0)

@@ -1,0 +1,129 @@
+"""The description of a study of a reduced model: what every analysis verb (time response,
+sweep, continuation, ...) needs, and the only thing that differs between an impact pair and a
+gearbox.
+
+A :class:`Study` holds the :class:`~vibrogear.models.reduced.ReducedModel`, how to get its
+start state at a parameter value (the static equilibrium under the mean load, paper eq. (9)),
+the parameter's name and unit (``Omega`` for the impact pair, ``rpm`` for gearboxes), the
+monitored quantity with its display unit, the model's time and force units, and a
+fingerprint of its physics (for resuming).  The verbs are written once against it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..models.reduced import ReducedModel
+from ..pipeline.outcome import NumericalFailure
+from ..pipeline.resume import fingerprint
+from ..solvers.integrate import IntegrationOptions
+
+__all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state"]
+
+
+@dataclass(frozen=True)
+class Monitor:
+    """The monitored quantity: contact ``contact``'s deformation delta = c.x - e(t), shown
+    as ``scale * delta`` in ``unit``; ``lines``: reference values in display units (zero line,
+    clearance bounds)."""
+    contact: int
+    label: str
+    unit: str
+    scale: float = 1.0
+    lines: tuple[float, ...] = ()
+    zero_line: bool = False
+
+    def axis_label(self, prefix: str = "") -> str:
+        text = f"{prefix} {self.label}".strip()
+        return f"{text} [{self.unit}]" if self.unit else text
+
+
+@dataclass(frozen=True, eq=False)
+class Study:
+    model: ReducedModel
+    title: str
+    param_name: str                      # "Omega" | "rpm"
+    param_unit: str                      # "" | "rpm"
+    param_label: str                     # axis label of the parameter
+    monitor: Monitor
+    time_unit_s: float = 1.0             # one model time unit in seconds ("" if nondimensional)
+    force_unit_n: float = 1.0            # one model force unit in N
+    rate_unit: float = 1.0               # one model deformation rate unit in display units/s
+    contact_groups: dict = field(default_factory=dict)   # "mesh"/"bearing:<name>" -> indices
+    balance_arclength: bool = False      # scale the parameter by range/|u| in the arclength
+    strict_start: bool = True            # no static equilibrium is a failure (else start at 0)
+    gearbox: object = None               # GearboxModel of a gearbox study
+
+    @property
+    def physics(self) -> str:
+        """Content hash of everything in the reduced model (for resume signatures)."""
+        return fingerprint(self.model)
+
+    def start(self, param: float) -> np.ndarray:
+        return start_state(self.model, param, strict=self.strict_start)
+
+
+def start_state(model: ReducedModel, param: float, *, strict: bool = True) -> np.ndarray:
+    """The static equilibrium [x, 0] at ``param`` (velocities zero, mean load)."""
+    from ..solvers.static import static_equilibrium
+
+    st = static_equilibrium(model, param)
+    if st.converged:
+        return st.u0
+    if not strict:
+        return np.zeros(model.n_states)
+    raise NumericalFailure(f"static equilibrium at {model.param_name} = {param:g}: {st.message} "
+                           f"(residual {st.residual:.3g} after {st.iterations} iterations)")
+
+
+def integration_options(scene) -> IntegrationOptions:
+    c = scene.integration
+    if isinstance(c, IntegrationOptions):
+        return c
+    return IntegrationOptions(rtol=c.rtol, atol=c.atol, max_steps=c.max_steps,
+                              max_events_per_step=c.max_events_per_step)
+
+
+def build_study(scene) -> Study:
+    """The study of a scene's reduced model (impact pair or gearbox)."""
+    if scene.impact_pair is not None:
+        return _impact_pair_study(scene)
+    if scene.gearbox is not None:
+        return _gearbox_study(scene)
+    raise NotImplementedError(f"no reduced model for a {scene.model_kind} scene")
+
+
+def _impact_pair_study(scene) -> Study:
+    from ..models.impact_pair import impact_pair_from_config
+
+    c = scene.impact_pair
+    title = (f"{scene.scene.name}: zeta={c.zeta:g}, kappa={c.kappa:g}, f_m={c.f_m:g}, "
+             f"f_p={c.f_p:g}, b_r={c.b_r:g}")
+    return Study(model=impact_pair_from_config(c), title=title, param_name="Omega",
+                 param_unit="", param_label="Omega", strict_start=False,
+                 monitor=Monitor(contact=0, label="q", unit="", lines=(-c.b_r, c.b_r)),
+                 contact_groups={"clearance": np.array([0])})
+
+
+def _gearbox_study(scene) -> Study:
+    from ..models.gearbox import build_gearbox
+
+    gm = build_gearbox(scene)
+    r = gm.reduced
+    mesh = gm.contact_indices("mesh")
+    groups = {"mesh": mesh}
+    for j, c in enumerate(gm.contacts):
+        if c.kind == "bearing":
+            groups.setdefault(f"bearing:{c.group}", []).append(j)
+    groups = {k: np.asarray(v, dtype=int) for k, v in groups.items()}
+    back = scene.gearbox.meshes[0].backlash if scene.gearbox.meshes else 0.0
+    parts = "+".join(str(s.n_modes) for s in gm.subsystems)
+    name = gm.contacts[r.monitor].name if gm.contacts else "mesh"
+    return Study(model=r, title=f"{scene.scene.name}: m = {r.n_modes} ({parts})",
+                 param_name="rpm", param_unit="rpm", param_label="driving speed [rpm]",
+                 monitor=Monitor(contact=r.monitor, label=f"{name} mesh deformation", unit="um",
+                                 scale=1e6, lines=(-back * 1e6,), zero_line=True),
+                 time_unit_s=1.0 / gm.omega_ref, force_unit_n=gm.omega_ref ** 2,
+                 rate_unit=gm.omega_ref, contact_groups=groups, balance_arclength=True,
+                 strict_start=True, gearbox=gm)

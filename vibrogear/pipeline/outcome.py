@@ -1,0 +1,59 @@
+"""What an analysis receives and returns: the contract between the runner, the analyses
+and the report writers.
+
+* An analysis is ``run(scene, ctx) -> AnalysisOutcome`` (or ``run(study, scene, ctx)`` for
+  the analyses of a reduced model, see :mod:`vibrogear.analyses.study`).  It computes and
+  returns; it never writes the final files or draws.  ``ctx.out`` is given only for files
+  that make a run resumable (partial files, see :mod:`vibrogear.pipeline.resume`).
+* A report writer is ``write(scene, outcome, out, previous) -> dict | None``: it writes the
+  analysis' files and figures from ``outcome.result`` (and may overlay the results of
+  analyses that ran before it, ``previous``: analysis name -> outcome, read-only).
+* Data passes between analyses only as these returned, frozen outcomes.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .progress import Progress
+
+__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "is_root_process"]
+
+
+class NumericalFailure(RuntimeError):
+    """A numerical failure that could not be recovered (exit code 1); the message says
+    where and why."""
+
+
+def is_root_process() -> bool:
+    """True except on the MPI ranks other than 0 (only rank 0 writes files)."""
+    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisOutcome:
+    """``summary``: JSON-able entries for ``summary.json``; ``result``: the frozen result
+    object the report writer (and later analyses' reports) read; ``partial_files``: files
+    that made the run resumable, deleted by the runner once the report has written the
+    final files."""
+    summary: dict
+    result: Any = None
+    partial_files: tuple[Path, ...] = ()
+    warnings: tuple[str, ...] = field(default=())
+
+
+@dataclass(frozen=True)
+class RunContext:
+    """Per-run settings an analysis may use: the output folder (for resume files only),
+    whether to show progress, and whether this process writes files."""
+    out: Path
+    quiet: bool = False
+
+    @property
+    def root(self) -> bool:
+        return is_root_process()
+
+    def progress(self, total: int, label: str) -> Progress:
+        return Progress(total, label, quiet=self.quiet)
