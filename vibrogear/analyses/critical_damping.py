@@ -165,7 +165,7 @@ def run_critical_damping(scene, ctx: RunContext) -> dict:
     import json
 
     from ..report.critical_damping_plots import plot_fold_cusp
-    from .impact import integration_options
+    from .study import integration_options
 
     cfg = scene.critical_damping
     c = scene.impact_pair

@@ -47,7 +47,8 @@ class Study:
     param_unit: str                      # "" | "rpm"
     param_label: str                     # axis label of the parameter
     monitor: Monitor
-    time_unit_s: float = 1.0             # one model time unit in seconds ("" if nondimensional)
+    length_unit: str = ""                # unit of the model's displacements ("" nondimensional)
+    time_unit_s: float = 1.0             # one model time unit in seconds
     force_unit_n: float = 1.0            # one model force unit in N
     rate_unit: float = 1.0               # one model deformation rate unit in display units/s
     contact_groups: dict = field(default_factory=dict)   # "mesh"/"bearing:<name>" -> indices
@@ -124,6 +125,6 @@ def _gearbox_study(scene) -> Study:
                  param_name="rpm", param_unit="rpm", param_label="driving speed [rpm]",
                  monitor=Monitor(contact=r.monitor, label=f"{name} mesh deformation", unit="um",
                                  scale=1e6, lines=(-back * 1e6,), zero_line=True),
-                 time_unit_s=1.0 / gm.omega_ref, force_unit_n=gm.omega_ref ** 2,
+                 length_unit="m", time_unit_s=1.0 / gm.omega_ref, force_unit_n=gm.omega_ref ** 2,
                  rate_unit=gm.omega_ref, contact_groups=groups, balance_arclength=True,
                  strict_start=True, gearbox=gm)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .sweep_io import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 

@@ -7,10 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from .figure import new_figure, save_figure
-from .sweep_io import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes
 
-__all__ = ["write_modes_csv", "plot_resonance_map", "write_contact_history",
-           "plot_gearbox_time_response"]
+__all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response"]
 
 
 def write_modes_csv(path, f_hz, zeta, names, shares, mesh, mesh_names) -> Path:
@@ -49,22 +48,6 @@ def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: floa
     ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title + "\nnatural frequencies (dark: large gear-mesh strain energy)", fontsize=9)
     return save_figure(fig, path, formats, dpi)
-
-
-def write_contact_history(out_dir, t_s, delta, delta_dot, force, names) -> Path:
-    """time_response.npz (t [s], deformation [m], rate [m/s], force [N] per contact) and a
-    CSV of the gear-mesh columns only (a row per sample)."""
-    out = Path(out_dir)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, t=t_s, delta=delta, delta_dot=delta_dot, force=force,
-                        names=np.array(names))
-    atomic_write_bytes(out / "time_response.npz", buf.getvalue())
-    mesh = [j for j, n in enumerate(names) if ":" not in n]
-    cols = ["t_s"] + [f"delta_{names[j]}_m" for j in mesh] + [f"force_{names[j]}_N" for j in mesh]
-    txt = io.StringIO()
-    np.savetxt(txt, np.column_stack([t_s] + [delta[j] for j in mesh] + [force[j] for j in mesh]),
-               delimiter=",", header=",".join(cols), comments="", fmt="%.9g")
-    return atomic_write_bytes(out / "time_response.csv", txt.getvalue().encode())
 
 
 def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearing_forces, *,

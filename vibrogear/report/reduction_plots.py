@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .figure import new_figure, save_figure
-from .sweep_io import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_reduction_tables", "plot_reduction_study"]
 

@@ -1,23 +1,11 @@
 """Time response: table and plots (time trace, phase trajectory)."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
-import numpy as np
-
 from .figure import new_figure, save_figure
-from .sweep_io import atomic_write_bytes
 
-__all__ = ["write_time_response", "plot_time_response"]
-
-
-def write_time_response(out_dir, t, u, names=()) -> Path:
-    names = list(names) or [f"u{i}" for i in range(u.shape[1])]
-    buf = io.StringIO()
-    np.savetxt(buf, np.column_stack([t, u]), delimiter=",", header=",".join(["t", *names]),
-               comments="", fmt="%.10g")
-    return atomic_write_bytes(Path(out_dir) / "time_response.csv", buf.getvalue().encode())
+__all__ = ["plot_time_response"]
 
 
 def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str = "",

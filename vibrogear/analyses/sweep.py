@@ -1,0 +1,172 @@
+"""Sequential continuation over the study's parameter (paper Fig. 2), resumable.
+
+Written once for every model.  The grid runs from ``param_min`` to ``param_max`` in the
+scene's parameter (Omega, or the driving speed in rpm); every unit starts from the static
+equilibrium at the first grid value.  Each finished point is appended to
+``sweep.partial.jsonl`` as it arrives (:class:`~vibrogear.pipeline.resume.PartialStore`:
+reused only when the model's physics, the grid, the sweep settings, the integrator options
+and the package version are all the same, else set aside); the runner deletes it once the
+report has written ``sweep.npz``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..pipeline.resume import PartialStore, fingerprint
+from ..solvers.sweep import PointRecord, SweepResult, sweep
+from .study import Study, integration_options
+
+__all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
+           "record_to_json", "record_from_json"]
+
+PARTIAL_NAME = "sweep.partial.jsonl"
+#: sweep settings that do not change the results (left out of the resume signature)
+_NOT_IN_SIGNATURE = ("workers", "callback", "done")
+
+
+@dataclass(frozen=True, eq=False)
+class SweepStudyResult:
+    sweep: SweepResult
+    study: Study
+
+
+def param_range(section) -> tuple[float, float]:
+    """(min, max) of a scene section's parameter range, whatever the parameter's name."""
+    if hasattr(section, "param_min"):
+        return float(section.param_min), float(section.param_max)
+    return float(section.omega_min), float(section.omega_max)
+
+
+def jumps(param, q, rel: float = 0.15) -> list[float]:
+    """Midpoints between successive sweep points whose q differs by > rel * range."""
+    q = np.asarray(q, float)
+    ok = np.isfinite(q)
+    span = np.ptp(q[ok]) if np.any(ok) else 0.0
+    return [0.5 * (param[k] + param[k - 1]) for k in range(1, len(q))
+            if ok[k] and ok[k - 1] and abs(q[k] - q[k - 1]) > rel * span > 0]
+
+
+def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callback=None,
+                    root: bool = True, **sweep_kw) -> tuple[SweepResult, PartialStore | None, int]:
+    """:func:`~vibrogear.solvers.sweep.sweep` with each finished point appended to
+    ``out_dir/sweep.partial.jsonl`` and the points of a matching partial file reused.
+    ``physics``: fingerprint of the model (default: its content hash).  Returns (result,
+    store, resumed points); ``store`` is None when ``root`` is False (MPI ranks other than 0
+    touch no files).  The caller deletes ``store.path`` once the final files exist."""
+    params = np.asarray(params, dtype=float).ravel()
+    store, done = None, {}
+    if root:
+        settings = {k: v for k, v in sweep_kw.items() if k not in _NOT_IN_SIGNATURE}
+        store = PartialStore(Path(out_dir) / PARTIAL_NAME, {
+            "analysis": "sweep", "physics": physics or fingerprint(model),
+            "grid": [repr(float(p)) for p in params], "settings": settings})
+        for item in store.items:
+            rec = record_from_json(item)
+            done[(rec.direction, rec.index)] = rec
+
+    def on_point(rec):
+        if store is not None:
+            store.append(record_to_json(rec))
+        return None if callback is None else callback(rec)
+
+    result = sweep(model, params, callback=on_point, done=done, **sweep_kw)
+    return result, store, len(done)
+
+
+def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
+    cfg = scene.sweep
+    lo, hi = param_range(cfg)
+    params = np.linspace(lo, hi, cfg.n_points)
+    opts = integration_options(scene)
+    total = len(cfg.directions) * params.size
+    with ctx.progress(total, "sweep") as bar:
+        res, store, resumed = resumable_sweep(
+            study.model, params, ctx.out, physics=study.physics, root=ctx.root,
+            callback=lambda rec: bar.update(1, f"{rec.param:.4g} {study.param_unit} "
+                                               f"P{rec.period_n}"),
+            directions=cfg.directions, transient_periods=cfg.transient_periods,
+            record_periods=cfg.record_periods,
+            extra_transient_periods=cfg.extra_transient_periods, max_period=cfg.max_period,
+            period_tol=cfg.period_tol, options=opts, u0=study.start(params[0]),
+            segments=cfg.segments, workers=cfg.workers)
+    failed = int(np.sum(res.status != 0))
+    if failed == res.param.size:
+        raise NumericalFailure(f"sweep: all {failed} points failed; first: "
+                               f"{study.param_name} = {res.param[0]:g}: {res.message[0]}")
+    warnings = []
+    if opts.rtol > cfg.period_tol:
+        warnings.append(f"integration rtol = {opts.rtol:g} is looser than sweep.period_tol = "
+                        f"{cfg.period_tol:g}: integration error alone can make periodic points "
+                        f"look 'not periodic'; use rtol <= {cfg.period_tol:g}")
+    up = res.direction == "up"
+    classes = {str(int(k)): int(np.sum(res.period_n == k)) for k in np.unique(res.period_n)}
+    summary = {
+        "status": "ok" if res.status_code == 0 else "partial",
+        "message": res.status_message, "points": int(res.param.size),
+        "resumed_points": resumed, "failed_points": failed, "period_classes": classes,
+        "points_with_contact_loss": int(np.sum(res.impacts > 0)),
+        "steps": res.steps, "rhs_calls": res.rhs_calls, "events": res.events,
+        "solver_wall_s": res.wall_time,
+        "jumps_up": jumps(res.param[up], res.qmax[up]),
+        "jumps_down": jumps(res.param[~up], res.qmax[~up]),
+        "error_estimate": res.error_estimate,
+    }
+    if store is not None and store.note:
+        summary["resume"] = store.note
+    keep = store is None or res.status_code == 2           # stopped: keep the partial file
+    return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
+                           partial_files=() if keep else (store.path,),
+                           warnings=tuple(warnings))
+
+
+# ---------------------------------------------------------------- partial-file records
+
+def _num(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _arr(a):
+    return None if a is None else [_num(v) for v in np.asarray(a, dtype=float).ravel()]
+
+
+def _f(x) -> float:
+    return math.nan if x is None else float(x)
+
+
+def _a(x) -> np.ndarray:
+    return np.array([_f(v) for v in x], dtype=float)
+
+
+def record_to_json(r: PointRecord) -> dict:
+    """A sweep point as JSON (floats exact, NaN as null)."""
+    d = {"direction": r.direction, "index": int(r.index), "param": _num(r.param),
+         "qmin": _num(r.qmin), "qmax": _num(r.qmax), "poincare": _arr(r.poincare),
+         "period_n": int(r.period_n), "impacts": _num(r.impacts), "defect": _num(r.defect),
+         "clusters": int(r.clusters), "status": int(r.status), "message": r.message,
+         "u_end": _arr(r.u_end), "steps": int(r.steps), "rejected": int(r.rejected),
+         "rhs_calls": int(r.rhs_calls), "events": int(r.events),
+         "wall_time": _num(r.wall_time)}
+    if r.states is not None:
+        d["states_shape"] = list(np.shape(r.states))
+        d["states"] = _arr(r.states)
+    return d
+
+
+def record_from_json(d: dict) -> PointRecord:
+    states = None
+    if d.get("states") is not None:
+        states = _a(d["states"]).reshape(d["states_shape"])
+    return PointRecord(
+        direction=d["direction"], index=int(d["index"]), param=_f(d["param"]),
+        qmin=_f(d["qmin"]), qmax=_f(d["qmax"]), poincare=_a(d["poincare"]),
+        period_n=int(d["period_n"]), impacts=_f(d["impacts"]), defect=_f(d["defect"]),
+        clusters=int(d["clusters"]), status=int(d["status"]), message=d["message"],
+        u_end=_a(d["u_end"]), steps=int(d["steps"]), rejected=int(d["rejected"]),
+        rhs_calls=int(d["rhs_calls"]), events=int(d["events"]),
+        wall_time=_f(d["wall_time"]), states=states)
