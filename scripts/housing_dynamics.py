@@ -51,7 +51,7 @@ def main(argv=None) -> int:
     _plot(out, runs)
     table = {f"{w:g}": {"resonance_speeds_rpm": r["summary"]["results"]["modes"]["resonance_speeds_rpm"],
                         "first_frequencies_hz": r["summary"]["results"]["modes"]["first_frequencies_hz"],
-                        "mesh_interruption_points": r["summary"]["results"]["sweep"]["points_with_mesh_interruption"]}
+                        "mesh_interruption_points": r["summary"]["results"]["sweep"]["points_with_contact_loss"]}
              for w, r in runs.items()}
     (out / "housing_dynamics.json").write_text(json.dumps(table, indent=1))
     print(f"wrote {out}/housing_dynamics.png, .svg, .json")

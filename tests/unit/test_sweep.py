@@ -11,8 +11,9 @@ from scipy.integrate import solve_ivp
 
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, ReducedModel
-from vibrogear.report.sweep_io import (PartialWriter, read_partial, read_sweep_npz,
-                                       sweep_signature, write_sweep)
+from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
+from vibrogear.pipeline.resume import read_items
+from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrate import IntegrationOptions
 from vibrogear.solvers.sweep import classify_period, count_clusters, sweep
 
@@ -195,34 +196,53 @@ def test_bad_parameter_is_a_failed_point_not_an_exception():
 
 def test_resume_gives_identical_results(tmp_path, hyst_result):
     model = impact_pair_model(**HYST)
-    sig = sweep_signature(model, HYST_GRID, **SWEEP_KW, rtol=OPTS.rtol)
-    part = tmp_path / "sweep.partial.jsonl"
-    writer = PartialWriter(part, sig)
+    part = tmp_path / PARTIAL_NAME
     half = HYST_GRID.size + 2                           # into the down sweep
-
-    def killed_after_half(rec, seen=[]):
-        writer(rec)
-        seen.append(rec)
-        return len(seen) < half                         # False: stop ("kill")
-
-    first = sweep(model, HYST_GRID, options=OPTS, callback=killed_after_half, **SWEEP_KW)
-    assert first.status_code == 2 and first.param.size == half
+    seen = []
+    first, store, resumed = resumable_sweep(
+        model, HYST_GRID, tmp_path, options=OPTS, root=True,
+        callback=lambda rec: (seen.append(rec), len(seen) < half)[1], **SWEEP_KW)
+    assert first.status_code == 2 and first.param.size == half and resumed == 0
     with part.open("a") as fh:                          # a torn line from the kill
         fh.write('{"kind":"point","direction":"do')
-    done = read_partial(part, sig)
-    assert len(done) == half
-    with pytest.raises(ValueError):
-        read_partial(part, {**sig, "model": "other"})
+    assert len(read_items(part)) == half
     new = []
-    writer2 = PartialWriter(part, sig)
-    resumed = sweep(model, HYST_GRID, options=OPTS, done=done,
-                    callback=lambda rec: (writer2(rec), new.append(rec)), **SWEEP_KW)
-    assert len(new) == 2 * HYST_GRID.size - half
-    ref = hyst_result
+    res, store, resumed = resumable_sweep(model, HYST_GRID, tmp_path, options=OPTS, root=True,
+                                          callback=new.append, **SWEEP_KW)
+    assert resumed == half and len(new) == 2 * HYST_GRID.size - half
     for name in ("param", "direction", "index", "qmin", "qmax", "poincare", "period_n",
                  "impacts", "defect", "clusters", "status", "u_end"):
-        assert _eq(getattr(resumed, name), getattr(ref, name)), name
-    assert len(read_partial(part, sig)) == 2 * HYST_GRID.size
+        assert _eq(getattr(res, name), getattr(hyst_result, name)), name
+    assert len(read_items(part)) == 2 * HYST_GRID.size
+
+
+@pytest.mark.parametrize("change", ["physics", "grid", "options", "settings"])
+def test_partial_file_of_another_run_is_set_aside(tmp_path, change):
+    """A partial file is reused only for the same physics, grid, integrator options and
+    sweep settings; otherwise it is renamed aside (kept) and the sweep starts clean."""
+    grid = HYST_GRID[:3]
+    kw = dict(directions=("up",), transient_periods=20, record_periods=4, max_period=2,
+              options=OPTS)
+    stop = iter([True, False])                           # stop after the second point
+    resumable_sweep(impact_pair_model(**HYST), grid, tmp_path, root=True,
+                    callback=lambda rec: next(stop), **kw)
+    model = impact_pair_model(**HYST)
+    if change == "physics":                              # a changed damping, same name
+        model = impact_pair_model(**{**HYST, "zeta": 0.016})
+    elif change == "grid":
+        grid = grid + 1e-3
+    elif change == "options":
+        kw["options"] = IntegrationOptions(rtol=1e-9, atol=1e-11, max_steps=123_456)
+    else:
+        kw["record_periods"] = 5
+    new = []
+    res, store, resumed = resumable_sweep(model, grid, tmp_path, root=True,
+                                          callback=new.append, **kw)
+    assert resumed == 0 and len(new) == grid.size
+    assert "set aside" in store.note and change in store.note
+    assert (tmp_path / f"{PARTIAL_NAME}.stale-1").exists()
+    fresh = sweep(model, grid, **kw)
+    assert _eq(res.qmax, fresh.qmax) and _eq(res.u_end, fresh.u_end)
 
 
 # ---------------------------------------------------------------- files and plot
@@ -245,16 +265,14 @@ def test_files_and_plot(tmp_path, hyst_result):
 
 
 def test_resumable_sweep_helper(tmp_path):
-    from vibrogear.report.sweep_io import PARTIAL_NAME, resumable_sweep
-
     model = impact_pair_model(**HYST)
     grid = HYST_GRID[:3]
     kw = dict(directions=("up",), transient_periods=20, record_periods=4, max_period=2,
               options=OPTS)
     stop = iter([True, False])                           # stop after the second point
-    r1, _ = resumable_sweep(model, grid, tmp_path, callback=lambda rec: next(stop), **kw)
-    assert r1.status_code == 2 and (tmp_path / PARTIAL_NAME).exists()
-    r2, paths = resumable_sweep(model, grid, tmp_path, **kw)
+    r1, st1, _ = resumable_sweep(model, grid, tmp_path, root=True,
+                                 callback=lambda rec: next(stop), **kw)
+    assert r1.status_code == 2 and st1.path.exists() and len(read_items(st1.path)) == 2
+    r2, st2, resumed = resumable_sweep(model, grid, tmp_path, root=True, **kw)
     full = sweep(model, grid, **kw)
-    assert _eq(r2.qmax, full.qmax) and _eq(r2.u_end, full.u_end)
-    assert not (tmp_path / PARTIAL_NAME).exists() and paths["npz"].exists()
+    assert resumed == 2 and _eq(r2.qmax, full.qmax) and _eq(r2.u_end, full.u_end)

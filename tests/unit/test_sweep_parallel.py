@@ -17,8 +17,9 @@ import pytest
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ReducedModel
 from vibrogear.pipeline.executors import UnitError, backend_for, run_units
-from vibrogear.report.sweep_io import (PARTIAL_NAME, read_partial, read_sweep_npz,
-                                       resumable_sweep, write_sweep)
+from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
+from vibrogear.pipeline.resume import read_items
+from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrate import IntegrationOptions
 from vibrogear.solvers.sweep import sweep, sweep_units
 
@@ -172,8 +173,8 @@ def test_crashing_unit_raises_and_keeps_the_other_units_points(tmp_path, monkeyp
     with pytest.raises(UnitError, match="injected failure"):
         resumable_sweep(boom_model(), GRID, tmp_path, directions=("up",), u0=U0, workers=2,
                         **KW)
-    done = read_partial(tmp_path / PARTIAL_NAME)
-    assert sorted(done) == [("up", 0), ("up", 1), ("up", 2), ("up", 3), ("up", 4)]
+    done = sorted((d["direction"], d["index"]) for d in read_items(tmp_path / PARTIAL_NAME))
+    assert done == [("up", 0), ("up", 1), ("up", 2), ("up", 3), ("up", 4)]
 
 
 # ---------------------------------------------------------------- resume after SIGKILL
@@ -182,7 +183,7 @@ KILLED = """
 import sys, time
 import numpy as np
 import test_sweep_parallel as t
-from vibrogear.report.sweep_io import resumable_sweep
+from vibrogear.analyses.sweep import resumable_sweep
 seen = []
 def stall(rec):
     seen.append(rec)
@@ -220,12 +221,12 @@ def test_sigkilled_sweep_resumes_without_recomputing(tmp_path, serial):
         os.killpg(proc.pid, signal.SIGKILL)
         proc.wait(timeout=30)
     assert proc.returncode == -signal.SIGKILL
-    assert len(read_partial(part)) == n_first and not (tmp_path / "sweep.npz").exists()
+    assert len(read_items(part)) == n_first and not (tmp_path / "sweep.npz").exists()
     new = []
-    res, paths = resumable_sweep(MODEL, GRID, tmp_path, u0=U0, workers=2,
-                                 callback=new.append, **KW)
-    assert len(new) == 2 * GRID.size - n_first
-    assert not part.exists() and paths["npz"].exists()
+    res, store, resumed = resumable_sweep(MODEL, GRID, tmp_path, u0=U0, workers=2,
+                                          callback=new.append, **KW)
+    assert resumed == n_first and len(new) == 2 * GRID.size - n_first
+    assert store.path == part and "resumed 5" in store.note
     _same(res, serial)
 
 
@@ -235,9 +236,13 @@ MPI_SCRIPT = """
 import sys
 import numpy as np
 import test_sweep_parallel as t
-from vibrogear.report.sweep_io import resumable_sweep
+from vibrogear.analyses.sweep import resumable_sweep
+from vibrogear.report.sweep_io import write_sweep
 model = t.boom_model() if sys.argv[2] == "boom" else t.MODEL
-res, _ = resumable_sweep(model, t.GRID, sys.argv[1], u0=t.U0, **t.KW)
+res, store, _ = resumable_sweep(model, t.GRID, sys.argv[1], u0=t.U0, **t.KW)
+if store is not None:                  # rank 0 writes the files, as the runner does
+    write_sweep(res, sys.argv[1])
+    store.path.unlink()
 from mpi4py import MPI
 np.save(f"{sys.argv[1]}/u_end_rank{MPI.COMM_WORLD.rank}.npy", res.u_end)
 """
@@ -273,4 +278,4 @@ def test_mpirun_unit_exception_ends_all_ranks(tmp_path):
                        env=_env(), cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert r.returncode != 0 and "injected failure" in r.stderr
     assert not (tmp_path / "sweep.npz").exists()
-    assert len(read_partial(tmp_path / PARTIAL_NAME)) >= 1   # finished points are kept
+    assert len(read_items(tmp_path / PARTIAL_NAME)) >= 1   # finished points are kept

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sweep import PointRecord, SweepResult, sweep
 from .study import Study, integration_options
@@ -52,7 +52,7 @@ def jumps(param, q, rel: float = 0.15) -> list[float]:
 
 
 def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callback=None,
-                    root: bool = True, **sweep_kw) -> tuple[SweepResult, PartialStore | None, int]:
+                    root: bool | None = None, **sweep_kw) -> tuple[SweepResult, PartialStore | None, int]:
     """:func:`~vibrogear.solvers.sweep.sweep` with each finished point appended to
     ``out_dir/sweep.partial.jsonl`` and the points of a matching partial file reused.
     ``physics``: fingerprint of the model (default: its content hash).  Returns (result,
@@ -60,11 +60,14 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
     touch no files).  The caller deletes ``store.path`` once the final files exist."""
     params = np.asarray(params, dtype=float).ravel()
     store, done = None, {}
-    if root:
-        settings = {k: v for k, v in sweep_kw.items() if k not in _NOT_IN_SIGNATURE}
+    if root if root is not None else is_root_process():
+        settings = {k: v for k, v in sweep_kw.items()
+                    if k not in _NOT_IN_SIGNATURE + ("options", "u0")}
+        u0 = sweep_kw.get("u0")
         store = PartialStore(Path(out_dir) / PARTIAL_NAME, {
             "analysis": "sweep", "physics": physics or fingerprint(model),
-            "grid": [repr(float(p)) for p in params], "settings": settings})
+            "grid": [repr(float(p)) for p in params], "settings": settings,
+            "options": sweep_kw.get("options"), "start": None if u0 is None else fingerprint(u0)})
         for item in store.items:
             rec = record_from_json(item)
             done[(rec.direction, rec.index)] = rec

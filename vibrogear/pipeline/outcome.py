@@ -12,11 +12,11 @@ and the report writers.
 """
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .executors import is_root
 from .progress import Progress
 
 __all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "is_root_process"]
@@ -27,9 +27,8 @@ class NumericalFailure(RuntimeError):
     where and why."""
 
 
-def is_root_process() -> bool:
-    """True except on the MPI ranks other than 0 (only rank 0 writes files)."""
-    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"
+#: True except on the MPI ranks other than 0 (only rank 0 writes files)
+is_root_process = is_root
 
 
 @dataclass(frozen=True, eq=False)

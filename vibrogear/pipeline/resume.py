@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import __version__
 
-__all__ = ["fingerprint", "PartialStore", "signature_difference"]
+__all__ = ["fingerprint", "PartialStore", "signature_difference", "read_items"]
 
 log = logging.getLogger(__name__)
 
@@ -71,10 +71,19 @@ def _jsonable(v):
     return v
 
 
-def signature_difference(old: dict, new: dict) -> list[str]:
-    """Top-level signature keys whose values differ (what changed since the partial run)."""
-    keys = sorted(set(old) | set(new))
-    return [k for k in keys if old.get(k) != new.get(k)]
+def signature_difference(old: dict, new: dict, prefix: str = "") -> list[str]:
+    """Signature entries whose values differ (what changed since the partial run), one
+    level into tables: e.g. ``["physics", "settings.record_periods"]``."""
+    out = []
+    for k in sorted(set(old) | set(new)):
+        a, b = old.get(k), new.get(k)
+        if a == b:
+            continue
+        if isinstance(a, dict) and isinstance(b, dict) and not prefix:
+            out += signature_difference(a, b, f"{k}.") or [k]
+        else:
+            out.append(prefix + k)
+    return out
 
 
 class PartialStore:
@@ -149,3 +158,9 @@ def _read_lines(path: Path) -> tuple[dict, list[dict]]:
             elif obj.get("kind") == "point":
                 points.append(obj)
     return header, points
+
+
+def read_items(path) -> list[dict]:
+    """The items of a partial file, whatever its signature ([] if there is none)."""
+    path = Path(path)
+    return _read_lines(path)[1] if path.exists() else []
