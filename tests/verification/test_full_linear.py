@@ -82,7 +82,9 @@ def test_lowest_modes_of_the_unsupported_coupled_chains_match_dense_eigh(two_cha
     assert np.allclose(V.T @ model.M @ V, np.eye(33), atol=1e-10)
     assert np.allclose(np.diag(mac_matrix(V, X[:, :33], model.M)), 1.0, atol=1e-10)
     for i, j, mac, err in pair_modes(f_ref[:33], X[:, :33], f, V, model.M):
-        assert i == j and mac > 1 - 1e-10 and abs(err) < (1e-9 if i else 1e-2)  # rigid: vs the floor
+        # the rigid-body mode's frequency is round-off (checked against f[1] above): its
+        # relative error compares two round-off values and is not asserted
+        assert i == j and mac > 1 - 1e-10 and (i == 0 or abs(err) < 1e-9)
     # the whole spectrum (the request reaches N - 1: dense path), and the max_count cap
     f_all, V_all = lowest_modes_full(model, 2 * f_ref[-1])
     assert f_all.size == N1 + N2 and np.allclose(f_all[1:], f_ref[1:], rtol=1e-10)
