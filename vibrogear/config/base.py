@@ -9,12 +9,25 @@ checks live in a ``validate(self, path)`` method of the dataclass.
 from __future__ import annotations
 
 import dataclasses
+import difflib
+import errno
 import math
+import os
+import re
+import stat
 import types
 import typing
+from pathlib import Path
 from typing import Any
 
-__all__ = ["ConfigError", "spec", "build", "check", "set_path", "parse_override", "as_data"]
+__all__ = ["ConfigError", "spec", "build", "check", "set_path", "parse_override", "as_data",
+           "check_name", "read_toml_file", "expected_text", "NAME_MAX_LEN"]
+
+#: longest name used as a file or folder name (scene.name)
+NAME_MAX_LEN = 100
+_NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]*")
+#: largest scene file read (a scene is a few kB)
+MAX_SCENE_BYTES = 10 * 2**20
 
 
 class ConfigError(ValueError):
@@ -73,6 +86,40 @@ def _type_name(tp: Any) -> str:
     return getattr(tp, "__name__", str(tp))
 
 
+def expected_text(tp: Any, meta: dict) -> str:
+    """What a field accepts, in words: its type, range and choices ("a number > 0")."""
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(expected_text(a, meta) for a in args if a is not type(None))
+    if origin is tuple:
+        item = expected_text(args[0], meta) if args else "values"
+        lo, hi = meta.get("min_len"), meta.get("max_len")
+        size = (f" of {lo} to {hi} entries" if lo is not None and hi is not None else
+                f" of at least {lo} entries" if lo is not None else
+                f" of at most {hi} entries" if hi is not None else "")
+        return f"a list{size} of ({item})"
+    if dataclasses.is_dataclass(tp):
+        return f"a table (keys: {', '.join(f.name for f in dataclasses.fields(tp))})"
+    rng = _range_text(meta)
+    choices = meta.get("choices")
+    base = {bool: "true or false", int: "an integer", float: "a number", str: "a string"}.get(
+        tp, _type_name(tp))
+    if choices:
+        return f"one of {', '.join(map(repr, choices))}"
+    return f"{base} {rng}" if rng else base
+
+
+def _got(value: Any) -> str:
+    kind = {str: "a string", bool: "a boolean", int: "an integer", float: "a number",
+            list: "a list", dict: "a table"}.get(type(value), type(value).__name__)
+    text = repr(value)
+    return f"{kind} {text if len(text) <= 60 else text[:57] + '...'}"
+
+
+def _type_error(path: str, tp: Any, meta: dict, value: Any) -> "ConfigError":
+    return ConfigError(path, f"expected {expected_text(tp, meta)}, got {_got(value)}")
+
+
 def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
     origin = typing.get_origin(tp)
     args = typing.get_args(tp)
@@ -91,7 +138,7 @@ def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
         raise ConfigError(path, "; ".join(errors))
     if origin is tuple:
         if not isinstance(value, (list, tuple)):
-            raise ConfigError(path, f"expected a list, got {type(value).__name__}")
+            raise _type_error(path, tp, meta, value)
         n = len(value)
         if meta.get("min_len") is not None and n < meta["min_len"]:
             raise ConfigError(path, f"needs at least {meta['min_len']} entries, got {n}")
@@ -106,20 +153,20 @@ def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
         return tuple(_convert(v, a, {}, f"{path}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
     if dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
-            raise ConfigError(path, f"expected a table, got {type(value).__name__}")
+            raise _type_error(path, tp, meta, value)
         return build(tp, value, path)
     if tp is bool:
         if not isinstance(value, bool):
-            raise ConfigError(path, f"expected true/false, got {value!r}")
+            raise _type_error(path, tp, meta, value)
         return value
     if tp is int:
         if isinstance(value, bool) or not isinstance(value, int):
-            raise ConfigError(path, f"expected an integer, got {value!r}")
+            raise _type_error(path, tp, meta, value)
         check(value, meta, path)
         return value
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(path, f"expected a number, got {value!r}")
+            raise _type_error(path, tp, meta, value)
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(path, f"must be a finite number, got {value!r}")
@@ -127,7 +174,7 @@ def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
         return value
     if tp is str:
         if not isinstance(value, str):
-            raise ConfigError(path, f"expected a string, got {value!r}")
+            raise _type_error(path, tp, meta, value)
         choices = meta.get("choices")
         if choices and value not in choices:
             raise ConfigError(path, f"{value!r} is not one of {', '.join(map(repr, choices))}")
@@ -146,13 +193,20 @@ def build(cls: type, data: dict, path: str = "") -> Any:
     unknown = sorted(set(data) - set(fields))
     if unknown:
         raise ConfigError(f"{path}.{unknown[0]}" if path else unknown[0],
-                          f"unknown key; allowed keys: {', '.join(sorted(fields))}")
+                          f"unknown key{_did_you_mean(unknown[0], fields)}; allowed keys: "
+                          f"{', '.join(sorted(fields))}")
     kwargs = {}
     for name, f in fields.items():
         fpath = f"{path}.{name}" if path else name
         if name not in data:
             if f.default is _MISSING and f.default_factory is _MISSING:
-                raise ConfigError(fpath, "missing required key")
+                required = [n for n, g in fields.items() if g.default is _MISSING
+                            and g.default_factory is _MISSING]
+                doc = f.metadata.get("doc")
+                raise ConfigError(fpath, f"missing required key: expected "
+                                  f"{expected_text(hints[name], dict(f.metadata))}"
+                                  f"{f' ({doc})' if doc else ''}; required keys here: "
+                                  f"{', '.join(required)}")
             continue
         kwargs[name] = _convert(data[name], hints[name], dict(f.metadata), fpath)
     obj = cls(**kwargs)
@@ -162,47 +216,72 @@ def build(cls: type, data: dict, path: str = "") -> Any:
     return obj
 
 
+def _did_you_mean(name: str, allowed) -> str:
+    close = difflib.get_close_matches(name, list(allowed), n=1, cutoff=0.6)
+    return f" (did you mean {close[0]!r}?)" if close else ""
+
+
+_KEY_PART = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
+
+
 def parse_override(text: str) -> tuple[list[str], Any]:
-    """Parse ``section.key=value`` (value in TOML syntax, bare words as strings)."""
+    """Parse ``section.key=value`` (value in TOML syntax, bare words as strings); list
+    entries as the tool prints them, ``gearbox.gears[0].teeth=30`` (or ``gears.0``)."""
     import tomllib
 
     if "=" not in text:
         raise ConfigError("--set", f"expected section.key=value, got {text!r}")
     key, raw = text.split("=", 1)
     key = key.strip()
-    if not key or any(not part for part in key.split(".")):
-        raise ConfigError("--set", f"bad key in {text!r}")
+    keys: list[str] = []
+    for part in key.split("."):
+        m = _KEY_PART.fullmatch(part.strip())
+        if m is None:
+            raise ConfigError("--set", f"bad key {key!r} in {text!r}: expected dotted names "
+                              "with optional list indices, e.g. gearbox.gears[0].teeth")
+        keys.append(m.group(1))
+        keys += re.findall(r"\d+", m.group(2))
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
-    except tomllib.TOMLDecodeError:
+    except (tomllib.TOMLDecodeError, RecursionError):
         value = raw.strip()
-    return key.split("."), value
+    return keys, value
+
+
+def _show(keys: list[str]) -> str:
+    """Keys as the tool prints paths: ``gearbox.gears[0].teeth``."""
+    out = ""
+    for k in keys:
+        out += f"[{k}]" if k.isdigit() else (f".{k}" if out else k)
+    return out
 
 
 def set_path(data: dict, keys: list[str], value: Any) -> None:
     """Set ``data[k0][k1]...`` creating tables on the way; list items by index."""
     node: Any = data
-    for i, k in enumerate(keys[:-1]):
+    for i, k in enumerate(keys):
+        here = _show(keys[:i + 1])
+        last = i == len(keys) - 1
         if isinstance(node, list):
-            try:
-                node = node[int(k)]
-            except (ValueError, IndexError):
-                raise ConfigError(".".join(keys[:i + 1]), "no such list entry") from None
-            continue
-        nxt = node.get(k)
-        if nxt is None:
-            nxt = node[k] = {}
-        if not isinstance(nxt, (dict, list)):
-            raise ConfigError(".".join(keys[:i + 1]), "is a value, not a table")
-        node = nxt
-    last = keys[-1]
-    if isinstance(node, list):
-        try:
-            node[int(last)] = value
-        except (ValueError, IndexError):
-            raise ConfigError(".".join(keys), "no such list entry") from None
-    else:
-        node[last] = value
+            if not k.isdigit() or int(k) >= len(node):
+                raise ConfigError(here, f"no such list entry: the list has {len(node)} "
+                                  f"entries, indices 0..{len(node) - 1}")
+            if last:
+                node[int(k)] = value
+                return
+            node = node[int(k)]
+        else:
+            if k.isdigit():
+                raise ConfigError(here, "is not a list")
+            if last:
+                node[k] = value
+                return
+            nxt = node.get(k)
+            if nxt is None:
+                nxt = node[k] = {}
+            node = nxt
+        if not isinstance(node, (dict, list)):
+            raise ConfigError(here, "is a value, not a table")
 
 
 def as_data(config: Any) -> Any:
@@ -214,3 +293,99 @@ def as_data(config: Any) -> Any:
             return [strip(v) for v in obj]
         return obj
     return strip(dataclasses.asdict(config) if dataclasses.is_dataclass(config) else config)
+
+
+def check_name(value: str, path: str) -> None:
+    """A name used as a file or folder name: 1..NAME_MAX_LEN characters of letters, digits,
+    ``. _ + -``, starting with a letter or digit (so no ``..``, ``/`` or hidden names)."""
+    if not value:
+        raise ConfigError(path, "must not be empty (it names the output folder)")
+    if len(value) > NAME_MAX_LEN:
+        raise ConfigError(path, f"at most {NAME_MAX_LEN} characters (it names the output "
+                          f"folder), got {len(value)}")
+    if not _NAME_RE.fullmatch(value):
+        raise ConfigError(path, f"{value!r} is not a safe file name: use letters, digits and "
+                          "'. _ + -', starting with a letter or digit (it names the output folder)")
+
+
+def _file_error(path: Path) -> str | None:
+    """Why ``path`` cannot be read as a scene file, or None."""
+    try:
+        st = path.stat()
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            return "symbolic link loop"
+        if exc.errno == errno.ENAMETOOLONG:
+            return "file name too long"
+        if exc.errno == errno.ENOTDIR:
+            return "no such file (a part of the path is not a folder)"
+        if exc.errno == errno.EACCES:
+            return "permission denied"
+        return "no such file" if exc.errno == errno.ENOENT else exc.strerror or str(exc)
+    if stat.S_ISDIR(st.st_mode):
+        return "is a folder, not a scene file"
+    if not stat.S_ISREG(st.st_mode):
+        return "not a regular file (a FIFO, socket or device)"
+    if st.st_size > MAX_SCENE_BYTES:
+        return f"too large for a scene file ({st.st_size} bytes > {MAX_SCENE_BYTES})"
+    if not os.access(path, os.R_OK):
+        return "permission denied"
+    return None
+
+
+def _header_error(text: str, schema: type) -> ConfigError | None:
+    """The first ``[table]`` / ``[[array]]`` header naming no table of ``schema``, with its
+    line (so a typo in a table name is reported there, not where TOML later trips)."""
+    for lineno, line in enumerate(text.splitlines(), 1):
+        m = re.match(r"\s*\[\[?([^\[\]]+)\]\]?\s*(#.*)?$", line)
+        if m is None:
+            continue
+        tp, path = schema, ""
+        for key in (k.strip().strip("\"'") for k in m.group(1).split(".")):
+            if not dataclasses.is_dataclass(tp):
+                break
+            fields = {f.name for f in dataclasses.fields(tp)}
+            here = f"{path}.{key}" if path else key
+            if key not in fields:
+                return ConfigError(here, f"unknown table [{m.group(1).strip()}] at line {lineno}"
+                                   f"{_did_you_mean(key, fields)}; allowed keys"
+                                   f"{' of [' + path + ']' if path else ''}: "
+                                   f"{', '.join(sorted(fields))}")
+            tp = typing.get_type_hints(tp)[key]
+            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            if typing.get_origin(tp) in (typing.Union, types.UnionType) and len(args) == 1:
+                tp = args[0]
+            if typing.get_origin(tp) is tuple and typing.get_args(tp):
+                tp = typing.get_args(tp)[0]
+            path = here
+    return None
+
+
+def read_toml_file(path: str | Path, schema: type | None = None) -> dict[str, Any]:
+    """Read a TOML file (UTF-8, an optional byte-order mark) into a dict; ConfigError naming
+    the file for anything that is not a readable scene file, and the table of ``schema``
+    where a table header is misspelt."""
+    import tomllib
+
+    p = Path(path)
+    why = _file_error(p)
+    if why is not None:
+        raise ConfigError(str(path), why)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except UnicodeDecodeError:
+        raise ConfigError(str(path), "not a valid TOML file: not UTF-8 text") from None
+    except OSError as exc:
+        raise ConfigError(str(path), f"cannot read: {exc.strerror or exc}") from None
+    text = text.removeprefix("\ufeff")
+    if schema is not None:
+        bad = _header_error(text, schema)
+        if bad is not None:
+            raise bad
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(str(path), f"not a valid TOML file: {exc}") from None
+    except RecursionError:
+        raise ConfigError(str(path), "not a valid scene file: arrays or tables nested too "
+                          "deeply") from None

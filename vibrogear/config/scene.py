@@ -2,12 +2,11 @@
 from __future__ import annotations
 
 import copy
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import ConfigError, build, parse_override, set_path, spec
+from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig, ReductionAccuracyConfig
 from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
 from .rotor import RotorConfig
@@ -101,16 +100,7 @@ class Scene:
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
-    p = Path(path)
-    if not p.is_file():
-        raise ConfigError(str(path), "no such file")
-    try:
-        with p.open("rb") as fh:
-            return tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(str(path), f"not a valid TOML file: {exc}") from None
-    except UnicodeDecodeError:
-        raise ConfigError(str(path), "not a valid TOML file: not UTF-8 text") from None
+    return read_toml_file(path, Scene)
 
 
 #: a gearbox scene's parameter is the driving-shaft speed: these sections name it in rpm
@@ -155,4 +145,8 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Sc
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
     """Read, override (``section.key=value``) and validate a scene file."""
-    return scene_from_dict(read_toml(path), overrides)
+    data = read_toml(path)
+    try:
+        return scene_from_dict(data, overrides)
+    except RecursionError:
+        raise ConfigError(str(path), "arrays or tables nested too deeply") from None
