@@ -17,6 +17,8 @@ excitation frequency of every analysis.
 [gearbox]
 name = "two-stage gearbox"
 
+gravity = [0.0, 0.0, -9.81]  # [m/s^2], housing frame (default 0): a static load
+
 [[gearbox.shafts]]
 name = "driving"
 bore = "input"              # housing bore pair carrying this shaft (or x = ..., z = ... without housing)
@@ -33,11 +35,18 @@ teeth = 25; module = 0.003  # normal module [m]
 helix_angle = 0.0           # [deg]
 width = 0.03; inner_diameter = 0.04
 free = false                # true: rotates freely on its own bearing (rattling gear)
+# mass = 1.2; Id = 8e-4; Ip = 1.5e-3  # [kg], [kg m^2]: instead of the pitch-diameter disc
 
 [[gearbox.meshes]]
 name = "G1"; gear_a = "z1"; gear_b = "z2"   # gear_a drives gear_b
 pressure_angle = 20.0       # normal pressure angle [deg]
-stiffness = 4e8             # mean mesh stiffness [N/m]
+stiffness = 4e8             # mean mesh stiffness [N/m], or "iso6336" (ISO 6336-1 method B
+                            # from teeth, module, helix, pressure angle and:)
+profile_shift_a = 0.0       # profile shift coefficients x [-]
+profile_shift_b = 0.0
+face_width = 0.025          # [m] (default: the smaller gear width)
+addendum = 1.0; dedendum = 1.25   # basic rack h_aP/m_n, h_fP/m_n
+iso_harmonics = 3           # single/double contact harmonics used with "iso6336"
 damping = 300.0             # [N s/m], acts while in contact
 backlash = 1e-4             # [m]
 stiffness_cos = [0.15]      # relative mesh-stiffness harmonics of the mesh frequency
@@ -51,6 +60,8 @@ stiffness = 8e9             # contact constant [N/m^p] (spring: [N/m])
 clearance = 5e-6            # radial clearance [m]
 axial_stiffness = 5e7       # [N/m]
 damping = 200.0             # radial and axial viscous damping [N s/m], always active
+# kxx = 2e8; kyy = 3e8; kxy = 0; kyx = 0; cxx = 200; cyy = 300   # spring: anisotropic
+#                           # [N/m], [N s/m] in the rotor frame X = -x, Y = z (up)
 
 [[gearbox.couplings]]
 name = "motor"; shaft = "driving"; position = 0.0
@@ -103,6 +114,10 @@ class GearConfig:
     width: float = spec(gt=0.0, doc="face width [m]")
     inner_diameter: float = spec(0.0, ge=0.0, doc="bore [m]")
     density: float | None = spec(None, gt=0.0, doc="[kg/m^3], default: the shaft's material")
+    mass: float | None = spec(None, gt=0.0, doc="[kg]; with Id and Ip instead of the "
+                              "pitch-diameter disc")
+    Id: float | None = spec(None, ge=0.0, doc="diametral inertia [kg m^2]")
+    Ip: float | None = spec(None, gt=0.0, doc="polar inertia [kg m^2]")
     free: bool = spec(False, doc="freely rotating on its own bearing (extra torsional DOF)")
     torsional_damping: float = spec(0.0, ge=0.0, doc="free gear: drag to its shaft [N m s/rad]")
     drag_torque: float = spec(0.0, ge=0.0, doc="free gear: steady drag torque of its bearing "
@@ -113,6 +128,14 @@ class GearConfig:
         return self.module * self.teeth / math.cos(math.radians(self.helix_angle))
 
     def validate(self, path: str) -> None:
+        given = [self.mass is not None, self.Id is not None, self.Ip is not None]
+        if any(given) and not all(given):
+            missing = [n for n, g in zip(("mass", "Id", "Ip"), given) if not g][0]
+            raise ConfigError(f"{path}.{missing}", "missing: mass, Id and Ip go together "
+                              "(or none: the inertia of the pitch-diameter disc)")
+        if all(given) and self.density is not None:
+            raise ConfigError(f"{path}.density", "give either density (geometric disc) or "
+                              "mass, Id and Ip, not both")
         if self.drag_torque and not self.free:
             raise ConfigError(f"{path}.drag_torque", "only a free gear has a drag torque")
         if not self.inner_diameter < self.pitch_diameter:
@@ -127,15 +150,39 @@ class MeshConfig:
     gear_b: str = spec(doc="driven gear of the pair")
     pressure_angle: float = spec(20.0, gt=0.0, lt=45.0, doc="normal pressure angle [deg]")
     hand: int = spec(1, choices=(1, -1), doc="helix hand of gear_a (helical pairs)")
-    stiffness: float = spec(gt=0.0, le=1e13, doc="mean mesh stiffness [N/m]")
+    stiffness: float | str = spec(gt=0.0, le=1e13, doc="mean mesh stiffness [N/m] along the "
+                                  "normal, or \"iso6336\" (from the gear data, ISO 6336-1 "
+                                  "method B)")
     damping: float = spec(0.0, ge=0.0, doc="mesh damping while in contact [N s/m]")
     backlash: float = spec(ge=0.0, lt=0.01, doc="circumferential backlash on the line of action [m]")
     stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
     stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
     te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics [m]")
     te_sin: tuple[float, ...] = spec((), max_len=50)
+    # gear data of ISO 6336-1 (used by stiffness = "iso6336", else only reported)
+    profile_shift_a: float = spec(0.0, ge=-1.0, le=2.0, doc="profile shift coefficient x of "
+                                  "gear_a [-]")
+    profile_shift_b: float = spec(0.0, ge=-1.0, le=2.0, doc="x of gear_b [-]")
+    face_width: float | None = spec(None, gt=0.0, doc="common face width b [m] (default: the "
+                                    "smaller gear width)")
+    addendum: float = spec(1.0, gt=0.0, le=2.0, doc="basic-rack addendum h_aP / m_n [-]")
+    dedendum: float = spec(1.25, gt=0.0, le=2.0, doc="basic-rack dedendum h_fP / m_n [-]")
+    web_ratio: float = spec(1.0, gt=0.0, le=10.0, doc="gear blank: web thickness / face width "
+                            "b_s / b (1: solid)")
+    rim_ratio: float = spec(10.0, gt=0.0, doc="gear blank: rim thickness / module s_R / m_n")
+    line_load: float | None = spec(None, gt=0.0, doc="K_A F_t / b [N/m]; below 1e5 N/m "
+                                   "(100 N/mm) ISO scales c' down (default: not applied)")
+    iso_harmonics: int = spec(3, ge=0, le=50, doc="stiffness harmonics of the single/double "
+                              "contact alternation used with stiffness = \"iso6336\"")
+
+    @property
+    def iso6336(self) -> bool:
+        return isinstance(self.stiffness, str)
 
     def validate(self, path: str) -> None:
+        if isinstance(self.stiffness, str) and self.stiffness != "iso6336":
+            raise ConfigError(f"{path}.stiffness", f"expected a number [N/m] (> 0, <= 1e13) "
+                              f"or \"iso6336\", got {self.stiffness!r}")
         if self.gear_a == self.gear_b:
             raise ConfigError(f"{path}.gear_b", "must differ from gear_a")
         amp = sum(abs(a) for a in self.stiffness_cos + self.stiffness_sin)
@@ -154,19 +201,51 @@ class GearboxBearingConfig:
     shaft: str = spec()
     position: float = spec(ge=0.0, doc="[m]; must be a node")
     type: str = spec("ball", choices=("ball", "roller", "linear", "spring"))
-    stiffness: float = spec(gt=0.0, le=1e14, doc="contact constant [N/m^p] (spring: [N/m])")
+    stiffness: float | None = spec(None, gt=0.0, le=1e14, doc="contact constant [N/m^p] "
+                                   "(spring: isotropic [N/m]); required but for a spring "
+                                   "bearing with kxx and kyy")
     clearance: float = spec(0.0, ge=0.0, lt=0.01, doc="radial clearance [m]")
     elements: int | None = spec(None, ge=3, le=200, doc="rolling elements (default: the bore's)")
     angle_offset: float = spec(0.0, doc="angle of element 0 without housing [deg]")
     axial_stiffness: float = spec(0.0, ge=0.0, doc="[N/m]")
     damping: float = spec(0.0, ge=0.0, doc="radial and axial viscous damping [N s/m], always active")
     contact_damping: float = spec(0.0, ge=0.0, doc="per element, only in contact [N s/m]")
+    # anisotropic linear bearing (type "spring"), rotor frame X = -x, Y = z (up) of the housing
+    kxx: float | None = spec(None, ge=0.0, le=1e14, doc="spring: [N/m] (default: stiffness)")
+    kyy: float | None = spec(None, ge=0.0, le=1e14, doc="spring: [N/m] (default: stiffness)")
+    kxy: float = spec(0.0, ge=-1e14, le=1e14, doc="spring: force X per displacement Y [N/m]")
+    kyx: float = spec(0.0, ge=-1e14, le=1e14, doc="spring: force Y per displacement X [N/m]")
+    cxx: float | None = spec(None, ge=0.0, doc="spring: [N s/m] (default: damping)")
+    cyy: float | None = spec(None, ge=0.0, doc="spring: [N s/m] (default: damping)")
+    cxy: float = spec(0.0, doc="spring: [N s/m]")
+    cyx: float = spec(0.0, doc="spring: [N s/m]")
 
     @property
     def exponent(self) -> float:
         return BEARING_EXPONENTS.get(self.type, 1.0)
 
+    def radial_matrices(self):
+        """Spring bearing: ((kxx, kxy), (kyx, kyy)) [N/m] and ((cxx, cxy), (cyx, cyy))
+        [N s/m] in the rotor frame; the force on the journal is -K d - C d'."""
+        k = self.stiffness if self.stiffness is not None else 0.0
+        kxx = k if self.kxx is None else self.kxx
+        kyy = k if self.kyy is None else self.kyy
+        cxx = self.damping if self.cxx is None else self.cxx
+        cyy = self.damping if self.cyy is None else self.cyy
+        return ((kxx, self.kxy), (self.kyx, kyy)), ((cxx, self.cxy), (self.cyx, cyy))
+
     def validate(self, path: str) -> None:
+        aniso = [n for n in ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx")
+                 if getattr(self, n)]
+        if aniso and self.type != "spring":
+            raise ConfigError(f"{path}.{aniso[0]}", f"only a 'spring' bearing has a stiffness "
+                              f"matrix; this one is {self.type!r}")
+        if self.stiffness is None and (self.type != "spring" or self.kxx is None
+                                       or self.kyy is None):
+            missing = "stiffness" if self.type != "spring" else \
+                ("kxx" if self.kxx is None else "kyy")
+            raise ConfigError(f"{path}.{missing}", "missing required key (a spring bearing "
+                              "takes stiffness, or kxx and kyy)")
         if self.type == "spring" and self.clearance:
             raise ConfigError(f"{path}.clearance", "a 'spring' bearing has no clearance (0); "
                               "use type 'linear' for one-sided linear contacts")
@@ -191,6 +270,9 @@ class GearboxConfig:
     bearings: tuple[GearboxBearingConfig, ...] = spec(min_len=1)
     couplings: tuple[ExternalCouplingConfig, ...] = spec(())
     name: str = spec("gearbox")
+    gravity: tuple[float, float, float] = spec((0.0, 0.0, 0.0), doc="gravitational "
+                                               "acceleration in the housing frame [m/s^2], "
+                                               "e.g. [0, 0, -9.81]; a static load")
 
     def shaft_index(self, name: str, path: str) -> int:
         for i, s in enumerate(self.shafts):
@@ -207,6 +289,10 @@ class GearboxConfig:
                           f"{', '.join(repr(g.name) for g in self.gears) or 'none'}")
 
     def validate(self, path: str) -> None:
+        g = math.sqrt(sum(c * c for c in self.gravity))
+        if g > 1000.0:
+            raise ConfigError(f"{path}.gravity", f"|g| = {g:g} m/s^2 out of range: must be "
+                              "<= 1000 (e.g. [0, 0, -9.81] for z up)")
         for group in ("shafts", "gears", "meshes", "bearings", "couplings"):
             seen = set()
             for i, item in enumerate(getattr(self, group)):
