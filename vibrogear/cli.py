@@ -1,25 +1,36 @@
-"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time SCENE``."""
+"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time SCENE``.
+
+Exit codes: 0 done; 1 a numerical failure (the message says where and why) or an analysis
+that produced nothing; 2 invalid input (a scene, an option, an output folder, the cache
+folder), found before anything is written; 130 interrupted (Ctrl-C): what finished is kept
+and the same command resumes.
+"""
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
 
-__all__ = ["main"]
+__all__ = ["main", "EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED"]
+
+EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 SINGLE = {"sweep": "sweep", "continue": "continuation", "report": "report",
           "modes": "modes", "campbell": "campbell", "time": "time_response"}
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="vibrogear", description=__doc__)
+    p = argparse.ArgumentParser(prog="vibrogear", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = p.add_subparsers(dest="command", required=True)
-    for name, helptext in [("run", "run the scene's analyses"), ("check", "validate the scene only"),
+    for name, helptext in [("run", "run the scene's analyses"), ("check", "validate the scene "
+                            "(and the output folder) only"),
                            *[(k, f"run only the {v} analysis") for k, v in SINGLE.items()]]:
         sp = sub.add_parser(name, help=helptext)
         sp.add_argument("scene", help="scene TOML file")
         sp.add_argument("--set", dest="overrides", action="append", default=[],
-                        metavar="SECTION.KEY=VALUE", help="override a config value (repeatable)")
+                        metavar="SECTION.KEY=VALUE", help="override a config value (repeatable); "
+                        "list entries as printed, e.g. gearbox.gears[0].teeth=30")
         sp.add_argument("--out", default=None, help="output folder (default out/<scene name>)")
         sp.add_argument("--quiet", action="store_true", help="no progress bars")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
@@ -27,18 +38,34 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _error(kind: str, exc: BaseException) -> None:
+    print(f"vibrogear: {kind}: {exc}", file=sys.stderr)
+
+
+def _cache(action: str) -> int:
+    from .cache import cache_dir, cache_info, clear_cache
+    from .config import ConfigError
+    try:
+        if action == "clear":
+            n, kept = clear_cache()
+            print(f"removed {n} cache entries from {cache_dir()}"
+                  + (f" (left {kept} files it did not write)" if kept else ""))
+        else:
+            info = cache_info()
+            print(f"{cache_dir()}: {info['entries']} entries, {info['bytes'] / 2**20:.1f} MiB")
+    except ConfigError as exc:
+        _error("invalid input", exc)
+        return EXIT_INPUT
+    return EXIT_OK
+
+
 def main(argv: list[str] | None = None) -> int:
     args = _parser().parse_args(argv)
-    from .config import ConfigError, load_scene
-
     if args.command == "cache":
-        from .cache import cache_dir, clear_cache
-        if args.action == "clear":
-            n = clear_cache()
-            print(f"removed {n} cache entries from {cache_dir()}")
-        else:
-            print(cache_dir())
-        return 0
+        return _cache(args.action)
+    from .config import ConfigError, load_scene
+    from .pipeline.files import check_output_dir
+
     try:
         scene = load_scene(args.scene, tuple(args.overrides))
         if args.command in SINGLE:
@@ -47,28 +74,37 @@ def main(argv: list[str] | None = None) -> int:
             data = as_data(scene)
             data["scene"]["analyses"] = [SINGLE[args.command]]
             scene = build(Scene, data)
-    except ConfigError as exc:
-        print(f"vibrogear: invalid input: {exc}", file=sys.stderr)
-        return 2
+        out = (check_output_dir(args.out) if args.out is not None else
+               check_output_dir(Path("out") / scene.scene.name, "scene.name"))
+        from .runner import resolve
+        resolve(scene)
+    except (ConfigError, NotImplementedError) as exc:
+        _error("invalid input", exc)
+        return EXIT_INPUT
     if args.command == "check":
-        print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)})")
-        return 0
+        print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
+              f" output folder {out}/)")
+        return EXIT_OK
     from .runner import NumericalFailure, RunContext, run_scene
 
-    out = Path(args.out) if args.out else Path("out") / scene.scene.name
     ctx = RunContext(out=out, quiet=args.quiet)
     try:
         summary = run_scene(scene, ctx, source=str(args.scene))
+    except KeyboardInterrupt:
+        print(f"\nvibrogear: interrupted; finished results and partial files are kept in {out}/. "
+              "Run the same command again to resume: points computed with the same physics, grid, "
+              "options and version are reused.", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except NumericalFailure as exc:
-        print(f"vibrogear: numerical failure: {exc}", file=sys.stderr)
-        return 1
+        _error("numerical failure", exc)
+        return EXIT_FAILED
     except (NotImplementedError, ConfigError) as exc:   # ConfigError: found building the model
-        print(f"vibrogear: invalid input: {exc}", file=sys.stderr)
-        return 2
+        _error("invalid input", exc)
+        return EXIT_INPUT
     if not args.quiet:
         print(f"wrote {out}/ ({', '.join(summary['analyses'])}; "
               f"{summary['wall_time_s']['total']:.2f} s)")
-    return 0
+    return EXIT_FAILED if summary.get("status") == "failed" else EXIT_OK
 
 
 if __name__ == "__main__":

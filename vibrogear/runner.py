@@ -138,9 +138,19 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
                 Path(path).unlink(missing_ok=True)
             summary["results"][name] = record
             previous[name] = outcome
-        except NumericalFailure as exc:
+        except (NumericalFailure, ArithmeticError) as exc:
+            # ArithmeticError: overflow, a singular or non-finite matrix (e.g. the housing's
+            # HousingSolveError), raised below the analyses; reported with the analysis name
+            if not isinstance(exc, NumericalFailure):
+                exc = NumericalFailure(f"{name}: {exc}")
             summary["results"][name] = {"status": "failed", "message": str(exc)}
             summary["status"] = "failed"
+            failure = exc
+        except KeyboardInterrupt as exc:
+            summary["results"][name] = {"status": "interrupted",
+                                        "message": "stopped by the user (Ctrl-C); run the same "
+                                        "command again to resume"}
+            summary["status"] = "interrupted"
             failure = exc
         summary["wall_time_s"][name] = time.perf_counter() - t0
         write_summary(ctx.out, summary)

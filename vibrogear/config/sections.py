@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from .base import ConfigError, check_name, spec
 
 __all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationConfig", "SweepConfig",
            "ShootingConfig", "ContinuationConfig", "TimeResponseConfig", "ReportConfig",
@@ -26,11 +26,12 @@ ANALYSES = {
 
 @dataclass(frozen=True)
 class SceneInfo:
-    name: str = spec(doc="scene name, used in plot titles")
+    name: str = spec(doc="scene name, used in plot titles and as the output folder out/<name>")
     analyses: tuple[str, ...] = spec(min_len=1, choices=tuple(ANALYSES))
     description: str = spec("", doc="free text")
 
     def validate(self, path: str) -> None:
+        check_name(self.name, f"{path}.name")
         seen = set()
         for i, a in enumerate(self.analyses):
             if a in seen:

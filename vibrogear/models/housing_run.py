@@ -11,7 +11,9 @@ interpolation operators on the same mesh, for checks of the modal reduction; cac
 from __future__ import annotations
 
 import dataclasses
+import logging
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -24,12 +26,34 @@ import numpy as np
 
 from ..config.housing import HousingConfig
 from ..geometry.housing import HousingMesh, bore_layout, build_housing_mesh
-from ..cache import cache_key, entry_dir
-from .housing_result import HousingModes, load_modes, publish, save_modes
+from ..cache import cache_key, discard_entry, entry_dir, new_workspace, open_entry, publish_entry
+from .housing_result import HousingModes, load_modes, save_modes
 
 __all__ = ["HousingModes", "HousingMatrices", "housing_modes", "housing_matrices", "housing_matrices_key",
-           "housing_cache_keys",
+           "housing_cache_key", "housing_cache_keys", "HousingSolveError",
            "under_mpi"]
+
+log = logging.getLogger(__name__)
+
+
+class HousingSolveError(ArithmeticError):
+    """The housing FE assembly or eigensolve failed numerically; the message says which
+    stage and the likely cause (the runner reports it as a numerical failure, exit 1)."""
+
+
+def _solve_failure(cfg: HousingConfig, stage: str, exc: BaseException) -> HousingSolveError:
+    hints = []
+    if not 1e6 <= cfg.material.E <= 1e13:
+        hints.append(f"housing.material.E = {cfg.material.E:g} Pa is far outside the range of "
+                     "solids (1e6..1e13 Pa), so the stiffness matrix over- or underflows")
+    if cfg.support == "elastic" and cfg.foundation_stiffness < 1e6:
+        hints.append(f"housing.foundation_stiffness = {cfg.foundation_stiffness:g} N/m^3 is so "
+                     "soft that the housing is nearly free (singular stiffness matrix); use "
+                     "support = 'fixed' or a stiffer foundation (1e8..1e12 N/m^3)")
+    text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+    return HousingSolveError(f"housing FE {stage} failed ({type(exc).__name__}: {text})"
+                             + (f"; likely cause: {'; '.join(hints)}" if hints else
+                                "; the stiffness matrix is probably singular or not finite"))
 
 
 def under_mpi() -> bool:
@@ -51,39 +75,74 @@ def _rank(comm) -> int:
     return 0 if comm is None else comm.rank
 
 
+def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
+    """The cache key of a housing stage, the one place it is defined: ``"mesh"`` depends on
+    the geometry and mesh sizes only; ``"modes"`` and ``"matrices"`` on the whole housing
+    config (and share its hash)."""
+    if stage == "mesh":
+        geo = dataclasses.asdict(cfg)
+        for k in ("material", "modes", "support", "foundation_stiffness"):
+            geo.pop(k)
+        geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
+        return cache_key("housing-mesh", geo)
+    if stage not in ("modes", "matrices"):
+        raise ValueError(f"unknown housing cache stage {stage!r}")
+    return cache_key(f"housing-{stage}", dataclasses.asdict(cfg))
+
+
 def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
-    """(mesh key, modes key): the mesh depends on geometry and mesh sizes only."""
-    geo = dataclasses.asdict(cfg)
-    for k in ("material", "modes", "support", "foundation_stiffness"):
-        geo.pop(k)
-    geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
-    return cache_key("housing-mesh", geo), cache_key("housing-modes", dataclasses.asdict(cfg))
+    """(mesh key, modes key)."""
+    return housing_cache_key(cfg, "mesh"), housing_cache_key(cfg, "modes")
+
+
+def _cached_modes(key: str) -> HousingModes | None:
+    """The verified modes entry ``key`` loaded, or None (an invalid one is removed)."""
+    folder = open_entry(key)
+    if folder is None:
+        return None
+    try:
+        return load_modes(folder, key=key)
+    except Exception as exc:                 # valid checksums but unreadable: another layout
+        discard_entry(key, f"cannot be read: {exc}")
+        return None
 
 
 def housing_modes(cfg: HousingConfig, *, cache: bool = True) -> HousingModes:
-    """Mesh -> assemble -> solve, with the on-disk cache (a hit does no FE work)."""
+    """Mesh -> assemble -> solve, with the on-disk cache (a hit does no FE work; an invalid
+    entry is rebuilt with a warning)."""
     comm = _comm()
     mesh_key, modes_key = housing_cache_keys(cfg)
-    final = entry_dir(modes_key)
-    if cache and _bcast(comm, (final / "meta.json").is_file() if _rank(comm) == 0 else None):
+    if cache and _bcast(comm, _cached_modes(modes_key) is not None if _rank(comm) == 0 else None):
         t0 = time.perf_counter()
-        res = load_modes(final, key=modes_key)
-        return dataclasses.replace(res, timings={**res.timings, "cache_load": time.perf_counter() - t0})
+        res = _cached_modes(modes_key)
+        if res is not None:
+            return dataclasses.replace(res, timings={**res.timings, "cache_load": time.perf_counter() - t0})
     try:
         return _compute(cfg, comm, mesh_key, modes_key, cache)
-    except Exception:
+    except Exception as exc:
         if comm is not None and comm.size > 1:
             sys.stderr.write(f"[rank {comm.rank}] housing FE failed; aborting all ranks\n")
             traceback.print_exc()
             sys.stderr.flush()
             comm.Abort(1)
+        if _is_numerical(exc):
+            raise _solve_failure(cfg, "modal solve", exc) from exc
         raise
+
+
+def _is_numerical(exc: BaseException) -> bool:
+    """PETSc/SLEPc, CHOLMOD and linear-algebra errors (not the package's own errors)."""
+    mod = type(exc).__module__ or ""
+    return (isinstance(exc, (ArithmeticError, np.linalg.LinAlgError))
+            or mod.split(".")[0] in ("petsc4py", "slepc4py", "sksparse", "scipy")
+            or "CHOLMOD" in str(exc) or "not positive definite" in str(exc))
 
 
 def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     rank = _rank(comm)
-    root = (entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir()))
-    work = _bcast(comm, Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root)) if rank == 0 else None)
+    root = entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir())
+    work = _bcast(comm, (new_workspace(modes_key) if cache else
+                         Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root))) if rank == 0 else None)
     hm, t_mesh = _mesh(cfg, mesh_key, root, cache) if rank == 0 else (None, 0.0)
     hm = _bcast(comm, hm)
     if comm is not None and os.environ.get("VIBROGEAR_HOUSING_FAIL_RANK") == str(comm.rank):
@@ -91,15 +150,21 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     m = cfg.modes
     from .housing import solve_mesh_modes
 
-    res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bore_layout(cfg),
-                           count=m.count, cutoff_hz=m.cutoff_hz, max_count=m.max_count, tol=m.tol,
-                           solver=m.solver, support=cfg.support, foundation_stiffness=cfg.foundation_stiffness,
-                           shapes=m.shapes, shapes_dir=work)
+    try:
+        res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree,
+                               bores=bore_layout(cfg), count=m.count, cutoff_hz=m.cutoff_hz,
+                               max_count=m.max_count, tol=m.tol, solver=m.solver,
+                               support=cfg.support, foundation_stiffness=cfg.foundation_stiffness,
+                               shapes=m.shapes, shapes_dir=work)
+    except BaseException:
+        if rank == 0:
+            shutil.rmtree(work, ignore_errors=True)      # no half-built entry left behind
+        raise
     res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key)
     if rank == 0:
         save_modes(res, work)
         if cache:
-            final = publish(work, entry_dir(modes_key))
+            final = publish_entry(work, modes_key)
             res = dataclasses.replace(res, shapes_path=(final / res.shapes_path.name)
                                       if res.shapes_path is not None else None)
     return _bcast(comm, res) if comm is not None else res
@@ -107,15 +172,18 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
 
 def _mesh(cfg, mesh_key, root, cache) -> tuple[HousingMesh, float]:
     """The housing mesh from the mesh cache or gmsh (one process), and the meshing seconds."""
-    mesh_dir = entry_dir(mesh_key)
-    if cache and (mesh_dir / "mesh.msh").is_file():
-        return _load_mesh_meta(mesh_dir), 0.0
-    tmp = Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
+    mesh_dir = open_entry(mesh_key) if cache else None
+    if mesh_dir is not None:
+        try:
+            return _load_mesh_meta(mesh_dir), 0.0
+        except Exception as exc:             # valid checksums but unreadable: another layout
+            discard_entry(mesh_key, f"cannot be read: {exc}")
+    tmp = new_workspace(mesh_key) if cache else Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
     hm = build_housing_mesh(cfg, tmp / "mesh.msh")
     seconds = hm.seconds
     _save_mesh_meta(hm, tmp)
     if cache:
-        publish(tmp, mesh_dir)
+        mesh_dir = publish_entry(tmp, mesh_key)
         hm = hm._replace(path=mesh_dir / "mesh.msh")
     if not hm.path.is_file():
         hm = _load_mesh_meta(mesh_dir)
@@ -179,8 +247,29 @@ _META = ("n_dofs_total", "bore_n_points", "bore_names", "beta", "degree", "mass_
 
 
 def housing_matrices_key(cfg: HousingConfig) -> str:
-    """The modes entry's config hash under the stage name ``housing-matrices``."""
-    return "housing-matrices-" + housing_cache_keys(cfg)[1].rsplit("-", 1)[1]
+    return housing_cache_key(cfg, "matrices")
+
+
+def _cached_matrices(key: str) -> HousingMatrices | None:
+    import json
+    import scipy.sparse as sp
+
+    final = open_entry(key)
+    if final is None:
+        return None
+    t0 = time.perf_counter()
+    try:
+        meta = json.loads((final / "meta.json").read_text())
+        with np.load(final / "matrices.npz") as z:
+            arrays = {k: sp.csr_matrix((z[k + "_data"], z[k + "_indices"], z[k + "_indptr"]),
+                                       shape=tuple(z[k + "_shape"])) for k in _SPARSE}
+            arrays.update(free_dofs=z["free_dofs"], bore_points=z["bore_points"])
+        meta.update(bore_n_points=tuple(meta["bore_n_points"]), bore_names=tuple(meta["bore_names"]),
+                    timings={**meta["timings"], "cache_load": time.perf_counter() - t0})
+        return HousingMatrices(**arrays, **meta, cached=True, cache_key=key)
+    except Exception as exc:                 # valid checksums but unreadable: another layout
+        discard_entry(key, f"cannot be read: {exc}")
+        return None
 
 
 def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatrices:
@@ -191,24 +280,21 @@ def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatric
     if under_mpi():
         raise RuntimeError("housing_matrices is serial: call it without mpirun")
     key = housing_matrices_key(cfg)
-    final = entry_dir(key)
-    if cache and (final / "meta.json").is_file():
-        t0 = time.perf_counter()
-        meta = json.loads((final / "meta.json").read_text())
-        with np.load(final / "matrices.npz") as z:
-            arrays = {k: sp.csr_matrix((z[k + "_data"], z[k + "_indices"], z[k + "_indptr"]),
-                                       shape=tuple(z[k + "_shape"])) for k in _SPARSE}
-            arrays.update(free_dofs=z["free_dofs"], bore_points=z["bore_points"])
-        meta.update(bore_n_points=tuple(meta["bore_n_points"]), bore_names=tuple(meta["bore_names"]),
-                    timings={**meta["timings"], "cache_load": time.perf_counter() - t0})
-        return HousingMatrices(**arrays, **meta, cached=True, cache_key=key)
-    root = final.parent if cache else Path(tempfile.gettempdir())
-    hm, t_mesh = _mesh(cfg, housing_cache_keys(cfg)[0], root, cache)
+    res = _cached_matrices(key) if cache else None
+    if res is not None:
+        return res
+    root = entry_dir(key).parent if cache else Path(tempfile.gettempdir())
+    hm, t_mesh = _mesh(cfg, housing_cache_key(cfg, "mesh"), root, cache)
     from .housing import assemble_mesh_matrices
 
     bores = bore_layout(cfg)
-    raw = assemble_mesh_matrices(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bores,
-                                 support=cfg.support, foundation_stiffness=cfg.foundation_stiffness)
+    try:
+        raw = assemble_mesh_matrices(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bores,
+                                     support=cfg.support, foundation_stiffness=cfg.foundation_stiffness)
+    except Exception as exc:
+        if _is_numerical(exc):
+            raise _solve_failure(cfg, "assembly", exc) from exc
+        raise
     free = raw["free"]
     T = raw["T"][:, free].tocsr()
     T.eliminate_zeros()
@@ -225,7 +311,7 @@ def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatric
         mass_kg=raw["mass_kg"], n_fallback_points=raw["n_fallback_points"],
         timings={"meshing": t_mesh, **raw["timings"]}, cache_key=key)
     if cache:
-        tmp = Path(tempfile.mkdtemp(prefix=f".{key}.", dir=root))
+        tmp = new_workspace(key)
         arrays = {"free_dofs": free, "bore_points": res.bore_points}
         for k in _SPARSE:
             A = getattr(res, k)
@@ -234,5 +320,5 @@ def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatric
         np.savez(tmp / "matrices.npz", **arrays)
         meta = {k: getattr(res, k) for k in _META}
         (tmp / "meta.json").write_text(json.dumps({**meta, "timings": dict(res.timings)}, indent=1))
-        publish(tmp, final)
+        publish_entry(tmp, key)
     return res

@@ -1,11 +1,14 @@
 """Atomic file writes: every output file appears whole or not at all."""
 from __future__ import annotations
 
+import errno
 import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_bytes", "atomic_write_text"]
+from ..config.base import ConfigError
+
+__all__ = ["atomic_write_bytes", "atomic_write_text", "check_output_dir"]
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
@@ -28,3 +31,40 @@ def atomic_write_bytes(path, data: bytes) -> Path:
 
 def atomic_write_text(path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def check_output_dir(path, what: str = "--out") -> Path:
+    """``path`` as an output folder that can be created and written, or a ConfigError naming
+    ``what``; creates nothing (so ``vibrogear check`` can run it before any output exists)."""
+    if path is None or str(path).strip() == "":
+        raise ConfigError(what, "empty path: give an output folder")
+    p = Path(path)
+    try:
+        name_max = os.pathconf(".", "PC_NAME_MAX")
+        path_max = os.pathconf(".", "PC_PATH_MAX")
+    except (OSError, ValueError):
+        name_max, path_max = 255, 4096
+    for part in p.parts:
+        if len(os.fsencode(part)) > name_max:
+            raise ConfigError(what, f"a path component is {len(os.fsencode(part))} bytes long; "
+                              f"the file system allows at most {name_max}: {part[:40]}...")
+    if len(os.fsencode(str(p.absolute()))) > path_max - 64:
+        raise ConfigError(what, f"path too long (the file system allows {path_max} bytes)")
+    probe = p
+    while True:
+        try:
+            if probe.exists() or probe.is_symlink():
+                break
+        except OSError as exc:
+            raise ConfigError(what, f"{probe}: {exc.strerror or exc}") from None
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    if not probe.is_dir():
+        kind = "a broken link" if probe.is_symlink() and not probe.exists() else "a file"
+        if probe == p:
+            raise ConfigError(what, f"{p} exists and is {kind}, not a folder")
+        raise ConfigError(what, f"{probe} is {kind}, so {p} cannot be a folder under it")
+    if not os.access(probe, os.W_OK | os.X_OK):
+        raise ConfigError(what, f"{probe} is not writable ({os.strerror(errno.EACCES).lower()})")
+    return p
