@@ -209,7 +209,11 @@ def build(cls: type, data: dict, path: str = "") -> Any:
                                   f"{', '.join(required)}")
             continue
         kwargs[name] = _convert(data[name], hints[name], dict(f.metadata), fpath)
-    obj = cls(**kwargs)
+    try:
+        obj = cls(**kwargs)
+    except ConfigError as exc:   # a check in __post_init__ names a field of this section
+        raise ConfigError(f"{path}.{exc.path}" if path and exc.path else path or exc.path,
+                          str(exc)[len(exc.path) + 2:] if exc.path else str(exc)) from None
     validate = getattr(obj, "validate", None)
     if validate is not None:
         validate(path)
