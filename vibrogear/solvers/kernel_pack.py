@@ -16,6 +16,8 @@ from collections import namedtuple
 
 import numpy as np
 
+from ..models.contact_law import smooth_contacts
+
 __all__ = ["ModelArrays", "model_arrays"]
 
 ModelArrays = namedtuple("ModelArrays", [
@@ -109,7 +111,7 @@ def _pack(model) -> tuple:
         kmc=f64(ct.stiffness_cos), kms=f64(ct.stiffness_sin), ec=f64(ct.error_cos),
         es=f64(ct.error_sin),
         # C1 contacts (Hertzian exponent > 1, no damping) switch without located events
-        smooth=f64((ct.exponent > 1.0) & (ct.damping == 0.0)),
+        smooth=f64(smooth_contacts(ct.exponent, ct.damping)),
         # contacts with mesh-stiffness or transmission-error harmonics (any / error / stiffness)
         harm=flags(ct.stiffness_cos, ct.stiffness_sin, ct.error_cos, ct.error_sin),
         eharm=flags(ct.error_cos, ct.error_sin), kharm=flags(ct.stiffness_cos, ct.stiffness_sin),

@@ -6,6 +6,7 @@ coupling; contacts act on delta = C x - e(t).  The contact *mode* (-1, 0, +1) is
 an input, not recomputed from the sign: the integrator switches it at located
 events, so that every step sees one smooth vector field.
 
+The contact force is the one law of :mod:`vibrogear.models.contact_law`, inlined.
 The arrays and the structure they expose (single-entry rows of P, nonzero column ranges,
 harmonic flags) are packed by :mod:`vibrogear.solvers.kernel_pack`; cos / sin of the
 harmonics are computed once per call.
@@ -15,9 +16,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..models.contact_law import contact_force, contact_mode, resolve_mode
 from .kernel_pack import ModelArrays, model_arrays
 
-__all__ = ["ModelArrays", "model_arrays", "FAST", "effective_mode", "accel", "jac_times", "accel_dparam",
+__all__ = ["ModelArrays", "model_arrays", "FAST", "accel", "jac_times", "accel_dparam",
            "jac_workspace", "contact_modes", "harmonics", "error_and_rate", "range_dot"]
 
 #: safe fast-math: reassociation (vectorised reductions) but no finite-math assumptions
@@ -43,16 +45,6 @@ def error_and_rate(A, j, Om, cs, sn):
         e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
         ed += w * (-A.ec[j, h] * sn[h] + A.es[j, h] * cs[h])
     return e, ed
-
-
-@njit(cache=True, inline="always", _nrt=False)
-def power(s, p):
-    """s**p for s > 0, with the common contact exponents done without pow()."""
-    if p == 1.5:
-        return s * np.sqrt(s)
-    if p == 2.0:
-        return s * s
-    return np.exp(p * np.log(s))
 
 
 # Index only with loop counters that start at 0 (range(n)) and slice for offsets:
@@ -161,16 +153,6 @@ def scatter_coupling(A, WT, wlo, whi, Kc, Bc, klo, khi, blo, bhi, q, acc, scale)
             row_axpy(A, A.pg[k], z, acc)
 
 
-@njit(cache=True, inline="always", _nrt=False)
-def effective_mode(A, j, delta):
-    """Contact mode from the sign of delta - gap."""
-    if delta > A.g_hi[j]:
-        return 1
-    if delta < A.g_lo[j]:
-        return -1
-    return 0
-
-
 @njit(cache=True)
 def contact_modes(A, t, Om, x, mode):
     """Contact modes from the sign of delta - gap (used for the initial state only)."""
@@ -184,13 +166,7 @@ def contact_modes(A, t, Om, x, mode):
         for i in range(m):
             d += A.C[j, i] * x[i]
         e, _ = error_and_rate(A, j, Om, cs, sn)
-        d -= e
-        if d > A.g_hi[j]:
-            mode[j] = 1
-        elif d < A.g_lo[j]:
-            mode[j] = -1
-        else:
-            mode[j] = 0
+        mode[j] = contact_mode(d - e, A.g_hi[j], A.g_lo[j])
 
 
 @njit(cache=True, _nrt=False, fastmath=FAST)
@@ -239,39 +215,20 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
             cd[j] = 0.0
             continue
         e, ed = error_and_rate(A, j, Om, cs, sn) if A.eharm[j] != 0.0 else (0.0, 0.0)
-        if A.smooth[j] != 0.0:
-            md = effective_mode(A, j, sx - e)
-            if md == 0:
-                kd[j] = 0.0
-                cd[j] = 0.0
-                continue
+        delta = sx - e
+        md = resolve_mode(md, A.smooth[j] != 0.0, delta, A.g_hi[j], A.g_lo[j])
+        if md == 0:
+            kd[j] = 0.0
+            cd[j] = 0.0
+            continue
         mod = 1.0
         if A.kharm[j] != 0.0:
             for h in range(H):
                 mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
-        delta = sx - e
-        ddot = sv - ed
-        if md > 0:
-            sgn = 1.0
-            s = delta - A.g_hi[j]
-            kt = A.k_hi[j] * mod
-        else:
-            sgn = -1.0
-            s = A.g_lo[j] - delta
-            kt = A.k_lo[j] * mod
-        p = A.expo[j]
-        if p == 1.0:
-            f = sgn * kt * s
-            kd[j] = kt
-        elif s > 0.0:
-            fs = kt * power(s, p)
-            f = sgn * fs
-            kd[j] = p * fs / s
-        else:
-            f = 0.0
-            kd[j] = 0.0
-        f += A.cdamp[j] * ddot
-        cd[j] = A.cdamp[j]
+        f, kdj, cdj = contact_force(md, delta, sv - ed, A.k_hi[j], A.k_lo[j], A.g_hi[j],
+                                    A.g_lo[j], A.expo[j], A.cdamp[j], mod)
+        kd[j] = kdj
+        cd[j] = cdj
         if f != 0.0:
             row_axpy(A, j, f, acc)
 
@@ -447,14 +404,12 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
         e = 0.0
         for h in range(H):
             e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
-        if A.smooth[j] != 0.0:
-            md = effective_mode(A, j, sx - e)
+        md = resolve_mode(md, A.smooth[j] != 0.0, sx - e, A.g_hi[j], A.g_lo[j])
         if md == 0:
             continue
         de = 0.0     # d e / d Om
         ded = 0.0    # d e' / d Om
         dmod = 0.0   # d mod / d Om
-        mod = 1.0
         for h in range(H):
             n = h + 1
             w = n * Om
@@ -463,16 +418,9 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
             de += n * t * s_
             ded += n * s_ + w * n * t * c_
             dmod += n * t * (-A.kmc[j, h] * sn[h] + A.kms[j, h] * cs[h])
-            mod += A.kmc[j, h] * cs[h] + A.kms[j, h] * sn[h]
-        # stiffness force / k(t), to differentiate the modulation
-        delta = sx - e
-        p = A.expo[j]
-        if md > 0:
-            s = delta - A.g_hi[j]
-            fk = A.k_hi[j] * (s if p == 1.0 else (power(s, p) if s > 0 else 0.0))
-        else:
-            s = A.g_lo[j] - delta
-            fk = -A.k_lo[j] * (s if p == 1.0 else (power(s, p) if s > 0 else 0.0))
+        # stiffness force / k(t) (no modulation, no damping), to differentiate the modulation
+        fk = contact_force(md, sx - e, 0.0, A.k_hi[j], A.k_lo[j], A.g_hi[j], A.g_lo[j],
+                           A.expo[j], 0.0, 1.0)[0]
         df = fk * dmod - kd[j] * de - cd[j] * ded
         df *= dOm
         if df != 0.0:
