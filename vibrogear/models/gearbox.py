@@ -17,6 +17,7 @@ velocity.  The scene's parameter is the driving-shaft speed in rpm.
 """
 from __future__ import annotations
 
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -26,11 +27,14 @@ import numpy as np
 from ..config.base import ConfigError
 from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import bearing_geometry, gear_mesh_geometry
+from .iso6336 import MeshStiffness, involute, inverse_involute, mesh_stiffness
 from .rotor import build_rotor_model, master_modes
-from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
+from .synthesis import ContactLaw, LinearBlock, LinearLink, PhysicalVector, Subsystem, synthesize
 
 __all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
-           "housing_to_rotor"]
+           "housing_to_rotor", "iso_mesh_stiffness", "gravity_load"]
+
+log = logging.getLogger(__name__)
 
 #: model time unit 1 / OMEGA_REF s (tau = OMEGA_REF t)
 OMEGA_REF = 2.0 * math.pi * 1000.0
@@ -58,6 +62,8 @@ class GearboxModel:
     omega_ref: float = OMEGA_REF
     housing: object = None                # HousingModes or None
     timings: dict = field(default_factory=dict)
+    blocks: tuple = ()                    # LinearBlock (cross-coupled bearing terms)
+    mesh_stiffness: tuple = ()            # per mesh: user / ISO 6336 / used values (dicts)
 
     @property
     def time_unit_s(self) -> float:
@@ -73,8 +79,12 @@ class GearboxModel:
 def _rotor_config(sh, gears, gear_p, shaft_p) -> tuple[RotorConfig, list[int]]:
     discs, free, free_ids = list(sh.discs), [], []
     for k, g in gears:
-        geo = dict(position=g.position, outer_diameter=g.pitch_diameter,
-                   inner_diameter=g.inner_diameter, width=g.width, density=g.density, name=g.name)
+        if g.mass is not None:
+            geo = dict(position=g.position, mass=g.mass, Id=g.Id, Ip=g.Ip, name=g.name)
+        else:
+            geo = dict(position=g.position, outer_diameter=g.pitch_diameter,
+                       inner_diameter=g.inner_diameter, width=g.width, density=g.density,
+                       name=g.name)
         if g.free:
             free.append(FreeGearConfig(**geo, torsional_damping=g.torsional_damping,
                                        speed_ratio=gear_p[k] / shaft_p))
@@ -151,11 +161,13 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
         subsystems.append(sub)
     t_housing = time.perf_counter()
     contacts, links, forces = [], [], []
-    contacts += _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
-    bc, bl = _bearings(scene, cfg, rotors, hm)
+    mc, records = _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
+    contacts += mc
+    bc, bl, blocks = _bearings(scene, cfg, rotors, hm)
     contacts += bc
     links += bl
     cl, forces = _external_couplings(cfg, rotors, shaft_p)
+    forces += gravity_load(cfg.gravity, rotors)
     links += cl
     for k, g in enumerate(cfg.gears):
         if g.free and g.drag_torque:
@@ -166,14 +178,30 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
-                         monitor=0, name=cfg.name, param_name="rpm")
+                         monitor=0, name=cfg.name, param_name="rpm", blocks=blocks)
     t_end = time.perf_counter()
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
                         shaft_ratios=tuple(shaft_p), rotors=tuple(rotors), mesh_teeth=teeth,
                         housing=hm, timings={"shafts_s": t_shafts - t0,
                                              "housing_s": t_housing - t_shafts,
-                                             "synthesis_s": t_end - t_housing})
+                                             "synthesis_s": t_end - t_housing},
+                        blocks=tuple(blocks), mesh_stiffness=tuple(records))
+
+
+def gravity_load(gravity, rotors) -> list:
+    """Weight of every shaft with its discs and gears: ``M g`` over the translational DOF
+    (``gravity`` in the housing frame [m/s^2]); [] when g = 0.  The housing's own weight is
+    not included (its mode set carries no modal participation factors)."""
+    g = housing_to_rotor(gravity)
+    if not np.any(g):
+        return []
+    out = []
+    for s, rotor in enumerate(rotors):
+        acc = np.zeros(rotor.n_dofs)
+        acc[:6 * rotor.n_nodes].reshape(-1, 6)[:, :3] = g
+        out.append((s, np.arange(rotor.n_dofs), rotor.M @ acc))
+    return out
 
 
 def _gear_psi(rotor, node, k, free_dof) -> int:
@@ -195,14 +223,42 @@ def _mesh_geometry(cfg, i, axes, gear_p):
                           "adjust the shafts' y0 or the gear positions")
     ca = housing_to_rotor([axes[sa][0], 0.0, axes[sa][1]])[:2]
     cb = housing_to_rotor([axes[sb][0], 0.0, axes[sb][1]])[:2]
+    r_a, r_b = ga.pitch_diameter / 2, gb.pitch_diameter / 2
+    alpha_n, beta = math.radians(m.pressure_angle), math.radians(ga.helix_angle)
+    shift = m.profile_shift_a + m.profile_shift_b
+    if shift:       # profile-shifted pair: the working pitch cylinders (zero backlash)
+        alpha_t = math.atan(math.tan(alpha_n) / math.cos(beta))
+        alpha_wt = inverse_involute(float(involute(alpha_t)) + 2 * math.tan(alpha_n) * shift
+                                    / (ga.teeth + gb.teeth))
+        scale = math.cos(alpha_t) / math.cos(alpha_wt)
+        r_a, r_b = scale * r_a, scale * r_b
+        beta = math.atan(math.tan(beta) * scale)             # same lead, radius r_w
+        alpha_n = math.atan(math.tan(alpha_wt) * math.cos(beta))
     try:
-        geom = gear_mesh_geometry(ca, cb, ga.pitch_diameter / 2, gb.pitch_diameter / 2,
-                                  math.radians(m.pressure_angle),
-                                  helix_angle=math.radians(ga.helix_angle), hand=m.hand,
+        geom = gear_mesh_geometry(ca, cb, r_a, r_b, alpha_n, helix_angle=beta, hand=m.hand,
                                   drive_sense=1 if gear_p[ka] > 0 else -1)
     except ValueError as exc:
-        raise ConfigError(path, str(exc)) from None
+        raise ConfigError(path, str(exc) + ("" if not shift else " (profile-shifted pair: "
+                          "the working pitch radii)")) from None
     return geom, (sa, ka), (sb, kb)
+
+
+def iso_mesh_stiffness(cfg, i: int) -> MeshStiffness:
+    """ISO 6336-1 method B values of ``meshes[i]`` (:mod:`vibrogear.models.iso6336`); a
+    ConfigError naming the mesh where the gear data lie outside the method's range."""
+    m, path = cfg.meshes[i], f"gearbox.meshes[{i}]"
+    ga = cfg.gears[cfg.gear_index(m.gear_a, f"{path}.gear_a")]
+    gb = cfg.gears[cfg.gear_index(m.gear_b, f"{path}.gear_b")]
+    try:
+        return mesh_stiffness(ga.teeth, gb.teeth, ga.module,
+                              m.face_width or min(ga.width, gb.width),
+                              alpha_n=math.radians(m.pressure_angle),
+                              beta=math.radians(ga.helix_angle), x1=m.profile_shift_a,
+                              x2=m.profile_shift_b, addendum=m.addendum, dedendum=m.dedendum,
+                              web_ratio=m.web_ratio, rim_ratio=m.rim_ratio,
+                              line_load=m.line_load, harmonics=m.iso_harmonics)
+    except ValueError as exc:
+        raise ConfigError(f"{path}.stiffness", f"ISO 6336-1 mesh stiffness: {exc}") from None
 
 
 def check_layout(scene) -> None:
@@ -215,23 +271,61 @@ def check_layout(scene) -> None:
         _mesh_geometry(cfg, i, axes, gear_p)
 
 
-def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof) -> list[ContactLaw]:
-    out = []
+def _mesh_law(cfg, i) -> tuple[float, tuple, tuple, dict]:
+    """(stiffness along the normal [N/m], stiffness_cos, stiffness_sin, summary record) of
+    ``meshes[i]``: the user's value, or ISO 6336-1's k_normal with its contact harmonics
+    (on meshes[0], unless the user gives harmonics).  ISO is reported next to a user value
+    whenever the gear data are in its range."""
+    m, path = cfg.meshes[i], f"gearbox.meshes[{i}]"
+    try:
+        iso = iso_mesh_stiffness(cfg, i)
+    except ConfigError as exc:
+        if m.iso6336:
+            raise
+        iso, note = None, str(exc)
+    k, hc, hs = (iso.k_normal if m.iso6336 else m.stiffness), m.stiffness_cos, m.stiffness_sin
+    if m.iso6336 and i == 0 and not (hc or hs):
+        hc, hs = iso.harmonics_cos, iso.harmonics_sin
+        t = np.linspace(0.0, 2 * np.pi, 64 * max(len(hc), 1), endpoint=False)
+        h = np.arange(1, len(hc) + 1)
+        low = 1.0 + np.min(np.cos(np.outer(t, h)) @ np.asarray(hc, float)
+                           + np.sin(np.outer(t, h)) @ np.asarray(hs, float)) if hc else 1.0
+        if low <= 0.0:
+            raise ConfigError(f"{path}.iso_harmonics", f"the truncated contact wave goes "
+                              f"negative (min k/k_mean = {low:.3g}); use fewer harmonics")
+    rec = {"mesh": m.name, "source": "iso6336" if m.iso6336 else "user",
+           "stiffness_used_N_per_m": float(k), "harmonics_cos": list(hc),
+           "harmonics_sin": list(hs),
+           "user_N_per_m": None if m.iso6336 else float(m.stiffness),
+           "iso6336": None if iso is None else iso.as_dict()}
+    if iso is None:
+        rec["iso6336_note"] = note
+    log.info("mesh %s: stiffness %.4g N/m (%s)%s", m.name, k, rec["source"],
+             "" if iso is None else f"; ISO 6336-1: {iso.k_normal:.4g} N/m along the normal, "
+             f"c' = {iso.c_prime / 1e9:.3f} N/(mm um), eps_alpha = {iso.eps_alpha:.3f}, "
+             f"eps_beta = {iso.eps_beta:.3f}")
+    return float(k), tuple(hc), tuple(hs), rec
+
+
+def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
+    out, records = [], []
     for i, m in enumerate(cfg.meshes):
         geom, (sa, ka), (sb, kb) = _mesh_geometry(cfg, i, axes, gear_p)
         ga, gb = cfg.gears[ka], cfg.gears[kb]
+        k_mesh, hc, hs, rec = _mesh_law(cfg, i)
+        records.append(rec)
         parts = []
         for s, g, k, c in ((sa, ga, ka, geom.c_a), (sb, gb, kb, geom.c_b)):
             rotor = rotors[s]
             node = rotor.node_at(g.position)
             idx = list(rotor.node_dofs(node)[:5]) + [_gear_psi(rotor, node, k, free_dof)]
             parts.append((s, idx, c))
-        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), k_hi=m.stiffness,
-                              k_lo=m.stiffness, gap_hi=0.0, gap_lo=-m.backlash, exponent=1.0,
-                              damping=m.damping, stiffness_cos=m.stiffness_cos,
-                              stiffness_sin=m.stiffness_sin, error_cos=m.te_cos,
-                              error_sin=m.te_sin, kind="mesh", group=m.name))
-    return out
+        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), k_hi=k_mesh,
+                              k_lo=k_mesh, gap_hi=0.0, gap_lo=-m.backlash, exponent=1.0,
+                              damping=m.damping, stiffness_cos=hc, stiffness_sin=hs,
+                              error_cos=m.te_cos, error_sin=m.te_sin, kind="mesh",
+                              group=m.name))
+    return out, records
 
 
 def _bore_of(hm, shaft_bore_names, y) -> int:
@@ -240,8 +334,35 @@ def _bore_of(hm, shaft_bore_names, y) -> int:
     return min(cand, key=lambda b: abs(hm.bore_centers[b, 1] - y))
 
 
+def _spring_links(name, centre, K, C):
+    """Links (and a block for the skew part) of a linear bearing with radial stiffness K and
+    damping C (2 x 2, rotor frame): the symmetric parts as springs/dampers along their
+    eigenvectors (along x and y when diagonal), the skew parts as one LinearBlock."""
+    K, C = np.asarray(K, float), np.asarray(C, float)
+    Ks, Cs = 0.5 * (K + K.T), 0.5 * (C + C.T)
+    ex, ey = np.eye(3)[:2]
+    links, blocks = [], []
+    if Ks[0, 1] == 0.0 and Cs[0, 1] == 0.0:
+        for lab, e, j in (("x", ex, 0), ("y", ey, 1)):
+            links.append(LinearLink(f"{name}:{lab}", centre(e), Ks[j, j], Cs[j, j]))
+    else:
+        for kind, A in (("stiffness", Ks), ("damping", Cs)):
+            lam, vec = np.linalg.eigh(A)
+            for j in range(2):
+                if lam[j]:
+                    e = vec[0, j] * ex + vec[1, j] * ey
+                    k, c = (lam[j], 0.0) if kind == "stiffness" else (0.0, lam[j])
+                    links.append(LinearLink(f"{name}:{kind} {j}", centre(e), k, c))
+    skew_k, skew_c = 0.5 * (K[0, 1] - K[1, 0]), 0.5 * (C[0, 1] - C[1, 0])
+    if skew_k or skew_c:
+        J = np.array([[0.0, 1.0], [-1.0, 0.0]])
+        blocks.append(LinearBlock(f"{name}:cross-coupled", (centre(ex), centre(ey)),
+                                  skew_k * J, skew_c * J))
+    return links, blocks
+
+
 def _bearings(scene, cfg, rotors, hm):
-    contacts, links = [], []
+    contacts, links, blocks = [], [], []
     used: dict[int, str] = {}
     for i, b in enumerate(cfg.bearings):
         path = f"gearbox.bearings[{i}]"
@@ -284,8 +405,9 @@ def _bearings(scene, cfg, rotors, hm):
         if b.axial_stiffness:
             links.append(LinearLink(f"{b.name}:axial", centre(ez), b.axial_stiffness, b.damping))
         if b.type == "spring":
-            for lab, e in (("x", ex), ("y", ey)):
-                links.append(LinearLink(f"{b.name}:{lab}", centre(e), b.stiffness, b.damping))
+            sl, sb = _spring_links(b.name, centre, *b.radial_matrices())
+            links += sl
+            blocks += sb
             continue
         if b.damping:
             for lab, e in (("x", ex), ("y", ey)):
@@ -300,7 +422,7 @@ def _bearings(scene, cfg, rotors, hm):
                                        k_hi=b.stiffness, k_lo=0.0, gap_hi=b.clearance,
                                        gap_lo=-np.inf, exponent=b.exponent,
                                        damping=b.contact_damping, kind="bearing", group=b.name))
-    return contacts, links
+    return contacts, links, blocks
 
 
 def _external_couplings(cfg, rotors, shaft_p):

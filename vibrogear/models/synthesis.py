@@ -14,7 +14,8 @@ where the low-rank part P stacks (i) identity rows over the shaft coordinates th
 block-diagonal projected damping V^T B_s V, gyroscopic p_s V^T G_s V and circulatory
 p_s V^T C_s V terms (eq. (7); they scale with the spin, omega_s = p_s omega_1) and (ii) one
 row per linear link (axial bearing springs, radial bearing damping, external torsional
-couplings).  Nothing m x m is ever formed except these blocks.
+couplings) and (iii) the rows of general blocks (:class:`LinearBlock`: the cross-coupled
+part of anisotropic bearings).  Nothing m x m is ever formed except these blocks.
 
 Time is scaled: the model's time unit is 1 / ``omega_ref`` seconds (tau = omega_ref t), so
 that displacements and velocities have the same magnitude in the integrator's error norm.
@@ -28,8 +29,8 @@ import scipy.linalg as sla
 
 from .reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 
-__all__ = ["PhysicalVector", "Subsystem", "ContactLaw", "LinearLink", "modal_vector",
-           "synthesize", "subsystem_offsets"]
+__all__ = ["PhysicalVector", "Subsystem", "ContactLaw", "LinearLink", "LinearBlock",
+           "modal_vector", "synthesize", "subsystem_offsets"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,6 +92,17 @@ class LinearLink:
     damping: float = 0.0
 
 
+@dataclass(frozen=True, eq=False)
+class LinearBlock:
+    """A general (non-symmetric) linear coupling over r physical functionals v_i:
+    force -sum_ij v_i (K_ij v_j.q + C_ij v_j.q'), e.g. the cross-coupled (skew) part of an
+    anisotropic bearing.  Symmetric couplings are better given as :class:`LinearLink` s."""
+    name: str
+    vectors: tuple                  # PhysicalVector per row
+    stiffness: np.ndarray           # (r, r) [N/m]
+    damping: np.ndarray             # (r, r) [N s/m]
+
+
 def subsystem_offsets(subsystems) -> np.ndarray:
     return np.concatenate([[0], np.cumsum([s.n_modes for s in subsystems])]).astype(int)
 
@@ -114,9 +126,11 @@ def _harmonics(laws, name: str, H: int) -> np.ndarray:
 
 def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None, *,
                omega_ref: float, omega_per_param: float, spin_per_param: float,
-               monitor: int = 0, name: str = "gearbox", param_name: str = "rpm") -> ReducedModel:
+               monitor: int = 0, name: str = "gearbox", param_name: str = "rpm",
+               blocks=()) -> ReducedModel:
     """Assemble the reduced model (see the module docstring); ``static_force`` is the
-    constant external load (the twist-angle torques), in physical units."""
+    constant external load (twist-angle torques, weight), in physical units; ``blocks``
+    (:class:`LinearBlock`) add general low-rank rows after the links."""
     offsets = subsystem_offsets(subsystems)
     m = int(offsets[-1])
     w = np.concatenate([2 * np.pi * s.freqs_hz for s in subsystems]) / omega_ref
@@ -144,6 +158,13 @@ def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None,
         zero = np.zeros((len(links), len(links)))
         K1.append(zero)
         B1.append(zero)
+    for blk in blocks:
+        r = len(blk.vectors)
+        rows.append(np.array([modal_vector(v, subsystems, offsets) for v in blk.vectors]))
+        K0.append(np.asarray(blk.stiffness, dtype=float).reshape(r, r) / omega_ref ** 2)
+        B0.append(np.asarray(blk.damping, dtype=float).reshape(r, r) / omega_ref)
+        K1.append(np.zeros((r, r)))
+        B1.append(np.zeros((r, r)))
     if rows:
         coupling = LinearCoupling(np.vstack(rows), sla.block_diag(*K0), sla.block_diag(*K1),
                                   sla.block_diag(*B0), sla.block_diag(*B1))
