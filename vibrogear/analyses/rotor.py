@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from ..models.rotor import build_rotor_model, master_modes
+from ..pipeline.outcome import NumericalFailure
 from ..solvers.rotor_modes import MODE_TYPES, campbell_diagram, modal_energy_share, rotor_modes
 
 __all__ = ["run_modes", "run_campbell"]
@@ -33,6 +34,8 @@ def run_modes(scene, ctx) -> dict:
     mc = cfg.modes
     count = None if mc.cutoff_hz is not None else mc.count
     res = rotor_modes(model, mc.speed_rpm, count=count, cutoff_hz=mc.cutoff_hz)
+    if res.status == "failed":
+        raise NumericalFailure(f"rotor modes at {mc.speed_rpm:g} rpm: {res.message}")
     mcount = None if mc.master_cutoff_hz is not None else mc.master_count
     t1 = time.perf_counter()
     master = master_modes(model, count=mcount, cutoff_hz=mc.master_cutoff_hz)
@@ -89,6 +92,8 @@ def run_campbell(scene, ctx) -> dict:
     with ctx.progress(cc.n_speeds, "campbell") as bar:
         res = campbell_diagram(model, speeds, n_modes=cc.n_modes, orders=cc.orders,
                                callback=lambda i, rpm: bar.update(1))
+    if res.status == "failed":
+        raise NumericalFailure(f"rotor Campbell diagram: {res.message}")
     out = ctx.out
     n_lines = res.frequencies_hz.shape[1]
     header = ["speed_rpm"] + [f"{k}_{j + 1}" for j in range(n_lines)

@@ -94,9 +94,8 @@ class Scene:
                                   "[rotor.campbell] (rpm_max, ...)")
         if self.housing_sweep is not None and self.housing is not None:
             self.housing_sweep.housing_points(self.housing, "housing_sweep")
-        if self.gearbox is not None:
-            from ..models.gearbox import check_layout     # axes, mesh planes, centre distances
-            check_layout(self)
+        from .layout import check_layout        # checks across sections, in one place
+        check_layout(self)
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

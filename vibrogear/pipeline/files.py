@@ -65,6 +65,9 @@ def check_output_dir(path, what: str = "--out") -> Path:
         if probe == p:
             raise ConfigError(what, f"{p} exists and is {kind}, not a folder")
         raise ConfigError(what, f"{probe} is {kind}, so {p} cannot be a folder under it")
-    if not os.access(probe, os.W_OK | os.X_OK):
-        raise ConfigError(what, f"{probe} is not writable ({os.strerror(errno.EACCES).lower()})")
+    try:                                  # a real probe (permissions alone mislead root)
+        os.rmdir(tempfile.mkdtemp(prefix=".vibrogear-probe.", dir=probe))
+    except OSError as exc:
+        raise ConfigError(what, f"cannot create folders in {probe}: "
+                          f"{exc.strerror or os.strerror(errno.EACCES)}") from None
     return p

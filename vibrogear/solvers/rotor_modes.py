@@ -53,6 +53,9 @@ class ReducedRotor:
     other_q: np.ndarray        # their eigenvectors in basis coordinates (m_lat + m_other, k)
     other_rigid: int
     basis_hz: np.ndarray
+    lateral_complete: bool = False     # the lateral basis spans every lateral DOF (exact)
+    other_lam_coarse: np.ndarray | None = None  # axial/torsional block, basis cut by a third
+    other_limit: float = np.inf        # |lambda| up to which the cut block is trusted
 
     def truncated(self, fraction: float = 2.0 / 3.0) -> "ReducedRotor":
         """The same reduction with only the lowest ``fraction`` of the lateral basis."""
@@ -61,7 +64,7 @@ class ReducedRotor:
         keep = np.r_[np.arange(k), np.arange(self.n_lateral, self.basis.shape[1])]
         return ReducedRotor(self.basis[:, keep], k, self.K[s, s], self.B[s, s], self.G[s, s],
                             self.C[s, s], self.other_lam, self.other_q[keep], self.other_rigid,
-                            self.basis_hz[keep])
+                            self.basis_hz[keep], lateral_complete=False)
 
     def state_matrix(self, omega: float) -> np.ndarray:
         m = self.K.shape[0]
@@ -98,21 +101,32 @@ def reduce_rotor(model: RotorModel, n_basis: int | None = None, *, count: int = 
     nb = default_basis_size(lat.size, count) if n_basis is None else min(n_basis, lat.size)
     v_l, hz_l = _block_modes(k_s, b_s, model.M, lat, nb)
     v_o, hz_o = _block_modes(k_s, b_s, model.M, oth, min(count + 8, oth.size))
-    proj = lambda a, v: v.T @ (a @ v)  # noqa: E731
     ml, mo = v_l.shape[1], v_o.shape[1]
     # axial/torsional block: speed-independent complex modes, solved once
-    a = np.zeros((2 * mo, 2 * mo))
-    a[:mo, mo:] = np.eye(mo)
-    a[mo:, :mo] = -proj(k_s, v_o)
-    a[mo:, mo:] = -proj(b_s, v_o)
-    lam, q = sla.eig(a)
     scale = np.sqrt(max(hz_o.max() * 2 * np.pi, 1.0) ** 2) if mo else 1.0
-    lam, q, n_rigid = _select(lam, q[:mo], scale)
+    lam, q, n_rigid = _other_block(k_s, b_s, v_o, scale)
     q_full = np.zeros((ml + mo, q.shape[1]), complex)
     q_full[ml:] = q
+    coarse, limit = None, np.inf
+    if 0 < mo < oth.size:                 # truncated: the same block on 2/3 of its basis
+        k = max(1, int(round(2.0 * mo / 3.0)))
+        coarse = _other_block(k_s, b_s, v_o[:, :k], scale)[0]
+        limit = 0.5 * 2 * np.pi * hz_o[k - 1]
+    proj = lambda a, v: v.T @ (a @ v)  # noqa: E731
     return ReducedRotor(np.hstack([v_l, v_o]), ml, proj(k_s, v_l), proj(b_s, v_l),
                         proj(model.G, v_l), proj(model.C, v_l), lam, q_full, n_rigid,
-                        np.concatenate([hz_l, hz_o]))
+                        np.concatenate([hz_l, hz_o]), lateral_complete=ml == lat.size,
+                        other_lam_coarse=coarse, other_limit=limit)
+
+
+def _other_block(k_s, b_s, v_o, scale):
+    mo = v_o.shape[1]
+    a = np.zeros((2 * mo, 2 * mo))
+    a[:mo, mo:] = np.eye(mo)
+    a[mo:, :mo] = -(v_o.T @ (k_s @ v_o))
+    a[mo:, mo:] = -(v_o.T @ (b_s @ v_o))
+    lam, q = sla.eig(a)
+    return _select(lam, q[:mo], scale)
 
 
 @dataclass(frozen=True, eq=False)
@@ -215,11 +229,12 @@ def _residuals(model: RotorModel, omega: float, lam: np.ndarray, x: np.ndarray) 
     k_s, b_s = model.supported()
     d = b_s + omega * model.G
     kk = k_s + omega * model.C
-    mx, dx, kx = model.M @ x, d @ x, kk @ x
-    r = lam ** 2 * mx + lam * dx + kx
-    scale = (np.abs(lam) ** 2 * np.linalg.norm(mx, axis=0) + np.abs(lam)
-             * np.linalg.norm(dx, axis=0) + np.linalg.norm(kx, axis=0))
-    return np.linalg.norm(r, axis=0) / np.where(scale > 0, scale, 1.0)
+    with np.errstate(all="ignore"):        # an overflowing model gives NaN: status "failed"
+        mx, dx, kx = model.M @ x, d @ x, kk @ x
+        r = lam ** 2 * mx + lam * dx + kx
+        scale = (np.abs(lam) ** 2 * np.linalg.norm(mx, axis=0) + np.abs(lam)
+                 * np.linalg.norm(dx, axis=0) + np.linalg.norm(kx, axis=0))
+        return np.linalg.norm(r, axis=0) / np.where(scale > 0, scale, 1.0)
 
 
 #: reduction error estimate (relative eigenvalue change, see :func:`basis_error_estimate`)
@@ -241,16 +256,45 @@ def _select(lam: np.ndarray, vec: np.ndarray, scale: float):
     return lam[order], vec[:, order], n_rigid
 
 
-def basis_error_estimate(red: ReducedRotor, omega: float, lam: np.ndarray) -> float:
-    """Largest relative eigenvalue change when the top third of the lateral basis is dropped:
-    an a-posteriori (conservative) estimate of the reduction error of ``lam``."""
+def basis_error_estimate(red: ReducedRotor, omega: float, lam: np.ndarray,
+                         residuals: np.ndarray | None = None) -> float:
+    """A-posteriori estimate of the reduction error of ``lam`` (largest relative eigenvalue
+    change), per block: a complete lateral basis is exact (0); otherwise the modes that the
+    basis cut by a third can still represent (``|lambda|`` below half its highest basis
+    frequency) are compared with it.  The axial/torsional block likewise when its basis is
+    truncated.  A mode neither comparison covers is estimated by its relative residual in
+    the full model (``residuals``, aligned with ``lam``)."""
     if lam.size == 0:
         return 0.0
-    coarse, _, _ = _solve_reduced(red.truncated(), omega)
-    if coarse.size == 0:
-        return float("inf")
+    other = np.isin(lam, red.other_lam)
+    est = np.zeros(lam.size)
+    covered = np.ones(lam.size, bool)
+    lat = ~other
+    if np.any(lat) and not red.lateral_complete:
+        cut = red.truncated()
+        coarse, _, _ = _solve_reduced(cut, omega)
+        coarse = coarse[~np.isin(coarse, cut.other_lam)]
+        limit = 0.5 * 2 * np.pi * cut.basis_hz[cut.n_lateral - 1]
+        ok = lat & (np.abs(lam) <= limit)
+        covered[lat & ~ok] = False
+        if np.any(ok):
+            if coarse.size == 0:
+                return float("inf")
+            est[ok] = _nearest_change(lam[ok], coarse)
+    if np.any(other) and red.other_lam_coarse is not None:
+        ok = other & (np.abs(lam) <= red.other_limit)
+        covered[other & ~ok] = False
+        if np.any(ok):
+            est[ok] = (_nearest_change(lam[ok], red.other_lam_coarse)
+                       if red.other_lam_coarse.size else np.inf)
+    if not np.all(covered):
+        est[~covered] = np.inf if residuals is None else residuals[~covered]
+    return float(np.max(est))
+
+
+def _nearest_change(lam: np.ndarray, coarse: np.ndarray) -> np.ndarray:
     d = np.abs(lam[:, None] - coarse[None, :]).min(axis=1)
-    return float(np.max(d / np.maximum(np.abs(lam), 1e-300)))
+    return d / np.maximum(np.abs(lam), 1e-300)
 
 
 def _solve_reduced(red: ReducedRotor, omega: float):
@@ -306,8 +350,9 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
         timings["reduce_s"] = time.perf_counter() - t0
         lam, q, n_rigid = _solve_reduced(red, omega)
         lam, q = _trim(lam, q, count, cutoff_hz)
-        timings["error_estimate"] = basis_error_estimate(red, omega, lam)
         x = red.basis @ q
+        timings["error_estimate"] = basis_error_estimate(red, omega, lam,
+                                                         _residuals(model, omega, lam, x))
         nb = red.basis.shape[1]
     else:
         raise ValueError(f"method must be 'reduced' or 'full', got {method!r}")
@@ -324,10 +369,7 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
     timings["total_s"] = time.perf_counter() - t0
     wn = np.abs(lam)
     est = timings.pop("error_estimate", 0.0)
-    status, msg = "ok", ""
-    if method == "reduced" and est > ERROR_LIMIT:
-        status, msg = "inaccurate", (f"reduction error estimate {est:.2e} > {ERROR_LIMIT:g}: "
-                                     "increase n_basis or use method='full'")
+    status, msg = _status(lam, res, est if method == "reduced" else 0.0, nb)
     return RotorModes(speed_rpm=float(speed_rpm), eigenvalues=lam, frequencies_hz=lam.imag / (2 * np.pi),
                       natural_frequencies_hz=wn / (2 * np.pi),
                       damping_ratios=-lam.real / np.where(wn > 0, wn, 1.0), whirl=whirl,
@@ -335,6 +377,22 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
                       residuals=res, error_estimate=est, n_rigid=n_rigid, method=method,
                       n_basis=nb, status=status,
                       message=msg, timings=timings)
+
+
+def _status(lam, residuals, est, n_basis, *, campbell: bool = False) -> tuple[str, str]:
+    """("ok" | "inaccurate" | "failed", message): non-finite eigenvalues or residuals fail
+    (e.g. an overflowing stiffness); a reduction error estimate above :data:`ERROR_LIMIT`
+    is inaccurate, with advice naming the scene key that enlarges the basis.  (Residuals
+    are reported, not judged: an eigenvalue is accurate to about the residual squared.)"""
+    if not (np.all(np.isfinite(lam)) and np.all(np.isfinite(residuals))):
+        return "failed", ("non-finite eigenvalues or residuals: the matrices overflow or are "
+                          "not finite (check rotor.material E, rho and the bearing values)")
+    key = "rotor.campbell.n_modes" if campbell else "rotor.modes.count"
+    advice = (f"; the reduced basis ({n_basis} modes, about 3 x {key} + 16 lateral ones) "
+              f"grows with {key}")
+    if est > ERROR_LIMIT:
+        return "inaccurate", f"reduction error estimate {est:.2e} > {ERROR_LIMIT:g}{advice}"
+    return "ok", ""
 
 
 def _mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -393,14 +451,13 @@ def campbell_diagram(model: RotorModel, speeds_rpm, *, n_modes: int = 8,
         whirl[i, :k] = [w if t == "lateral" else "-" for w, t in zip(wl, ty)]
         if i in (0, len(lines_q) - 1):
             max_res = max(max_res, float(_residuals(model, speeds[i] * RPM, lams[i], x).max()))
-    est = basis_error_estimate(red, speeds[-1] * RPM, lams[-1])
+    est = basis_error_estimate(red, speeds[-1] * RPM, lams[-1], _residuals(
+        model, speeds[-1] * RPM, lams[-1], red.basis @ lines_q[-1]))
     crit = _critical_speeds(red, speeds, freqs, lines_q, whirl, types, orders)
     timings = {"reduce_s": t_red, "sweep_s": t_sweep,
                "total_s": time.perf_counter() - t0}
-    status, msg = "ok", ""
-    if est > ERROR_LIMIT:
-        status, msg = "inaccurate", (f"reduction error estimate {est:.2e} > {ERROR_LIMIT:g}:"
-                                     " increase n_basis")
+    status, msg = _status(np.concatenate(lams), np.array([max_res]), est, red.basis.shape[1],
+                          campbell=True)
     return CampbellResult(speeds, freqs, zetas, whirl, types, tuple(orders), tuple(crit), max_res,
                           est, red.basis.shape[1], status, msg, timings)
 

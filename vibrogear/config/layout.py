@@ -1,0 +1,159 @@
+"""Layout checks across sections: the one place for checks that join ``[gearbox]``,
+``[housing]`` and the analysis options, run by :meth:`Scene.validate` (so ``vibrogear
+check`` reports them before any output exists).
+
+Housing frame as in :mod:`vibrogear.config.housing`: the box is ``0..length`` (x),
+``0..width`` (y, along the shafts), ``0..height`` (z); the cavity is the box less one wall
+thickness on every side.  A bore pair's front bore spans ``y = -boss_length .. wall`` and
+its back bore ``y = width - wall .. width + boss_length``.
+"""
+from __future__ import annotations
+
+import math
+
+from .base import ConfigError
+
+__all__ = ["check_layout", "bore_spans", "gear_tip_radius", "time_response_bytes",
+           "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
+
+#: a bearing may sit this many wall thicknesses outside its bore's span (and no further)
+BEARING_SLACK_WALLS = 1.0
+#: largest time history a time response may hold (samples x states x 8 bytes)
+MAX_TIME_RESPONSE_BYTES = 4 * 2**30
+
+
+def bore_spans(housing, bore) -> dict[str, tuple[float, float]]:
+    """The housing-frame y range of the front and back bore of ``bore``."""
+    t, W = housing.wall_thickness, housing.width
+    return {"front": (-bore.boss_length, t), "back": (W - t, W + bore.boss_length)}
+
+
+def gear_tip_radius(gear) -> float:
+    """Tip radius of a standard gear: pitch radius + one normal module (addendum)."""
+    return 0.5 * gear.pitch_diameter + gear.module
+
+
+def check_layout(scene) -> None:
+    """Every cross-section check that needs no model: bores, bearings, gears in the cavity,
+    rolling elements, and the size of a time response."""
+    if scene.housing is not None:
+        _check_bore_names(scene.housing)
+    if scene.gearbox is not None:
+        if scene.housing is not None:
+            _check_gearbox_in_housing(scene.gearbox, scene.housing)
+        else:
+            _check_free_bearings(scene.gearbox)
+        from ..models.gearbox import check_layout as check_meshes   # centre distances, planes
+        check_meshes(scene)
+    if scene.time_response is not None and "time_response" in scene.scene.analyses:
+        _check_time_response_size(scene)
+
+
+def _check_bore_names(housing) -> None:
+    seen: dict[str, int] = {}
+    for i, b in enumerate(housing.bores):
+        if b.name and b.name in seen:
+            raise ConfigError(f"housing.bores[{i}].name", f"{b.name!r} used twice (also "
+                              f"housing.bores[{seen[b.name]}]): bore names must be unique")
+        seen[b.name] = i
+
+
+def _check_free_bearings(cfg) -> None:
+    for i, b in enumerate(cfg.bearings):
+        if b.type != "spring" and b.elements is None:
+            raise ConfigError(f"gearbox.bearings[{i}].elements", f"a {b.type!r} bearing without "
+                              "a housing needs its number of rolling elements (an integer 3..200)")
+
+
+def _check_gearbox_in_housing(cfg, housing) -> None:
+    bores = {b.name: b for b in housing.bores}
+    names = ", ".join(repr(n) for n in bores)
+    for i, sh in enumerate(cfg.shafts):
+        if sh.bore not in bores:
+            raise ConfigError(f"gearbox.shafts[{i}].bore", f"unknown bore {sh.bore!r}; housing "
+                              f"bores are {names}")
+        if sh.x is not None or sh.z is not None:
+            raise ConfigError(f"gearbox.shafts[{i}].x", "with a housing the axis is the bore's: "
+                              "leave x and z out")
+    t = housing.wall_thickness
+    used: dict[tuple[str, str], int] = {}
+    for i, b in enumerate(cfg.bearings):
+        p = f"gearbox.bearings[{i}]"
+        sh = cfg.shafts[cfg.shaft_index(b.shaft, f"{p}.shaft")]
+        bore = bores[sh.bore]
+        y = sh.y0 + b.position
+        spans = bore_spans(housing, bore)
+        side = min(spans, key=lambda s: _outside(y, spans[s]))
+        lo, hi = spans[side]
+        if _outside(y, spans[side]) > BEARING_SLACK_WALLS * t:
+            raise ConfigError(f"{p}.position", f"bearing at housing y = {y:.6g} m (shaft y0 + "
+                              f"position) is {_outside(y, spans[side]):.3g} m from the nearest "
+                              f"bore of {sh.bore!r} ({side}, y = {lo:.6g}..{hi:.6g} m); it must lie "
+                              f"within one wall thickness ({t:g} m) of a bore: check the shaft's "
+                              "y0 and the bearing position")
+        if (sh.bore, side) in used:
+            raise ConfigError(f"{p}.position", f"the {side} bore of {sh.bore!r} already carries "
+                              f"gearbox.bearings[{used[(sh.bore, side)]}]: one bearing per bore")
+        used[(sh.bore, side)] = i
+        if b.elements is not None and b.elements != bore.rolling_elements:
+            raise ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
+                              f"{bore.rolling_elements} coupling points (housing.bores "
+                              f"rolling_elements); give {bore.rolling_elements} or leave "
+                              f"elements out, got {b.elements}")
+    L, W, H = housing.length, housing.width, housing.height
+    for k, g in enumerate(cfg.gears):
+        p = f"gearbox.gears[{k}]"
+        s = cfg.shaft_index(g.shaft, f"{p}.shaft")
+        bore = bores[cfg.shafts[s].bore]
+        ra, y = gear_tip_radius(g), cfg.shafts[s].y0 + g.position
+        for axis, centre, top, low_name, high_name in (
+                ("x", bore.x, L, "the wall at x = 0", f"the wall at x = {L:g}"),
+                ("z", bore.z, H, "the housing floor", "the housing top")):
+            for gap, where in ((centre - ra - t, low_name), (top - t - centre - ra, high_name)):
+                if gap < 0:
+                    raise ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch radius "
+                                      f"+ module, axis at {axis} = {centre:.6g} m) reaches "
+                                      f"{-gap:.3g} m into {where} (cavity {axis} = {t:g}.."
+                                      f"{top - t:g} m): use a smaller gear or move the bore "
+                                      f"{bore.name!r}")
+        half = 0.5 * g.width
+        if y - half < t or y + half > W - t:
+            raise ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
+                              f"{y + half:.6g} m) is not inside the cavity (y = {t:g}.."
+                              f"{W - t:g} m): check the shaft's y0 and the gear position")
+
+
+def _outside(y: float, span: tuple[float, float]) -> float:
+    return max(span[0] - y, y - span[1], 0.0)
+
+
+def _state_count(scene) -> int:
+    """An upper estimate of the reduced model's state count (2 per coordinate)."""
+    if scene.impact_pair is not None:
+        return 2
+    n = 0
+    if scene.gearbox is not None:
+        n += sum(sh.master_count for sh in scene.gearbox.shafts)
+        n += sum(1 for g in scene.gearbox.gears if g.free)
+    if scene.housing is not None:
+        m = scene.housing.modes
+        n += m.max_count if m.cutoff_hz is not None else m.count
+    return 2 * max(n, 1)
+
+
+def time_response_bytes(scene) -> int:
+    tr = scene.time_response
+    samples = math.floor(tr.periods * tr.samples_per_period) + 1
+    return samples * _state_count(scene) * 8
+
+
+def _check_time_response_size(scene) -> None:
+    tr = scene.time_response
+    need = time_response_bytes(scene)
+    if need > MAX_TIME_RESPONSE_BYTES:
+        states = _state_count(scene)
+        most = MAX_TIME_RESPONSE_BYTES // (8 * states * tr.samples_per_period)
+        raise ConfigError("time_response.periods", f"{tr.periods:g} periods x "
+                          f"{tr.samples_per_period} samples x ~{states} states need "
+                          f"{need / 2**30:.3g} GiB; at most "
+                          f"{MAX_TIME_RESPONSE_BYTES / 2**30:g} GiB: periods must be <= {most}")
