@@ -45,6 +45,7 @@ def run(study, scene, ctx: RunContext) -> dict:
     return {"status": "ok", "rpm": rpm, "modes": int(f_hz.size),
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
             "resonance_speeds_rpm": crit, "wall_s": wall,
+            "mesh_stiffness": gm.mesh_stiffness_summary(),
             "build_timings_s": gm.timings,
             "error_estimate": {"note": "linearised reduced model; see reduction_accuracy"}}
 

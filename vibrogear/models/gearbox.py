@@ -8,7 +8,17 @@ rolling-element points of the bores).  Couplings in physical coordinates
 and transmission-error harmonics on ``meshes[0]``), rolling elements (one-sided Hertzian
 contacts with clearance, journal node to bore point, or to ground without housing), linear
 links (axial bearing springs, radial bearing damping, spring bearings, external torsional
-couplings).  :func:`build_gearbox` joins them by :func:`~vibrogear.models.synthesis.synthesize`.
+couplings; :mod:`vibrogear.models.gearbox_supports`).  :func:`build_gearbox` joins them by
+:func:`~vibrogear.models.synthesis.synthesize`.
+
+Mesh stiffness: a number [N/m] along the tooth normal, or ``"iso6336"``: ISO 6336-1 method B
+from the gear data (:mod:`vibrogear.models.iso6336`; ``k_normal`` and, on ``meshes[0]``, the
+single/double contact harmonics unless the user gives harmonics).  The ISO values of every
+mesh whose gear data lie in the method's range are kept in ``GearboxModel.mesh_stiffness``
+next to the user's value.  Profile-shifted pairs (x_a + x_b != 0) mesh on their working
+pitch cylinders (zero backlash), which fix the centre distance.  Static load: the
+twist-angle torques, free-gear drag and, with ``[gearbox] gravity``, the weight of the
+shafts with their discs and gears (``M g``; not the housing's own weight).
 
 The coordinates q are deviations from the steady rigid-body rotation fixed by the motor and
 load discs (they spin at omega_s with prescribed angles), so the paper's spin velocities of
@@ -26,10 +36,11 @@ import numpy as np
 
 from ..config.base import ConfigError
 from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
-from .couplings import bearing_geometry, gear_mesh_geometry
+from .couplings import gear_mesh_geometry
+from .gearbox_supports import bearings as _bearings, gravity_load, housing_to_rotor
 from .iso6336 import MeshStiffness, involute, inverse_involute, mesh_stiffness
 from .rotor import build_rotor_model, master_modes
-from .synthesis import ContactLaw, LinearBlock, LinearLink, PhysicalVector, Subsystem, synthesize
+from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
 
 __all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
            "housing_to_rotor", "iso_mesh_stiffness", "gravity_load"]
@@ -40,13 +51,6 @@ log = logging.getLogger(__name__)
 OMEGA_REF = 2.0 * math.pi * 1000.0
 #: rad/s per rpm
 RPM = 2.0 * math.pi / 60.0
-
-
-def housing_to_rotor(v) -> np.ndarray:
-    """Housing frame (x, y, z) -> rotor frame (X, Y, Z) = (-x, z, y); the map is its own
-    inverse."""
-    v = np.asarray(v, dtype=float)
-    return np.stack([-v[..., 0], v[..., 2], v[..., 1]], axis=-1)
 
 
 @dataclass(frozen=True, eq=False)
@@ -71,6 +75,23 @@ class GearboxModel:
 
     def mesh_frequency_hz(self, rpm: float) -> float:
         return self.mesh_teeth * rpm / 60.0
+
+    def mesh_stiffness_summary(self) -> list[dict]:
+        """Per mesh: the stiffness used [N/m], its source, the user's value and ISO 6336-1's
+        (along the tooth normal, with c', c_gamma_alpha in N/(mm um) and the contact
+        ratios) where both exist."""
+        out = []
+        for r in self.mesh_stiffness:
+            iso = r["iso6336"] or {}
+            out.append({"mesh": r["mesh"], "source": r["source"],
+                        "used_N_per_m": r["stiffness_used_N_per_m"],
+                        "user_N_per_m": r["user_N_per_m"],
+                        "iso6336_N_per_m": iso.get("k_normal_N_per_m"),
+                        "iso6336_c_prime_N_per_mm_um": iso.get("c_prime_N_per_mm_um"),
+                        "iso6336_c_gamma_alpha_N_per_mm_um": iso.get("c_gamma_alpha_N_per_mm_um"),
+                        "eps_alpha": iso.get("eps_alpha"), "eps_beta": iso.get("eps_beta"),
+                        "harmonics_cos": r["harmonics_cos"], "harmonics_sin": r["harmonics_sin"]})
+        return out
 
     def contact_indices(self, kind: str) -> np.ndarray:
         return np.array([j for j, c in enumerate(self.contacts) if c.kind == kind], dtype=int)
@@ -189,21 +210,6 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
                         blocks=tuple(blocks), mesh_stiffness=tuple(records))
 
 
-def gravity_load(gravity, rotors) -> list:
-    """Weight of every shaft with its discs and gears: ``M g`` over the translational DOF
-    (``gravity`` in the housing frame [m/s^2]); [] when g = 0.  The housing's own weight is
-    not included (its mode set carries no modal participation factors)."""
-    g = housing_to_rotor(gravity)
-    if not np.any(g):
-        return []
-    out = []
-    for s, rotor in enumerate(rotors):
-        acc = np.zeros(rotor.n_dofs)
-        acc[:6 * rotor.n_nodes].reshape(-1, 6)[:, :3] = g
-        out.append((s, np.arange(rotor.n_dofs), rotor.M @ acc))
-    return out
-
-
 def _gear_psi(rotor, node, k, free_dof) -> int:
     return free_dof[k] if k in free_dof else rotor.dof(node, "psi")
 
@@ -263,12 +269,15 @@ def iso_mesh_stiffness(cfg, i: int) -> MeshStiffness:
 
 def check_layout(scene) -> None:
     """The gearbox checks that need no FE model (shaft axes, mesh planes and centre
-    distances), run by the scene's validation so that ``vibrogear check`` reports them."""
+    distances, ISO 6336 mesh stiffness), run by the scene's validation so that
+    ``vibrogear check`` reports them."""
     cfg = scene.gearbox
     _, gear_p = cfg.speed_ratios()
     axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
-    for i in range(len(cfg.meshes)):
+    for i, m in enumerate(cfg.meshes):
         _mesh_geometry(cfg, i, axes, gear_p)
+        if m.iso6336:
+            _mesh_law(cfg, i)
 
 
 def _mesh_law(cfg, i) -> tuple[float, tuple, tuple, dict]:
@@ -326,103 +335,6 @@ def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
                               error_cos=m.te_cos, error_sin=m.te_sin, kind="mesh",
                               group=m.name))
     return out, records
-
-
-def _bore_of(hm, shaft_bore_names, y) -> int:
-    """Index of the bore (front or back) of this shaft nearest to housing y."""
-    cand = [b for b, n in enumerate(hm.bore_names) if n in shaft_bore_names]
-    return min(cand, key=lambda b: abs(hm.bore_centers[b, 1] - y))
-
-
-def _spring_links(name, centre, K, C):
-    """Links (and a block for the skew part) of a linear bearing with radial stiffness K and
-    damping C (2 x 2, rotor frame): the symmetric parts as springs/dampers along their
-    eigenvectors (along x and y when diagonal), the skew parts as one LinearBlock."""
-    K, C = np.asarray(K, float), np.asarray(C, float)
-    Ks, Cs = 0.5 * (K + K.T), 0.5 * (C + C.T)
-    ex, ey = np.eye(3)[:2]
-    links, blocks = [], []
-    if Ks[0, 1] == 0.0 and Cs[0, 1] == 0.0:
-        for lab, e, j in (("x", ex, 0), ("y", ey, 1)):
-            links.append(LinearLink(f"{name}:{lab}", centre(e), Ks[j, j], Cs[j, j]))
-    else:
-        for kind, A in (("stiffness", Ks), ("damping", Cs)):
-            lam, vec = np.linalg.eigh(A)
-            for j in range(2):
-                if lam[j]:
-                    e = vec[0, j] * ex + vec[1, j] * ey
-                    k, c = (lam[j], 0.0) if kind == "stiffness" else (0.0, lam[j])
-                    links.append(LinearLink(f"{name}:{kind} {j}", centre(e), k, c))
-    skew_k, skew_c = 0.5 * (K[0, 1] - K[1, 0]), 0.5 * (C[0, 1] - C[1, 0])
-    if skew_k or skew_c:
-        J = np.array([[0.0, 1.0], [-1.0, 0.0]])
-        blocks.append(LinearBlock(f"{name}:cross-coupled", (centre(ex), centre(ey)),
-                                  skew_k * J, skew_c * J))
-    return links, blocks
-
-
-def _bearings(scene, cfg, rotors, hm):
-    contacts, links, blocks = [], [], []
-    used: dict[int, str] = {}
-    for i, b in enumerate(cfg.bearings):
-        path = f"gearbox.bearings[{i}]"
-        s = cfg.shaft_index(b.shaft, "")
-        sh, rotor = cfg.shafts[s], rotors[s]
-        jd = rotor.node_dofs(rotor.node_at(b.position))
-        ring = None
-        if hm is not None:
-            names = {f"{sh.bore}/front", f"{sh.bore}/back"}
-            bore = _bore_of(hm, names, sh.y0 + b.position)
-            if bore in used:
-                raise ConfigError(f"{path}.position", f"bore {hm.bore_names[bore]!r} already "
-                                  f"carries bearing {used[bore]!r}")
-            used[bore] = b.name
-            n = hm.bore_n_points[bore]
-            if b.elements is not None and b.elements != n:
-                raise ConfigError(f"{path}.elements", f"the housing bore has {n} coupling "
-                                  f"points (housing.bores rolling_elements); got {b.elements}")
-            radial = housing_to_rotor(hm.bore_points[bore, :n] - hm.bore_centers[bore])
-            angles = np.arctan2(radial[:, 1], radial[:, 0])
-            P = hm.bore_values.shape[1]
-            ring = [(bore * P + k) * 3 for k in range(n)]          # first housing index
-        else:
-            if b.elements is None and b.type != "spring":
-                raise ConfigError(f"{path}.elements", "without a housing give the number of "
-                                  "rolling elements (3..200)")
-            n = b.elements or 0
-            angles = math.radians(b.angle_offset) + 2 * np.pi * np.arange(n) / max(n, 1)
-
-        def centre(direction_rotor):
-            """Journal minus bore-centre displacement along a rotor-frame unit vector."""
-            parts = [(s, jd[:3], direction_rotor)]
-            if ring is not None:
-                h = housing_to_rotor(direction_rotor)           # same map back
-                idx = [r0 + c for r0 in ring for c in range(3)]
-                parts.append((len(rotors), idx, -np.tile(h, len(ring)) / len(ring)))
-            return PhysicalVector.of(*parts)
-
-        ex, ey, ez = np.eye(3)
-        if b.axial_stiffness:
-            links.append(LinearLink(f"{b.name}:axial", centre(ez), b.axial_stiffness, b.damping))
-        if b.type == "spring":
-            sl, sb = _spring_links(b.name, centre, *b.radial_matrices())
-            links += sl
-            blocks += sb
-            continue
-        if b.damping:
-            for lab, e in (("x", ex), ("y", ey)):
-                links.append(LinearLink(f"{b.name}:damping {lab}", centre(e), 0.0, b.damping))
-        geom = bearing_geometry(angles)
-        for k in range(n):
-            parts = [(s, jd, geom.journal[k])]
-            if ring is not None:
-                parts.append((len(rotors), [ring[k] + c for c in range(3)],
-                              housing_to_rotor(geom.housing[k])))
-            contacts.append(ContactLaw(name=f"{b.name}:{k}", vector=PhysicalVector.of(*parts),
-                                       k_hi=b.stiffness, k_lo=0.0, gap_hi=b.clearance,
-                                       gap_lo=-np.inf, exponent=b.exponent,
-                                       damping=b.contact_damping, kind="bearing", group=b.name))
-    return contacts, links, blocks
 
 
 def _external_couplings(cfg, rotors, shaft_p):
