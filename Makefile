@@ -9,7 +9,7 @@ export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
 .PHONY: two-stage two-stage-helical single-stage gear-pair gearboxes housing-dynamics bench-gearbox
-.PHONY: rotor setup demo test test-slow test-mpi bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
+.PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
 
@@ -25,6 +25,10 @@ test: $(STAMP)
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
+
+## regression tier: rewrite tests/regression/golden/*.json from fresh runs; review the diff
+golden: $(STAMP)
+	$(PY) tests/regression/regenerate.py
 
 bench: $(STAMP)
 	$(PY) benchmarks/run_all.py

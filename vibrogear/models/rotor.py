@@ -226,19 +226,63 @@ def lowest_modes(K, M, count: int | None = None, cutoff_hz: float | None = None)
     return freqs, vec
 
 
+#: relative frequency difference below which modes form one degenerate cluster (the two
+#: bending planes of an axisymmetric shaft; the rigid-body modes)
+CLUSTER_RTOL = 1e-7
+
+
+def _cluster_bounds(freqs: np.ndarray) -> list[tuple[int, int]]:
+    """[start, stop) index ranges of equal frequencies (``freqs`` ascending, rigid = 0)."""
+    bounds, start = [], 0
+    for k in range(1, freqs.size + 1):
+        if k == freqs.size or freqs[k] - freqs[k - 1] > CLUSTER_RTOL * max(freqs[k], 1e-300):
+            bounds.append((start, k))
+            start = k
+    return bounds
+
+
+def _canonical_basis(vec: np.ndarray, M, bounds) -> np.ndarray:
+    """Within each degenerate cluster, replace the eigen-solver's basis (any rotation of
+    the subspace, chosen by round-off: it changed with the BLAS thread count) by one that
+    depends on the subspace only: its M-orthogonal projection of fixed vectors, then
+    M-orthonormalised in a fixed order (a single mode: its sign fixed the same way).  The physics is unchanged; the modal coordinates,
+    and everything computed in them, become reproducible."""
+    out = vec.copy()
+    rng = np.random.default_rng(20261124)
+    X = rng.standard_normal((vec.shape[0], max((b - a for a, b in bounds), default=1)))
+    for a, b in bounds:
+        V = vec[:, a:b]
+        W = V @ (V.T @ (M @ X[:, :b - a]))          # projection of fixed vectors
+        L = np.linalg.cholesky(W.T @ (M @ W))
+        out[:, a:b] = sla.solve_triangular(L, W.T, lower=True).T
+    return out
+
+
 def master_modes(model: RotorModel, count: int | None = None,
                  cutoff_hz: float | None = None) -> MasterModes:
     """Free, non-rotating, undamped modes of the shaft (no bearings), mass-normalised.
 
     The six rigid-body modes (plus one per free gear with zero torsional stiffness) come
     first.  Give ``count`` (number of modes), ``cutoff_hz`` (all modes up to it) or both
-    (at most ``count`` modes up to ``cutoff_hz``).
+    (at most ``count`` modes up to ``cutoff_hz``).  A count that would cut a degenerate
+    cluster (the two bending planes of a pair) is raised to keep the whole cluster: one
+    plane alone makes the shaft anisotropic, and which combination of the two planes was
+    kept was decided by round-off.  Degenerate clusters get a reproducible basis.
     """
     if count is None and cutoff_hz is None:
         raise ValueError("give count or cutoff_hz")
-    freqs, vec = lowest_modes(model.K, model.M, count, cutoff_hz)
+    ask = None if count is None else count + 2
+    freqs, vec = lowest_modes(model.K, model.M, ask, cutoff_hz)
     # rigid-body modes: eigenvalues at round-off level of the stiffness scale
     scale = np.max(model.K.diagonal() / np.maximum(model.M.diagonal(), 1e-300))
     rigid = (2 * np.pi * freqs) ** 2 < 1e-9 * scale
     freqs = np.where(rigid, 0.0, freqs)
-    return MasterModes(freqs, vec, int(np.sum(rigid)))
+    bounds = _cluster_bounds(freqs)
+    if count is not None:
+        keep = next(b for a, b in bounds if b >= min(count, freqs.size))
+        if keep < freqs.size or freqs.size <= count:
+            bounds = [(a, b) for a, b in bounds if b <= keep]
+        else:          # the asked-for extra modes are one cluster still: keep the count
+            keep, bounds = count, [(a, min(b, count)) for a, b in bounds if a < count]
+        freqs, vec = freqs[:keep], vec[:, :keep]
+    return MasterModes(freqs, _canonical_basis(vec, model.M, bounds), int(np.sum(freqs == 0.0)))
