@@ -1,24 +1,65 @@
 """Gearbox modes: the reduced model linearised at its static state (paper section II.B):
 natural frequencies, damping ratios, the subsystem and gear-mesh strain-energy share of each
-mode, and the resonance speeds where a mesh order meets a mesh-active mode."""
+mode, and the resonance speeds where a mesh order meets a mesh-active mode.
+
+Rigid-body modes (eigenvalues at round-off distance from zero: a drive train free to turn, a
+shaft without axial support) are counted, not listed, as in the rotor analysis.  A mesh
+whose deformation sits exactly on its contact boundary (zero backlash, no load) is
+linearised as closed: its tangent stiffness is the mesh stiffness, as for any small motion
+into the flank (the contact law's non-strict side).
+"""
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
 
 from ..pipeline.outcome import RunContext
 
-__all__ = ["run", "reference_rpm"]
+__all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL"]
+
+#: a mode is rigid when its natural frequency is below this fraction of the highest one
+RIGID_TOL = 1e-7
+
+
+def _speed_range(sec) -> tuple[float, float]:
+    lo = getattr(sec, "param_min", None)
+    hi = getattr(sec, "param_max", None)
+    if lo is None:                      # sections without the param_* names
+        lo, hi = sec.omega_min, sec.omega_max
+    return float(lo), float(hi)
 
 
 def reference_rpm(scene) -> float:
-    if scene.time_response is not None:
-        return scene.time_response.omega
+    """The speed the modes are computed at: ``gearbox.modes_rpm``, else the time response's
+    speed, else the middle of the sweep (or continuation) range, else 0."""
+    if scene.gearbox is not None and scene.gearbox.modes_rpm is not None:
+        return float(scene.gearbox.modes_rpm)
+    tr = scene.time_response
+    if tr is not None:
+        return float(getattr(tr, "param", None) if hasattr(tr, "param") else tr.omega)
     for sec in (scene.sweep, scene.continuation):
         if sec is not None:
-            return 0.5 * (sec.omega_min + sec.omega_max)
+            return 0.5 * sum(_speed_range(sec))
     return 0.0
+
+
+def linearisation_model(model, x0):
+    """``model`` with each contact whose deformation at ``x0`` lies exactly on a closed
+    boundary of zero width (gap_lo == gap_hi: a zero-backlash mesh, unloaded) moved just
+    inside its upper contact, so the linearisation takes its stiffness (non-strict
+    inequality); every other contact is left as it is."""
+    ct = model.contacts
+    if not ct.count:
+        return model
+    d = ct.directions @ np.asarray(x0, float)[:model.n_modes]
+    scale = np.maximum(np.abs(ct.gap_hi), 1e-12)
+    on = (ct.gap_hi == ct.gap_lo) & (np.abs(d - ct.gap_hi) <= 1e-9 * scale) & (ct.exponent == 1.0)
+    if not np.any(on):
+        return model
+    gap_hi = np.where(on, d - 1e-9 * scale, ct.gap_hi)
+    return dataclasses.replace(model, contacts=dataclasses.replace(ct, gap_hi=gap_hi))
 
 
 def run(study, scene, ctx: RunContext) -> dict:
@@ -31,18 +72,32 @@ def run(study, scene, ctx: RunContext) -> dict:
     rpm = reference_rpm(scene)
     u0 = study.start(rpm)
     t0 = time.perf_counter()
-    lm = linear_modes(gm.reduced, u0, rpm)
+    model = linearisation_model(gm.reduced, u0)
+    lm = linear_modes(model, u0, rpm)
     wall = time.perf_counter() - t0
-    f_hz = lm.frequency * gm.omega_ref
-    shares, names = _subsystem_shares(gm, lm.vectors)
-    mesh = _mesh_energy(gm, lm, u0)
-    write_modes_csv(ctx.out / "modes.csv", f_hz, lm.damping_ratio, names, shares, mesh,
+    f_all = lm.frequency * gm.omega_ref
+    elastic = f_all > RIGID_TOL * max(float(f_all.max(initial=0.0)), 1e-300)
+    # rigid-body modes: zero eigenvalues of the tangent stiffness (their state-space pairs
+    # are round-off, some without an imaginary part, so they are counted here)
+    n_rigid = int(np.sum(lm.undamped <= RIGID_TOL * max(float(lm.undamped.max(initial=0.0)),
+                                                        1e-300)))
+    f_hz = f_all[elastic]
+    fd_hz = f_hz * np.sqrt(np.clip(1.0 - lm.damping_ratio[elastic] ** 2, 0.0, None))
+    zeta = lm.damping_ratio[elastic]
+    shares, names = _subsystem_shares(gm, lm.vectors[:, elastic])
+    mesh = _mesh_energy(gm, model, lm, u0)[:, elastic]
+    write_modes_csv(ctx.out / "modes.csv", f_hz, fd_hz, zeta, names, shares, mesh,
                     [c.name for c in gm.contacts if c.kind == "mesh"])
-    lo, hi = (scene.sweep.omega_min, scene.sweep.omega_max) if scene.sweep else (0.5 * rpm, 1.5 * rpm)
+    if scene.sweep is not None:
+        lo, hi = _speed_range(scene.sweep)
+    elif rpm > 0:
+        lo, hi = 0.5 * rpm, 1.5 * rpm
+    else:            # at rest: the speeds up to the 1x resonance of the highest mode listed
+        lo, hi = 0.0, 1.1 * 60.0 * float(f_hz.max(initial=1.0)) / gm.mesh_teeth
     crit = _resonance_speeds(gm, f_hz, mesh, lo, hi)
     plot_resonance_map(ctx.out / "resonance_map", f_hz, mesh, gm.mesh_teeth, lo, hi,
                        title=study.title + f", linearised at {rpm:g} rpm")
-    return {"status": "ok", "rpm": rpm, "modes": int(f_hz.size),
+    return {"status": "ok", "rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
             "resonance_speeds_rpm": crit, "wall_s": wall,
             "mesh_stiffness": gm.mesh_stiffness_summary(),
@@ -60,22 +115,26 @@ def _subsystem_shares(gm, vectors):
     return shares, [s.name for s in gm.subsystems]
 
 
-def _mesh_energy(gm, lm, x0) -> np.ndarray:
+def _mesh_energy(gm, model, lm, x0) -> np.ndarray:
     """(n_meshes, n_modes): strain-energy share k'_mesh (c . phi)^2 / (phi^T K_t phi) of
     each mesh (k': its tangent stiffness at the static state, 0 in the backlash) in the
-    undamped mode nearest in frequency to each damped mode."""
+    undamped elastic mode nearest in frequency to each damped mode (rigid undamped modes,
+    whose strain energy is zero, are never the nearest)."""
     from ..solvers.linear import contact_slopes
 
-    r = gm.reduced
     idx = gm.contact_indices("mesh")
     if idx.size == 0:
         return np.zeros((0, lm.frequency.size))
-    d = r.contacts.directions[idx]
-    k = contact_slopes(r, x0[:r.n_modes])[0][idx][:, None]
-    phi = lm.undamped_vectors
-    w2 = np.maximum((2 * np.pi * lm.undamped) ** 2, 1e-300)
+    d = model.contacts.directions[idx]
+    k = contact_slopes(model, x0[:model.n_modes])[0][idx][:, None]
+    fu = lm.undamped
+    elastic = fu > RIGID_TOL * max(float(fu.max(initial=0.0)), 1e-300)
+    phi = lm.undamped_vectors[:, elastic]
+    w2 = (2 * np.pi * fu[elastic]) ** 2
     share = k * (d @ phi) ** 2 / (w2 * np.sum(phi ** 2, axis=0))
-    nearest = np.abs(lm.frequency[:, None] - lm.undamped[None, :]).argmin(axis=1)
+    if not np.any(elastic):
+        return np.zeros((idx.size, lm.frequency.size))
+    nearest = np.abs(lm.frequency[:, None] - fu[elastic][None, :]).argmin(axis=1)
     return share[:, nearest]
 
 
@@ -91,5 +150,3 @@ def _resonance_speeds(gm, f_hz, mesh, lo, hi, threshold=0.05) -> list[dict]:
                 out.append({"mode": int(i), "frequency_hz": float(f_hz[i]), "mesh_order": order,
                             "rpm": float(rpm), "mesh_energy_share": float(share[i])})
     return out
-
-

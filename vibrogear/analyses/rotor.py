@@ -1,6 +1,8 @@
 """Runner glue for rotor scenes: ``modes`` and ``campbell`` analyses.
 
-``run_modes`` writes ``modes.csv`` (supported rotor at ``[rotor.modes].speed_rpm``),
+``run_modes`` writes ``modes.csv`` (supported rotor at ``[rotor.modes].speed_rpm``;
+``frequency_hz`` is the natural frequency |lambda| / 2 pi, as in the gearbox's modes.csv,
+``damped_frequency_hz`` Im(lambda) / 2 pi, both at full precision),
 ``master_modes.csv`` + ``master_modes.npz`` (free, non-rotating shaft: what modal synthesis
 uses) and ``mode_shapes.png/.svg``; ``run_campbell`` writes ``campbell.csv``,
 ``critical_speeds.csv`` and ``campbell.png/.svg``.
@@ -42,11 +44,11 @@ def run_modes(scene, ctx) -> dict:
     t_master = time.perf_counter() - t1
     out = ctx.out
     _write_csv(out / "modes.csv",
-               ["index", "frequency_hz", "natural_frequency_hz", "damping_ratio", "whirl",
+               ["index", "frequency_hz", "damped_frequency_hz", "damping_ratio", "whirl",
                 "whirl_ratio", "mode_type", "lateral_share", "axial_share", "torsional_share",
                 "residual"],
-               [[i + 1, f"{res.frequencies_hz[i]:.8g}", f"{res.natural_frequencies_hz[i]:.8g}",
-                 f"{res.damping_ratios[i]:.6g}", res.whirl[i], f"{res.whirl_ratio[i]:.4f}",
+               [[i + 1, repr(float(res.natural_frequencies_hz[i])),
+                 repr(float(res.frequencies_hz[i])), f"{res.damping_ratios[i]:.6g}", res.whirl[i], f"{res.whirl_ratio[i]:.4f}",
                  res.mode_type[i], *(f"{v:.4f}" for v in res.energy_share[i]),
                  f"{res.residuals[i]:.2e}"] for i in range(res.frequencies_hz.size)])
     share = modal_energy_share(model, master.vectors)
@@ -65,7 +67,8 @@ def run_modes(scene, ctx) -> dict:
     return {
         "status": res.status, "message": res.message, "n_dofs": model.n_dofs,
         "n_elements": int(model.element_nodes.shape[0]), "speed_rpm": mc.speed_rpm,
-        "frequencies_hz": res.frequencies_hz.tolist(), "whirl": list(res.whirl),
+        "frequencies_hz": res.natural_frequencies_hz.tolist(),
+        "damped_frequencies_hz": res.frequencies_hz.tolist(), "whirl": list(res.whirl),
         "mode_type": list(res.mode_type), "damping_ratios": res.damping_ratios.tolist(),
         "n_rigid_supported": res.n_rigid, "method": res.method, "n_basis": res.n_basis,
         "master_modes": {"count": int(master.frequencies_hz.size), "n_rigid": master.n_rigid,

@@ -270,6 +270,9 @@ class GearboxConfig:
     bearings: tuple[GearboxBearingConfig, ...] = spec(min_len=1)
     couplings: tuple[ExternalCouplingConfig, ...] = spec(())
     name: str = spec("gearbox")
+    modes_rpm: float | None = spec(None, ge=0.0, le=1e6, doc="driving speed at which the "
+                                   "'modes' analysis linearises [rpm] (default: the time "
+                                   "response's, else the middle of the sweep range, else 0)")
     gravity: tuple[float, float, float] = spec((0.0, 0.0, 0.0), doc="gravitational "
                                                "acceleration in the housing frame [m/s^2], "
                                                "e.g. [0, 0, -9.81]; a static load")

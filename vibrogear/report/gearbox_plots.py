@@ -12,15 +12,17 @@ from ..pipeline.files import atomic_write_bytes
 __all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response"]
 
 
-def write_modes_csv(path, f_hz, zeta, names, shares, mesh, mesh_names) -> Path:
-    """modes.csv: index, frequency_hz, damping_ratio, dominant subsystem, its energy share,
-    and the strain-energy share of each gear mesh."""
-    cols = ["index", "frequency_hz", "damping_ratio", "dominant", "share"] + \
-        [f"mesh_energy_{n}" for n in mesh_names]
+def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) -> Path:
+    """modes.csv: index, frequency_hz (natural frequency |lambda| / 2 pi, as in the rotor's
+    modes.csv), damped_frequency_hz, damping_ratio, dominant subsystem, its energy share,
+    and the strain-energy share of each gear mesh; frequencies at full precision."""
+    cols = ["index", "frequency_hz", "damped_frequency_hz", "damping_ratio", "dominant",
+            "share"] + [f"mesh_energy_{n}" for n in mesh_names]
     lines = [",".join(cols)]
     for i in range(len(f_hz)):
         k = int(np.argmax(shares[:, i]))
-        row = [str(i), f"{f_hz[i]:.6g}", f"{zeta[i]:.4g}", names[k], f"{shares[k, i]:.3f}"]
+        row = [str(i), repr(float(f_hz[i])), repr(float(fd_hz[i])), f"{zeta[i]:.6g}", names[k],
+               f"{shares[k, i]:.3f}"]
         row += [f"{mesh[j, i]:.4g}" for j in range(mesh.shape[0])]
         lines.append(",".join(row))
     return atomic_write_bytes(Path(path), ("\n".join(lines) + "\n").encode())
@@ -31,6 +33,8 @@ def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: floa
                        formats=("png", "svg"), dpi: int = 150) -> list[Path]:
     """Natural frequencies (horizontal lines, darker = more mesh strain energy) against the
     mesh-frequency orders 1x and 2x over the speed range: crossings are resonance speeds."""
+    if not rpm_hi > rpm_lo:               # a single speed: a span around it
+        rpm_lo, rpm_hi = 0.5 * rpm_lo, max(1.5 * rpm_lo, 1.0)
     fig = new_figure((8.0, 5.0))
     ax = fig.add_subplot(111)
     rpm = np.linspace(rpm_lo, rpm_hi, 2)
