@@ -74,15 +74,24 @@ def involute(alpha):
 
 
 def inverse_involute(value: float) -> float:
-    """alpha in (0, pi/2) with inv(alpha) = value (Newton from Cheng's start)."""
+    """alpha in (0, pi/2) with inv(alpha) = value: Newton safeguarded by bisection (inv is
+    increasing on (0, pi/2))."""
     _check(value > 0.0, f"involute function value must be > 0, got {value}")
-    a = (3.0 * value) ** (1.0 / 3.0)
-    for _ in range(60):
+    lo, hi = 0.0, 0.5 * math.pi
+    a = min((3.0 * value) ** (1.0 / 3.0), 0.5 * (lo + hi))
+    for _ in range(200):
         t = math.tan(a)
-        step = (t - a - value) / (t * t)
-        a -= step
-        if abs(step) < 1e-15 * a:
-            break
+        r = t - a - value
+        if r > 0.0:
+            hi = a
+        else:
+            lo = a
+        nxt = a - r / (t * t)
+        if not lo < nxt < hi:
+            nxt = 0.5 * (lo + hi)
+        if abs(nxt - a) <= 1e-15 * a:
+            return nxt
+        a = nxt
     return a
 
 
