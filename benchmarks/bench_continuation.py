@@ -20,7 +20,8 @@ import numpy as np  # noqa: E402
 
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.models.impact_pair import impact_pair_from_config  # noqa: E402
-from vibrogear.solvers.continuation import ContinuationOptions, continue_orbits  # noqa: E402
+from vibrogear.solvers.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
+                                            continuation)
 from vibrogear.solvers.integrate import IntegrationOptions, integrate  # noqa: E402
 
 TARGET_S = 2.0
@@ -33,11 +34,9 @@ def run_once(scene):
     t0 = time.perf_counter()
     warm = integrate(model, c.omega_max, np.array([ip.f_m, 0.0]), 0.0,
                      c.transient_periods * model.excitation_period(c.omega_max), options=opt)
-    co = ContinuationOptions(param_min=c.omega_min, param_max=c.omega_max, ds=c.ds,
-                             ds_min=c.ds_min, ds_max=c.ds_max, max_points=c.max_points,
-                             tol=scene.shooting.tol, period_doubling_branch=True)
-    branches = continue_orbits(model, warm.u_end, c.omega_max, co, direction=-1, integration=opt)
-    return time.perf_counter() - t0, branches
+    res = continuation(PeriodicOrbitProblem(model, warm.u_end, c.omega_max, direction=-1),
+                       PseudoArclength(integration=opt, tol=scene.shooting.tol), c.options())
+    return time.perf_counter() - t0, res.branches
 
 
 def main() -> dict:

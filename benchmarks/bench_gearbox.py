@@ -42,7 +42,7 @@ def two_stage_case(n: int = 700):
 
     scene = load_scene(SCENE)
     gm = build_gearbox(scene)
-    params = np.linspace(scene.sweep.omega_min, scene.sweep.omega_max, n)
+    params = np.linspace(scene.sweep.param_min, scene.sweep.param_max, n)
     st = static_equilibrium(gm.reduced, params[0])
     return gm.reduced, st.u0, params
 

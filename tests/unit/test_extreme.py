@@ -9,9 +9,11 @@ import pytest
 
 from vibrogear.cli import main
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.continuation import ContinuationOptions, continue_orbits
+from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+                                            PseudoArclength, continuation)
 from vibrogear.solvers.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.shooting import shoot
+from vibrogear.solvers.status import Status
 from vibrogear.solvers.sweep import sweep
 from vibrogear.verification.impact_exact import ImpactParams, linear_frf, periodic_orbit
 
@@ -100,22 +102,44 @@ def test_large_forcing_double_sided_impacts_and_chaos():
 def test_bounded_work_gives_a_failure_status_not_a_hang():
     model = impact_pair_model(0.015, 0.5, 0.55, 0.12, 1.0)
     tr = integrate(model, 0.9, np.zeros(2), 0.0, 1000.0, options=IntegrationOptions(max_steps=50))
-    assert tr.status == -1 and "maximum number of steps" in tr.message
+    assert tr.status == Status.MAX_STEPS and "maximum number of steps" in tr.message
     assert np.all(np.isfinite(tr.u_end))
     sh = shoot(model, 0.9, np.zeros(2), options=IntegrationOptions(max_steps=50))
-    assert not sh.converged and sh.status < 0
-    br = continue_orbits(model, np.zeros(2), 0.9, ContinuationOptions(0.5, 1.0), 
-                         integration=IntegrationOptions(max_steps=50))
-    assert br[0].status == 1 and not br[0].points and "starting orbit" in br[0].message
+    assert not sh.converged and sh.status == Status.MAX_STEPS
+    res = continuation(PeriodicOrbitProblem(model, np.zeros(2), 0.9),
+                       PseudoArclength(integration=IntegrationOptions(max_steps=50)),
+                       ContinuationOptions(param_min=0.5, param_max=1.0))
+    br = res.branches[0]
+    assert res.status == br.status == Status.NO_START and not br.points
+    assert "starting orbit" in res.message and "maximum number of steps" in res.message
 
 
-def test_chattering_contact_is_reported():
-    """Huge contact damping makes the contact sticky: reported as a status, bounded."""
+def test_stiff_contact_damping_exhausts_the_step_budget():
+    """Huge contact damping (1e6, a time scale of 1e-6) makes the contact phase stiff for an
+    explicit method: the bounded step budget runs out inside the first contact and the run
+    says so (MAX_STEPS), with a finite state, instead of hanging."""
     model = impact_pair_model(0.01, 0.0, 0.0, 0.5, 1e-3, contact_damping=1e6)
     tr = integrate(model, 1.0, np.array([0.0, 1.0]), 0.0, 50.0,
                    options=IntegrationOptions(rtol=1e-6, atol=1e-9, max_steps=200_000))
-    assert tr.status in (0, -1, -3)
-    assert np.all(np.isfinite(tr.u_end))
+    assert tr.status == Status.MAX_STEPS and tr.steps == 200_000
+    assert 0.0 < tr.t_end < 50.0 and tr.events >= 1 and np.all(np.isfinite(tr.u_end))
+
+
+def test_chattering_contact_is_reported():
+    """Events that follow each other with no regular step between them are reported as
+    CHATTERING.  Crossing a 2e-9 wide clearance leaves one contact and enters the other
+    within 1e-8 time units: two events back to back.  Allowing one event per regular step
+    the run stops there (first crossing, t = 2.83); allowing two it completes (79 events),
+    so the status comes from the event pile-up and nothing else."""
+    model = impact_pair_model(0.05, 0.3, 0.0, 0.2, 1e-9)
+    T = 20 * 2 * np.pi / 1.2
+    tight = integrate(model, 1.2, np.zeros(2), 0.0, T,
+                      options=IntegrationOptions(max_events_per_step=1))
+    assert tight.status == Status.CHATTERING and "chattering" in tight.message
+    assert tight.events == 2 and 2.8 < tight.t_end < 2.9 and np.all(np.isfinite(tight.u_end))
+    loose = integrate(model, 1.2, np.zeros(2), 0.0, T,
+                      options=IntegrationOptions(max_events_per_step=2))
+    assert loose.status == Status.OK and loose.events > 50
 
 
 @pytest.mark.parametrize("overrides", [

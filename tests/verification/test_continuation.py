@@ -8,9 +8,11 @@ from finite_differences import fd_shooting_jacobian
 
 from vibrogear.analyses.sweep import jumps
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.continuation import ContinuationOptions, continue_orbits
+from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+                                            PseudoArclength, continuation)
 from vibrogear.solvers.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.shooting import periodic_flow
+from vibrogear.solvers.status import Status
 from vibrogear.solvers.sweep import sweep
 from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
 
@@ -28,8 +30,14 @@ def model():
 def branches(model):
     p0 = 1.3
     warm = integrate(model, p0, np.array([1.05, 0.0]), 0.0, 300 * 2 * np.pi / p0, options=OPT)
-    co = ContinuationOptions(param_min=0.45, param_max=1.3, ds=0.02, ds_max=0.05, tol=1e-9)
-    return continue_orbits(model, warm.u_end, p0, co, direction=-1, integration=OPT)
+    co = ContinuationOptions(param_min=0.45, param_max=1.3, ds=0.02, ds_max=0.05)
+    res = continuation(PeriodicOrbitProblem(model, warm.u_end, p0, direction=-1),
+                       PseudoArclength(integration=OPT, tol=1e-9), co)
+    assert res.status == Status.LEFT_RANGE, res.message
+    # the special points listed in the result are the labelled points of the branches
+    assert [(s.label, s.param) for s in res.special_points] == [
+        (p.label, p.param) for b in res.branches for p in b.points if p.label]
+    return res.branches
 
 
 def _labelled(branch, label):
@@ -38,7 +46,7 @@ def _labelled(branch, label):
 
 def test_branch_reaches_range_and_finds_main_folds(branches):
     b1 = branches[0]
-    assert b1.status == 0 and b1.points[-1].param < 0.45 + 0.05
+    assert b1.status == Status.LEFT_RANGE and b1.points[-1].param < 0.45 + 0.05
     lps = sorted(p.param for p in _labelled(b1, "LP") if p.param > 0.8)
     assert len(lps) == 2 and lps[0] < lps[1]
 
@@ -71,7 +79,7 @@ def test_period_two_branch_is_genuine_and_exact(model, branches):
     assert len(branches) == 2
     b2 = branches[1]
     assert b2.n_periods == 2 and len(b2.points) > 5
-    assert "rejoined" in b2.message
+    assert b2.status == Status.REJOINED and "rejoined" in b2.message
     pd = sorted(p.param for p in _labelled(branches[0], "PD"))
     ip = ImpactParams(**PAR)
     for p in [q for q in b2.points if not q.label][1:-1:4]:

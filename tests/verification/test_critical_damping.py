@@ -13,13 +13,16 @@ import pytest
 from vibrogear.analyses.critical_damping import critical_zeta, fold_scan
 from vibrogear.cli import main
 from vibrogear.config import load_scene
+from vibrogear.solvers.continuation import ContinuationOptions, PseudoArclength
 from vibrogear.solvers.integrate import IntegrationOptions
+from vibrogear.solvers.status import Status
 from vibrogear.verification import impact_exact as ex
 
 SCENE = "configs/impact_pair.toml"
 ZETA_C = 0.033752
 OPTS = IntegrationOptions(rtol=1e-8, atol=1e-10)
-WINDOW = {"omega_min": 0.6, "omega_max": 1.5}
+WINDOW = ContinuationOptions(param_min=0.6, param_max=1.5, ds=0.02, ds_max=0.05, max_points=3000)
+METHOD = PseudoArclength(integration=OPTS, tol=1e-8)
 
 
 @pytest.fixture(scope="module")
@@ -48,9 +51,9 @@ def _coexist(cfg, zeta, om, lo, hi):
 
 
 def test_fold_pair_below_none_above(cfg):
-    below = fold_scan(cfg, ZETA_C - 0.003, integration=OPTS, shooting_tol=1e-8, **WINDOW)
-    above = fold_scan(cfg, ZETA_C + 0.003, integration=OPTS, shooting_tol=1e-8, **WINDOW)
-    assert below.status == 0 and above.status == 0
+    below = fold_scan(cfg, ZETA_C - 0.003, WINDOW, METHOD)
+    above = fold_scan(cfg, ZETA_C + 0.003, WINDOW, METHOD)
+    assert below.status == above.status == Status.LEFT_RANGE
     assert below.has_fold_pair and len(below.folds) == 2
     lo, hi = below.folds
     assert 0.85 < lo < hi < 0.87          # hysteresis window of the primary resonance
@@ -66,7 +69,7 @@ def test_fold_pair_below_none_above(cfg):
 def test_default_scene_folds_bound_the_hysteresis(cfg):
     """At the scene's zeta = 0.015 the folds bound the window where the exact solution has two
     stable orbits: inside they coexist, just outside either fold only one is left."""
-    s = fold_scan(cfg, 0.015, integration=OPTS, shooting_tol=1e-8, **WINDOW)
+    s = fold_scan(cfg, 0.015, WINDOW, METHOD)
     lo, hi = s.folds
     assert 0.8 < lo < hi < 1.0
     up, down = _coexist(cfg, 0.015, 0.5 * (lo + hi), lo, hi)
@@ -77,8 +80,7 @@ def test_default_scene_folds_bound_the_hysteresis(cfg):
 
 
 def test_bisection_coarse(cfg):
-    res = critical_zeta(cfg, zeta_lo=0.015, zeta_hi=0.05, tol=2e-3, integration=OPTS,
-                        shooting_tol=1e-8, **WINDOW)
+    res = critical_zeta(cfg, WINDOW, METHOD, zeta_lo=0.015, zeta_hi=0.05, tol=2e-3)
     lo, hi = res.bracket
     assert hi - lo <= 2e-3
     assert lo <= ZETA_C <= hi

@@ -26,9 +26,11 @@ import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
 from ..pipeline.outcome import NumericalFailure, RunContext
-from ..solvers.continuation import ContinuationOptions, continue_orbits
+from ..solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem, PseudoArclength,
+                                    continuation)
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium
+from ..solvers.status import Status
 
 __all__ = ["FoldScan", "CriticalDampingResult", "fold_scan", "critical_zeta",
            "run_critical_damping"]
@@ -40,7 +42,7 @@ class FoldScan:
     zeta: float
     folds: tuple[float, ...]
     points: int
-    status: int
+    status: Status
     message: str
     wall_time: float
 
@@ -75,22 +77,21 @@ def _start_state(model, omega: float, periods: int, options: IntegrationOptions)
     return tr.u_end
 
 
-def fold_scan(cfg_impact_pair, zeta: float, *, omega_min: float, omega_max: float,
-              integration: IntegrationOptions = IntegrationOptions(),
-              shooting_tol: float = 1e-9, ds: float = 0.02, ds_max: float = 0.05,
-              ds_min: float = 1e-6, max_points: int = 3000,
+def fold_scan(cfg_impact_pair, zeta: float, options: ContinuationOptions,
+              method: PseudoArclength = PseudoArclength(), *,
               transient_periods: int = 300) -> FoldScan:
-    """Continue the period-1 branch from omega_max down to omega_min at this zeta."""
+    """Continue the period-1 branch from param_max down to param_min at this zeta (the
+    options' period-doubling switch is not used: only period-1 folds count)."""
     wall = time.perf_counter()
     model = impact_pair_from_config(dataclasses.replace(cfg_impact_pair, zeta=float(zeta)))
-    u0 = _start_state(model, omega_max, transient_periods, integration)
-    copts = ContinuationOptions(param_min=omega_min, param_max=omega_max, ds=ds, ds_min=ds_min,
-                                ds_max=ds_max, max_points=max_points, tol=shooting_tol,
-                                period_doubling_branch=False)
-    branch = continue_orbits(model, u0, omega_max, copts, direction=-1,
-                             integration=integration)[0]
-    folds = tuple(sorted(p.param for p in branch.points
-                         if p.label == "LP" and omega_min <= p.param <= omega_max))
+    lo, hi = options.param_min, options.param_max
+    u0 = _start_state(model, hi, transient_periods, method.integration)
+    if options.period_doubling_branch:
+        options = dataclasses.replace(options, period_doubling_branch=False)
+    res = continuation(PeriodicOrbitProblem(model, u0, hi, direction=-1), method, options)
+    branch = res.branches[0]
+    folds = tuple(sorted(s.param for s in res.special_points
+                         if s.branch == 0 and s.label == "LP" and lo <= s.param <= hi))
     return FoldScan(zeta=float(zeta), folds=folds, points=len(branch.points),
                     status=branch.status, message=branch.message,
                     wall_time=time.perf_counter() - wall)
@@ -110,15 +111,14 @@ def _extrapolate(scans) -> float:
     return float(-b / a) if a < 0 else float("nan")
 
 
-def critical_zeta(cfg_impact_pair, *, omega_min: float, omega_max: float, zeta_lo: float,
-                  zeta_hi: float, tol: float = 1e-4,
-                  integration: IntegrationOptions = IntegrationOptions(),
-                  shooting_tol: float = 1e-9, ds: float = 0.02, ds_max: float = 0.05,
-                  max_points: int = 3000, transient_periods: int = 300,
+def critical_zeta(cfg_impact_pair, options: ContinuationOptions,
+                  method: PseudoArclength = PseudoArclength(), *, zeta_lo: float,
+                  zeta_hi: float, tol: float = 1e-4, transient_periods: int = 300,
                   callback: Callable[[FoldScan], None] | None = None) -> CriticalDampingResult:
     """Bisect in zeta for the damping above which the primary resonance has no fold pair.
 
-    ``zeta_lo`` must give a fold pair in [omega_min, omega_max] and ``zeta_hi`` none;
+    ``zeta_lo`` must give a fold pair in the options' window [param_min, param_max] and
+    ``zeta_hi`` none;
     the bracket is halved until it is narrower than ``tol``.  Raises
     :class:`~vibrogear.runner.NumericalFailure` when the ends do not bracket the cusp or
     a continuation stops before leaving the window (its verdict would be unreliable).
@@ -129,13 +129,12 @@ def critical_zeta(cfg_impact_pair, *, omega_min: float, omega_max: float, zeta_l
     scans: list[FoldScan] = []
 
     def scan(z: float) -> FoldScan:
-        s = fold_scan(cfg_impact_pair, z, omega_min=omega_min, omega_max=omega_max,
-                      integration=integration, shooting_tol=shooting_tol, ds=ds, ds_max=ds_max,
-                      max_points=max_points, transient_periods=transient_periods)
+        s = fold_scan(cfg_impact_pair, z, options, method,
+                      transient_periods=transient_periods)
         scans.append(s)
         if callback is not None:
             callback(s)
-        if s.status != 0:
+        if not s.status.success:
             raise NumericalFailure(f"critical damping: continuation at zeta = {z:.6g} stopped "
                                    f"early: {s.message}")
         return s
@@ -143,7 +142,7 @@ def critical_zeta(cfg_impact_pair, *, omega_min: float, omega_max: float, zeta_l
     lo, hi = scan(zeta_lo), scan(zeta_hi)
     if not lo.has_fold_pair:
         raise NumericalFailure(f"critical damping: zeta_lo = {zeta_lo:g} has no fold pair in "
-                               f"Omega [{omega_min:g}, {omega_max:g}] (folds {list(lo.folds)}): "
+                               f"Omega [{options.param_min:g}, {options.param_max:g}] (folds {list(lo.folds)}): "
                                "lower zeta_lo")
     if hi.has_fold_pair:
         raise NumericalFailure(f"critical damping: zeta_hi = {zeta_hi:g} still has folds "
@@ -169,25 +168,25 @@ def run_critical_damping(scene, ctx: RunContext) -> dict:
 
     cfg = scene.critical_damping
     c = scene.impact_pair
+    options = cfg.options()
+    method = PseudoArclength(integration=integration_options(scene), tol=scene.shooting.tol)
     n_max = 2 + int(np.ceil(np.log2(max((cfg.zeta_hi - cfg.zeta_lo) / cfg.tol, 1.0))))
     with ctx.progress(n_max, "critical zeta") as bar:
         res = critical_zeta(
-            c, omega_min=cfg.omega_min, omega_max=cfg.omega_max, zeta_lo=cfg.zeta_lo,
-            zeta_hi=cfg.zeta_hi, tol=cfg.tol, integration=integration_options(scene),
-            shooting_tol=scene.shooting.tol, ds=cfg.ds, ds_max=cfg.ds_max,
-            max_points=cfg.max_points, transient_periods=cfg.transient_periods,
+            c, options, method, zeta_lo=cfg.zeta_lo, zeta_hi=cfg.zeta_hi, tol=cfg.tol,
+            transient_periods=cfg.transient_periods,
             callback=lambda s: bar.update(1, f"zeta={s.zeta:.5g} LP={len(s.folds)}"))
     # extra zetas between zeta_lo and the cusp, only to draw the two fold curves
     extra = []
-    kw = dict(omega_min=cfg.omega_min, omega_max=cfg.omega_max,
-              integration=integration_options(scene), shooting_tol=scene.shooting.tol,
-              ds=cfg.ds, ds_max=cfg.ds_max, max_points=cfg.max_points,
-              transient_periods=cfg.transient_periods)
     for z in np.linspace(cfg.zeta_lo, res.bracket[0], cfg.curve_points + 2)[1:-1]:
-        s = fold_scan(c, float(z), **kw)
-        if s.status == 0:
+        s = fold_scan(c, float(z), options, method, transient_periods=cfg.transient_periods)
+        if s.status.success:
             extra.append(s)
-    scans = [dataclasses.asdict(s) | {"has_fold_pair": s.has_fold_pair} for s in res.scans]
+
+    def as_json(s: FoldScan) -> dict:
+        return dataclasses.asdict(s) | {"status": s.status.text, "has_fold_pair": s.has_fold_pair}
+
+    scans = [as_json(s) for s in res.scans]
     out = {
         "status": "ok",
         "zeta_critical": res.zeta_critical,
@@ -199,8 +198,7 @@ def run_critical_damping(scene, ctx: RunContext) -> dict:
         "continuations": res.continuations,
         "window": [cfg.omega_min, cfg.omega_max],
         "scans": scans,
-        "curve_scans": [dataclasses.asdict(s) | {"has_fold_pair": s.has_fold_pair}
-                        for s in extra],
+        "curve_scans": [as_json(s) for s in extra],
         "solver_wall_s": res.wall_time,
         "error_estimate": {"zeta_half_bracket": 0.5 * (res.bracket[1] - res.bracket[0]),
                            "extrapolation_minus_bisection": res.zeta_extrapolated

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config.options import IntegrationOptions, Parameter
 from ..models.reduced import ReducedModel
 from ..pipeline.outcome import NumericalFailure
 from ..pipeline.resume import fingerprint
-from ..solvers.integrate import IntegrationOptions
 
 __all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state"]
 
@@ -43,9 +43,7 @@ class Monitor:
 class Study:
     model: ReducedModel
     title: str
-    param_name: str                      # "Omega" | "rpm"
-    param_unit: str                      # "" | "rpm"
-    param_label: str                     # axis label of the parameter
+    parameter: Parameter                 # the model's declaration: Omega | rpm
     monitor: Monitor
     length_unit: str = ""                # unit of the model's displacements ("" nondimensional)
     time_unit_s: float = 1.0             # one model time unit in seconds
@@ -55,6 +53,18 @@ class Study:
     balance_arclength: bool = False      # scale the parameter by range/|u| in the arclength
     strict_start: bool = True            # no static equilibrium is a failure (else start at 0)
     gearbox: object = None               # GearboxModel of a gearbox study
+
+    @property
+    def param_name(self) -> str:
+        return self.parameter.name
+
+    @property
+    def param_unit(self) -> str:
+        return self.parameter.unit
+
+    @property
+    def param_label(self) -> str:
+        return self.parameter.label
 
     @property
     def physics(self) -> str:
@@ -79,11 +89,8 @@ def start_state(model: ReducedModel, param: float, *, strict: bool = True) -> np
 
 
 def integration_options(scene) -> IntegrationOptions:
-    c = scene.integration
-    if isinstance(c, IntegrationOptions):
-        return c
-    return IntegrationOptions(rtol=c.rtol, atol=c.atol, max_steps=c.max_steps,
-                              max_events_per_step=c.max_events_per_step)
+    """The scene's [integration] section: it is the integrator's options object."""
+    return scene.integration
 
 
 def build_study(scene) -> Study:
@@ -101,8 +108,8 @@ def _impact_pair_study(scene) -> Study:
     c = scene.impact_pair
     title = (f"{scene.scene.name}: zeta={c.zeta:g}, kappa={c.kappa:g}, f_m={c.f_m:g}, "
              f"f_p={c.f_p:g}, b_r={c.b_r:g}")
-    return Study(model=impact_pair_from_config(c), title=title, param_name="Omega",
-                 param_unit="", param_label="Omega", strict_start=False,
+    return Study(model=impact_pair_from_config(c), title=title, parameter=scene.parameter,
+                 strict_start=False,
                  monitor=Monitor(contact=0, label="q", unit="", lines=(-c.b_r, c.b_r)),
                  contact_groups={"clearance": np.array([0])})
 
@@ -122,7 +129,7 @@ def _gearbox_study(scene) -> Study:
     parts = "+".join(str(s.n_modes) for s in gm.subsystems)
     name = gm.contacts[r.monitor].name if gm.contacts else "mesh"
     return Study(model=r, title=f"{scene.scene.name}: m = {r.n_modes} ({parts})",
-                 param_name="rpm", param_unit="rpm", param_label="driving speed [rpm]",
+                 parameter=scene.parameter,
                  monitor=Monitor(contact=r.monitor, label=f"{name} mesh deformation", unit="um",
                                  scale=1e6, lines=(-back * 1e6,), zero_line=True),
                  length_unit="m", time_unit_s=1.0 / gm.omega_ref, force_unit_n=gm.omega_ref ** 2,

@@ -74,8 +74,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import ClassVar
 
 from .base import ConfigError, spec
+from .options import RPM, Parameter
 from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
@@ -264,6 +266,7 @@ class ExternalCouplingConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class GearboxConfig:
+    PARAMETER: ClassVar[Parameter] = RPM      # continued in the driving-shaft speed [rpm]
     shafts: tuple[ShaftConfig, ...] = spec(min_len=1, max_len=20)
     gears: tuple[GearConfig, ...] = spec(())
     meshes: tuple[MeshConfig, ...] = spec((), max_len=20)

@@ -9,12 +9,14 @@ from typing import Any
 from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig, ReductionAccuracyConfig
 from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
+from .options import Parameter
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
-                       IntegrationConfig, ReportConfig, SceneInfo, ShootingConfig, SweepConfig,
+                       IntegrationOptions, ReportConfig, RpmContinuationConfig, RpmSweepConfig,
+                       RpmTimeResponseConfig, SceneInfo, ShootingOptions, SweepConfig,
                        TimeResponseConfig)
 
-__all__ = ["Scene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
+__all__ = ["Scene", "GearboxScene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
 
 #: sections that define the mechanical model; a scene has exactly one kind of model
 MODEL_SECTIONS = ("impact_pair", "gearbox", "rotor", "housing")
@@ -57,14 +59,22 @@ class Scene:
     housing: HousingConfig | None = spec(None)
     housing_sweep: HousingSweepConfig | None = spec(None)
     housing_convergence: HousingConvergenceConfig | None = spec(None)
-    integration: IntegrationConfig = spec(IntegrationConfig())
-    shooting: ShootingConfig = spec(ShootingConfig())
+    integration: IntegrationOptions = spec(IntegrationOptions())
+    shooting: ShootingOptions = spec(ShootingOptions())
     sweep: SweepConfig | None = spec(None)
     continuation: ContinuationConfig | None = spec(None)
     time_response: TimeResponseConfig | None = spec(None)
     report: ReportConfig | None = spec(None)
     critical_damping: CriticalDampingConfig | None = spec(None)
     reduction_accuracy: ReductionAccuracyConfig | None = spec(None)
+
+    @property
+    def parameter(self) -> Parameter | None:
+        """The continuation parameter the scene's model declares (None: no reduced model)."""
+        for section in (self.impact_pair, self.gearbox):
+            if section is not None:
+                return section.PARAMETER
+        return None
 
     @property
     def model_kind(self) -> str:
@@ -98,34 +108,17 @@ class Scene:
         check_layout(self)
 
 
+@dataclass(frozen=True)
+class GearboxScene(Scene):
+    """A gearbox scene: its parameter is the driving-shaft speed (``GearboxConfig.PARAMETER``),
+    so [sweep], [continuation] and [time_response] take ``rpm_min``/``rpm_max``/``rpm``."""
+    sweep: RpmSweepConfig | None = spec(None)
+    continuation: RpmContinuationConfig | None = spec(None)
+    time_response: RpmTimeResponseConfig | None = spec(None)
+
+
 def read_toml(path: str | Path) -> dict[str, Any]:
     return read_toml_file(path, Scene)
-
-
-#: a gearbox scene's parameter is the driving-shaft speed: these sections name it in rpm
-_RPM_KEYS = {"sweep": (("rpm_min", "omega_min"), ("rpm_max", "omega_max")),
-             "continuation": (("rpm_min", "omega_min"), ("rpm_max", "omega_max")),
-             "time_response": (("rpm", "omega"),)}
-
-
-def _rpm_names(data: dict[str, Any]) -> None:
-    """In a gearbox scene, read ``rpm_min``/``rpm_max``/``rpm`` as the parameter fields."""
-    for section, pairs in _RPM_KEYS.items():
-        table = data.get(section)
-        if not isinstance(table, dict):
-            continue
-        for rpm_key, key in pairs:
-            if key in table:
-                raise ConfigError(f"{section}.{key}", f"a gearbox scene gives the driving-shaft "
-                                  f"speed as {rpm_key!r} [rpm]")
-            if rpm_key in table:
-                table[key] = table.pop(rpm_key)
-
-
-def _rpm_error(exc: ConfigError) -> ConfigError:
-    fix = lambda text: text.replace("omega_min", "rpm_min").replace(  # noqa: E731
-        "omega_max", "rpm_max").replace(".omega", ".rpm").replace("omega", "rpm")
-    return ConfigError(fix(exc.path), fix(str(exc)[len(exc.path) + 2:] if exc.path else str(exc)))
 
 
 def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Scene:
@@ -133,13 +126,8 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Sc
     for text in overrides:
         keys, value = parse_override(text)
         set_path(data, keys, value)
-    if "gearbox" not in data:
-        return build(Scene, data)
-    _rpm_names(data)
-    try:
-        return build(Scene, data)
-    except ConfigError as exc:
-        raise _rpm_error(exc) from None
+    # the sections that take the parameter read it under the model's keys
+    return build(GearboxScene if "gearbox" in data else Scene, data)
 
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:

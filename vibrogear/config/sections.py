@@ -1,13 +1,30 @@
-"""Config sections shared by all scenes: the impact pair and the analysis options."""
+"""Config sections shared by all scenes: the impact pair and the analysis options.
+
+The sections that take the continuation parameter ([sweep], [continuation],
+[time_response]) read it under the keys of the parameter the model declares
+(:class:`~vibrogear.config.options.Parameter`: ``omega_min``/``omega_max``/``omega`` for the
+impact pair, ``rpm_min``/``rpm_max``/``rpm`` for gearboxes): one settings class each, and
+one class per parameter made by :func:`with_parameter`, which adds the keys as fields and
+reads them back as ``param_min``/``param_max`` (or ``param``).  Errors name the key the
+user wrote, because it is the field's name.  [integration] and [shooting] are the solvers'
+own options objects; [continuation] builds the solver's
+:class:`~vibrogear.config.options.ContinuationOptions` (:meth:`ContinuationSettings.options`).
+"""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import ClassVar
 
 from .base import ConfigError, check_name, spec
+from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
+                      Parameter, ShootingOptions, check_range)
 
-__all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationConfig", "SweepConfig",
-           "ShootingConfig", "ContinuationConfig", "TimeResponseConfig", "ReportConfig",
-           "CriticalDampingConfig", "ANALYSES"]
+__all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
+           "SweepSettings", "ContinuationSettings", "TimeResponseSettings", "with_parameter",
+           "SweepConfig", "ContinuationConfig", "TimeResponseConfig", "RpmSweepConfig",
+           "RpmContinuationConfig", "RpmTimeResponseConfig", "ReportConfig",
+           "CriticalDampingConfig", "ContinuationOptions", "ANALYSES"]
 
 #: analyses a scene may list, with what each is for
 ANALYSES = {
@@ -48,26 +65,12 @@ class ImpactPairConfig:
     f_p: float = spec(ge=0.0, doc="amplitude of the harmonic load")
     b_r: float = spec(gt=0.0, doc="half clearance (backlash) b_r")
     contact_damping: float = spec(0.0, ge=0.0, doc="extra damping acting only in contact")
+    PARAMETER: ClassVar[Parameter] = OMEGA
 
 
-@dataclass(frozen=True)
-class IntegrationConfig:
-    rtol: float = spec(1e-9, gt=0.0, lt=1.0)
-    atol: float = spec(1e-11, gt=0.0)
-    max_steps: int = spec(5_000_000, gt=0)
-    max_events_per_step: int = spec(20, gt=0)
-
-
-def _check_range(obj, path: str, lo: str, hi: str) -> None:
-    a, b = getattr(obj, lo), getattr(obj, hi)
-    if not a < b:
-        raise ConfigError(f"{path}.{hi}", f"must be greater than {lo} = {a:g}, got {b:g}")
-
-
-@dataclass(frozen=True)
-class SweepConfig:
-    omega_min: float = spec(gt=0.0)
-    omega_max: float = spec(gt=0.0)
+@dataclass(frozen=True, kw_only=True)
+class SweepSettings:
+    """[sweep] less the parameter range (see :func:`with_parameter`)."""
     n_points: int = spec(200, ge=2, le=1_000_000)
     transient_periods: int = spec(200, ge=0, le=1_000_000)
     extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
@@ -80,45 +83,74 @@ class SweepConfig:
                          "starting from the static equilibrium (parallel work units)")
     workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
                                "(default: all cores; 1: serial; under mpirun: the ranks)")
+    range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
-        _check_range(self, path, "omega_min", "omega_max")
+        if len(self.range_keys) == 2:
+            check_range(self, path, *self.range_keys)
         if self.max_period > self.record_periods:
             raise ConfigError(f"{path}.max_period",
                               f"must be <= record_periods = {self.record_periods}")
 
 
-@dataclass(frozen=True)
-class ShootingConfig:
-    tol: float = spec(1e-9, gt=0.0, lt=1.0, doc="periodicity residual tolerance (relative)")
-    max_iter: int = spec(25, ge=1, le=1000)
-
-
-@dataclass(frozen=True)
-class ContinuationConfig:
-    omega_min: float = spec(gt=0.0)
-    omega_max: float = spec(gt=0.0)
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSettings(ContinuationSteps):
+    """[continuation]: the solver's steps (:class:`ContinuationSteps`, ds in the parameter's
+    unit), where to start, and the parameter range (see :func:`with_parameter`)."""
     start: str = spec("max", choices=("min", "max"), doc="end of the range to start from")
-    ds: float = spec(0.02, gt=0.0)
-    ds_min: float = spec(1e-6, gt=0.0)
-    ds_max: float = spec(0.1, gt=0.0)
-    max_points: int = spec(2000, ge=2, le=1_000_000)
-    max_corrector_iter: int = spec(8, ge=1, le=100)
-    period_doubling_branch: bool = spec(True, doc="switch onto the period-2 branch at the first PD")
     transient_periods: int = spec(300, ge=0, doc="periods integrated to find the starting orbit")
+    range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
-        _check_range(self, path, "omega_min", "omega_max")
-        if not self.ds_min <= self.ds <= self.ds_max:
-            raise ConfigError(f"{path}.ds", f"must satisfy ds_min <= ds <= ds_max "
-                              f"({self.ds_min:g} <= ds <= {self.ds_max:g}), got {self.ds:g}")
+        if len(self.range_keys) == 2:
+            check_range(self, path, *self.range_keys)
+
+    def options(self) -> ContinuationOptions:
+        """The solver's options: this section's steps over [param_min, param_max]."""
+        return ContinuationOptions(param_min=self.param_min, param_max=self.param_max,
+                                   **self.steps())
 
 
-@dataclass(frozen=True)
-class TimeResponseConfig:
-    omega: float = spec(gt=0.0, doc="excitation parameter of the run")
+@dataclass(frozen=True, kw_only=True)
+class TimeResponseSettings:
+    """[time_response] less the parameter value (see :func:`with_parameter`)."""
     periods: float = spec(100.0, gt=0.0)
     samples_per_period: int = spec(64, ge=4, le=100_000)
+
+
+def with_parameter(settings: type, parameter: Parameter, name: str, *, single: bool = False):
+    """``settings`` plus the model's parameter under its scene keys: ``<key>_min`` and
+    ``<key>_max`` (read back as ``param_min``, ``param_max``), or ``<key>`` (``param``) when
+    ``single``.  The class is named ``name`` (bound to that name in this module)."""
+    key = parameter.key
+    if single:
+        keys = (key,)
+        fields = [(key, float, spec(gt=0.0, doc=f"{parameter.label} of the run"))]
+        ns = {"param": property(lambda self: getattr(self, key))}
+    else:
+        keys = (f"{key}_min", f"{key}_max")
+        fields = [(k, float, spec(gt=0.0, doc=f"{parameter.label}, {end} of the range"))
+                  for k, end in zip(keys, ("lower", "upper"))]
+        ns = {"param_min": property(lambda self: getattr(self, keys[0])),
+              "param_max": property(lambda self: getattr(self, keys[1])),
+              "range_keys": keys}
+    ns["parameter"] = parameter
+    cls = dataclasses.make_dataclass(name, fields, bases=(settings,), namespace=ns,
+                                     frozen=True, kw_only=True)
+    cls.__module__ = __name__
+    cls.__doc__ = f"{settings.__doc__.split(' (see')[0]}, over {parameter.name} " \
+                  f"(keys {', '.join(keys)})."
+    return cls
+
+
+SweepConfig = with_parameter(SweepSettings, OMEGA, "SweepConfig")
+ContinuationConfig = with_parameter(ContinuationSettings, OMEGA, "ContinuationConfig")
+TimeResponseConfig = with_parameter(TimeResponseSettings, OMEGA, "TimeResponseConfig",
+                                    single=True)
+RpmSweepConfig = with_parameter(SweepSettings, RPM, "RpmSweepConfig")
+RpmContinuationConfig = with_parameter(ContinuationSettings, RPM, "RpmContinuationConfig")
+RpmTimeResponseConfig = with_parameter(TimeResponseSettings, RPM, "RpmTimeResponseConfig",
+                                       single=True)
 
 
 @dataclass(frozen=True)
@@ -146,7 +178,15 @@ class CriticalDampingConfig:
     curve_points: int = spec(6, ge=0, le=100, doc="extra zetas below the cusp, for the plot only")
 
     def validate(self, path: str) -> None:
-        _check_range(self, path, "omega_min", "omega_max")
-        _check_range(self, path, "zeta_lo", "zeta_hi")
-        if not self.ds <= self.ds_max:
-            raise ConfigError(f"{path}.ds", f"must be <= ds_max = {self.ds_max:g}, got {self.ds:g}")
+        check_range(self, path, "omega_min", "omega_max")
+        check_range(self, path, "zeta_lo", "zeta_hi")
+        try:
+            self.options()
+        except ConfigError as exc:      # the continuation's own rules, named here
+            raise ConfigError(f"{path}.{exc.path}", str(exc)[len(exc.path) + 2:]) from None
+
+    def options(self) -> ContinuationOptions:
+        """The options of each trial zeta's continuation (period-1 branch only)."""
+        return ContinuationOptions(param_min=self.omega_min, param_max=self.omega_max,
+                                   ds=self.ds, ds_max=self.ds_max, max_points=self.max_points,
+                                   period_doubling_branch=False)

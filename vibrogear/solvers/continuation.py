@@ -12,42 +12,65 @@ along the flip eigenvector, orthogonal to the period-1 tangent) and continues it
 """
 from __future__ import annotations
 
+import logging
 import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
+from ..config.options import ContinuationOptions
 from ..models.reduced import ReducedModel
-from .floquet import stability, test_functions
+from .floquet import flip_vector, floquet_multipliers, liouville_error, stability, test_functions
 from .integrate import IntegrationOptions, integrate
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
+from .status import Status
 
-__all__ = ["ContinuationOptions", "BranchPoint", "Branch", "continue_orbits"]
+__all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "BranchPoint",
+           "Branch", "SpecialPoint", "ContinuationResult", "continuation"]
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicOrbitProblem:
+    """The period-``n_periods`` orbit of ``model`` through (``u0``, ``param``): ``u0`` is (close
+    to) its state at t = 0; ``direction`` = -1 continues towards smaller parameter first."""
+    model: ReducedModel
+    u0: np.ndarray
+    param: float
+    n_periods: int = 1
+    direction: int = -1
+
+    def __post_init__(self):
+        object.__setattr__(self, "u0", np.array(self.u0, dtype=float))
+        if self.u0.shape != (self.model.n_states,):
+            raise ValueError(f"u0 must have {self.model.n_states} entries")
+        if self.direction not in (-1, 1) or self.n_periods < 1:
+            raise ValueError("direction must be -1 or +1 and n_periods >= 1")
 
 
 @dataclass(frozen=True)
-class ContinuationOptions:
-    param_min: float
-    param_max: float
-    ds: float = 0.02
-    ds_min: float = 1e-6
-    ds_max: float = 0.1
-    max_points: int = 2000
-    max_corrector_iter: int = 8
+class PseudoArclength:
+    """Shooting (the orbit's residual H(u0, p) = u(T) - u0 with its exact Jacobian from the
+    variational equations) + pseudo-arclength steps: Keller's corrector to ``tol`` (relative
+    periodicity residual), a second-order predictor, at most ``max_angle`` radians between
+    successive tangents, ``locate_iter`` regula-falsi steps per special point.  The
+    arclength measures the parameter divided by ``param_scale``; the options' ds, ds_min,
+    ds_max are in parameter units (a step along the parameter axis moves it by ds)."""
+    integration: IntegrationOptions = IntegrationOptions()
     tol: float = 1e-9
     param_scale: float = 1.0
+    max_angle: float = 0.35
     locate_iter: int = 10
-    max_angle: float = 0.35          # radians between successive tangents
-    period_doubling_branch: bool = True
+    start_max_iter: int | None = None   # Newton iterations for the starting orbit
+    #                                     (default: 3 x the options' max_corrector_iter)
 
     def __post_init__(self):
-        if not self.param_min < self.param_max:
-            raise ValueError("param_min must be < param_max")
-        if not 0 < self.ds_min <= self.ds <= self.ds_max:
-            raise ValueError("need 0 < ds_min <= ds <= ds_max")
-        if self.max_points < 2 or self.max_corrector_iter < 1:
-            raise ValueError("max_points >= 2 and max_corrector_iter >= 1 required")
+        if not (0 < self.tol < 1 and self.param_scale > 0 and 0 < self.max_angle < np.pi
+                and self.locate_iter >= 1 and (self.start_max_iter or 1) >= 1):
+            raise ValueError("PseudoArclength: need 0 < tol < 1, param_scale > 0, "
+                             "0 < max_angle < pi, locate_iter >= 1, start_max_iter >= 1")
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +85,8 @@ class BranchPoint:
     tangent: np.ndarray
     label: str = ""
     iterations: int = 0
+    integration_error: float = 0.0      # the orbit's integrator error estimate
+    liouville_det_error: float | None = None
 
     @property
     def stable(self) -> bool:
@@ -70,9 +95,9 @@ class BranchPoint:
 
 @dataclass(frozen=True, eq=False)
 class Branch:
-    points: list            # BranchPoint, in order of continuation
+    points: tuple           # BranchPoint, in order of continuation
     n_periods: int          # 1: period-1 branch, 2: period-2 branch
-    status: int             # 0 left the range / finished, 1 stopped early (see message)
+    status: Status          # LEFT_RANGE / REJOINED when done, else why it stopped
     message: str
     period_scale: float     # period of the orbit = n_periods * 2 pi / (omega_per_param * param)
     counters: dict = field(default_factory=dict)
@@ -82,18 +107,51 @@ class Branch:
         return np.array([getattr(p, name) for p in self.points])
 
 
-class _Problem:
-    """Evaluations of H and its Jacobian, with counters."""
+@dataclass(frozen=True)
+class SpecialPoint:
+    label: str              # LP, PD or NS
+    param: float
+    branch: int             # index into ContinuationResult.branches
+    index: int              # index into that branch's points
 
-    def __init__(self, model, n_periods, options, scale):
-        self.model, self.n_periods, self.opts, self.scale = model, n_periods, options, scale
+
+@dataclass(frozen=True, eq=False)
+class ContinuationResult:
+    branches: tuple         # Branch: the period-1 branch, then the period-2 branch of its PD
+    special_points: tuple   # SpecialPoint, branch by branch in order of continuation
+    status: Status
+    message: str
+    counters: dict
+    wall_time: float
+
+    @property
+    def error_estimate(self) -> dict:
+        """Worst periodicity residual, integrator error estimate and Liouville determinant
+        error over all points (the last None where a contact is damped)."""
+        pts = [p for b in self.branches for p in b.points]
+        dets = [p.liouville_det_error for p in pts if p.liouville_det_error is not None]
+        return {"max_periodicity_residual": max((p.residual for p in pts), default=None),
+                "max_integration_error": max((p.integration_error for p in pts), default=None),
+                "liouville_det_error": max(dets) if dets else None}
+
+
+class _Stop(Exception):
+    """The callback returned False."""
+
+
+class _Problem:
+    """Evaluations of H and its Jacobian in z = (u0, p / scale), with counters."""
+
+    def __init__(self, model, n_periods, method: PseudoArclength):
+        self.model, self.n_periods, self.method = model, n_periods, method
+        self.scale = method.param_scale
         self.flows = 0
         self.rhs_calls = 0
 
     def flow(self, z: np.ndarray) -> PeriodicFlow:
         self.flows += 1
         f = periodic_flow(self.model, z[-1] * self.scale, z[:-1], n_periods=self.n_periods,
-                          options=self.opts)
+                          options=self.method.integration)
         self.rhs_calls += f.trajectory.rhs_calls
         return f
 
@@ -110,8 +168,9 @@ def _tangent(J: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
     return t / np.linalg.norm(t)
 
 
-def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int, tol: float):
-    """Newton on [H(z); t.(z - z_pred)] = 0. Returns (z, flow, iterations) or None."""
+def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int):
+    """Newton on [H(z); t.(z - z_pred)] = 0. Returns (z, flow, iterations, residual) or None."""
+    tol = prob.method.tol
     z = z_pred.copy()
     for it in range(max_iter + 1):
         if not z[-1] * prob.scale > 0:
@@ -138,27 +197,30 @@ def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int, t
 
 def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPoint:
     tr = f.trajectory
-    return BranchPoint(param=float(z[-1] * prob.scale), u0=z[:-1].copy(),
-                       floquet=np.linalg.eigvals(f.monodromy), residual=res,
+    p = float(z[-1] * prob.scale)
+    mu = floquet_multipliers(f.monodromy)
+    return BranchPoint(param=p, u0=z[:-1].copy(), floquet=mu, residual=res,
                        qmin=tr.monitor_min, qmax=tr.monitor_max, impacts=tr.monitor_losses,
-                       tangent=t.copy(), label=label, iterations=it)
+                       tangent=t.copy(), label=label, iterations=it,
+                       integration_error=tr.error_estimate,
+                       liouville_det_error=liouville_error(prob.model, p, f.period, mu))
 
 
-def _locate(prob, za, ta, ds_total, fa, fb, which, opts):
+def _locate(prob, za, ta, ds_total, fa, fb, which, options):
     """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
     and the next point (``fb``, s = ds_total) for the zero of test function ``which``."""
     lo, hi = 0.0, ds_total
     f_lo, f_hi = fa, fb
     best = None
     side = 0
-    for _ in range(opts.locate_iter):
+    for _ in range(prob.method.locate_iter):
         if f_hi != f_lo:
             mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         else:
             mid = 0.5 * (lo + hi)
         if not lo < mid < hi:
             mid = 0.5 * (lo + hi)
-        got = _correct(prob, za + mid * ta, ta, opts.max_corrector_iter, opts.tol)
+        got = _correct(prob, za + mid * ta, ta, options.max_corrector_iter)
         if got is None:
             break
         z, f, it, res = got
@@ -180,75 +242,117 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, opts):
     return best
 
 
-def continue_orbits(model: ReducedModel, u0_start, param_start: float,
-                    options: ContinuationOptions, *, direction: int = -1, n_periods: int = 1,
-                    integration: IntegrationOptions = IntegrationOptions(),
-                    callback: Callable | None = None) -> list[Branch]:
-    """Continue the period-``n_periods`` orbit through ``(u0_start, param_start)``.
+def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
+                 options: ContinuationOptions,
+                 callback: Callable[[BranchPoint], bool | None] | None = None
+                 ) -> ContinuationResult:
+    """Continue the periodic orbit of ``problem`` over [param_min, param_max].
 
-    ``u0_start`` must be (close to) a periodic orbit; ``direction`` = -1 continues
-    towards smaller parameter first.  Returns the branch and, when a PD is found and
-    ``options.period_doubling_branch``, the period-2 branch switched onto there.
+    Returns the branch and, when a PD is found and ``options.period_doubling_branch``, the
+    period-2 branch switched onto there.  ``callback(point)`` is called with every new
+    point (special points included); returning False stops the run with status
+    STOPPED_BY_CALLBACK, keeping the points so far.
     """
-    sh = shoot(model, param_start, u0_start, n_periods=n_periods, options=integration,
-               tol=options.tol, max_iter=options.max_corrector_iter * 3)
-    if not sh.converged:
-        return [Branch([], n_periods, 1, f"no starting orbit: {sh.message}", 0.0)]
-    z0 = np.concatenate([sh.u0, [param_start / options.param_scale]])
-    t0 = np.zeros_like(z0)
-    t0[-1] = float(direction)
-    branch = _run_branch(model, z0, t0, options, n_periods, integration, callback)
-    out = [branch]
-    pd = [i for i, p in enumerate(branch.points) if p.label == "PD"]
-    if options.period_doubling_branch and pd and n_periods == 1:
-        out.append(_switch_period_doubling(model, branch.points[pd[0]], options, integration,
-                                           callback))
-    return out
-
-
-def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) -> Branch:
     wall = time.perf_counter()
-    prob = _Problem(model, n_periods, integration, options.param_scale)
-    f = prob.flow(z0)
-    t = _tangent(prob.jac(f), t_hint)
-    pts = [_point(prob, z0, f, t, 0, residual_norm(f.G, z0[:-1]))]
-    if callback:
-        callback(pts[-1])
-    z = z0
-    ds = options.ds
-    status, message = 0, "left the parameter range"
+    model, n_periods = problem.model, problem.n_periods
+    sh = shoot(model, problem.param, problem.u0, n_periods=n_periods,
+               options=method.integration, tol=method.tol,
+               max_iter=method.start_max_iter or 3 * options.max_corrector_iter)
+    period_scale = 2 * np.pi * n_periods / model.omega_per_param
+    if not sh.converged:
+        msg = f"{Status.NO_START.message}: {sh.message}"
+        branches = (Branch((), n_periods, Status.NO_START, msg, period_scale,
+                           counters=dict(sh.counters)),)
+    else:
+        z0 = np.concatenate([sh.u0, [problem.param / method.param_scale]])
+        t0 = np.zeros_like(z0)
+        t0[-1] = float(problem.direction)
+        branches = (_run_branch(model, z0, t0, method, options, n_periods, callback),)
+        first = branches[0]
+        pd = [p for p in first.points if p.label == "PD"]
+        if (options.period_doubling_branch and pd and n_periods == 1
+                and first.status != Status.STOPPED_BY_CALLBACK):
+            branches += (_switch_period_doubling(model, pd[0], method, options, callback),)
+    special = tuple(SpecialPoint(p.label, p.param, b, i) for b, br in enumerate(branches)
+                    for i, p in enumerate(br.points) if p.label)
+    status = branches[0].status
+    for br in branches[1:]:
+        if not br.status.success:
+            status = br.status
+            break
+    message = "; ".join(f"period-{br.n_periods} branch: {br.message}" for br in branches)
+    counters = {"points": sum(len(b.points) for b in branches), "start_flows": sh.flows,
+                "flows": sh.flows + sum(b.counters.get("flows", 0) for b in branches),
+                "rhs_calls": sh.rhs_calls + sum(b.counters.get("rhs_calls", 0) for b in branches)}
+    log.info("continuation: %s (%d points, %d flows)", message, counters["points"],
+             counters["flows"])
+    return ContinuationResult(branches=branches, special_points=special, status=status,
+                              message=message, counters=counters,
+                              wall_time=time.perf_counter() - wall)
+
+
+def _run_branch(model, z0, t_hint, method, options, n_periods, callback) -> Branch:
+    wall = time.perf_counter()
+    prob = _Problem(model, n_periods, method)
+    scale = method.param_scale
+    pts: list[BranchPoint] = []
+
+    def emit(point):
+        pts.append(point)
+        if callback is not None and callback(point) is False:
+            raise _Stop
+
+    status, message = Status.LEFT_RANGE, Status.LEFT_RANGE.message
+    try:
+        f = prob.flow(z0)
+        t = _tangent(prob.jac(f), t_hint)
+        emit(_point(prob, z0, f, t, 0, residual_norm(f.G, z0[:-1])))
+        status, message = _walk(prob, z0, f, t, method, options, n_periods, emit)
+    except _Stop:
+        status = Status.STOPPED_BY_CALLBACK
+        message = f"{status.message} after {len(pts)} points"
+    return Branch(tuple(pts), n_periods, status, message,
+                  2 * np.pi * n_periods / model.omega_per_param,
+                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls},
+                  wall_time=time.perf_counter() - wall)
+
+
+def _walk(prob, z, f, t, method, options, n_periods, emit) -> tuple[Status, str]:
+    """The predictor-corrector loop; each new point goes to ``emit``."""
+    model, scale = prob.model, method.param_scale
+    ds = options.ds / scale
+    ds_min, ds_max = options.ds_min / scale, options.ds_max / scale
+    n_points = 1
     tests_prev = test_functions(f.monodromy, t)
     t_prev, ds_prev = None, ds
-    d_prev = _half_defect(model, z0, options, integration, n_periods) if n_periods > 1 else None
+    d_prev = _half_defect(model, z, scale, method, n_periods) if n_periods > 1 else None
+    # a start on the range's end may lie an ulp outside it: only a point beyond the range
+    # by more than round-off ends the branch
+    slack = 1e-9 * (abs(options.param_max) + abs(options.param_min))
     while True:
-        if len(pts) >= options.max_points:
-            status, message = 1, "maximum number of points reached"
-            break
-        p = z[-1] * options.param_scale
-        # a start on the range's end (p = param_max / scale * scale) may lie an ulp
-        # outside it: only a point beyond the range by more than round-off ends the branch
-        slack = 1e-9 * (abs(options.param_max) + abs(options.param_min))
+        if n_points >= options.max_points:
+            return Status.MAX_POINTS, Status.MAX_POINTS.message
+        p = z[-1] * scale
         if p < options.param_min - slack or p > options.param_max + slack:
-            break
+            return Status.LEFT_RANGE, Status.LEFT_RANGE.message
         pred = z + ds * t
         if t_prev is not None:
             # second-order predictor: the tangent's change estimates the curvature
             bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
             if np.linalg.norm(bend) < 0.25 * ds:
                 pred = pred + bend
-        got = _correct(prob, pred, t, options.max_corrector_iter, options.tol)
+        got = _correct(prob, pred, t, options.max_corrector_iter)
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
             t_new = _tangent(prob.jac(f_new), t)
             angle = np.arccos(np.clip(t_new @ t, -1, 1))
-            if angle > options.max_angle and ds > options.ds_min:
+            if angle > method.max_angle and ds > ds_min:
                 got = None
         if got is None:
             ds *= 0.5
-            if ds < options.ds_min:
-                status, message = 1, f"step size below ds_min at param = {p:.6g}"
-                break
+            if ds < ds_min:
+                return Status.DS_TOO_SMALL, f"{Status.DS_TOO_SMALL.message} at param = {p:.6g}"
             continue
         tests = test_functions(f_new.monodromy, t_new)
         labels = []
@@ -263,65 +367,59 @@ def _run_branch(model, z0, t_hint, options, n_periods, integration, callback) ->
             loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
-                special = _point(prob, zl, fl, tl, itl, resl, label=which)
                 if not (which == "NS" and not test_functions(fl.monodromy, tl)["NS_valid"]):
-                    pts.append(special)
-                    if callback:
-                        callback(special)
+                    n_points += 1
+                    emit(_point(prob, zl, fl, tl, itl, resl, label=which))
         ds_used = ds
-        ds = min(ds * 1.5, options.ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
-        ds = max(ds, options.ds_min)
+        ds = min(ds * 1.5, ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
+        ds = max(ds, ds_min)
         if n_periods > 1:
             # the signed half-period defect changes sign where the branch passes
             # through the period-1 orbit (the other PD): there it has rejoined
-            d_new = _half_defect(model, z_new, options, integration, n_periods)
+            d_new = _half_defect(model, z_new, scale, method, n_periods)
             if d_prev is not None and d_new @ d_prev < 0:
-                p_new = z_new[-1] * options.param_scale
-                status, message = 0, (f"period-{n_periods} branch rejoined the period-1 branch "
-                                      f"between param = {p:.6g} and {p_new:.6g}")
-                break
+                p_new = z_new[-1] * scale
+                return Status.REJOINED, (f"period-{n_periods} branch rejoined the period-1 "
+                                         f"branch between param = {p:.6g} and {p_new:.6g}")
             d_prev = d_new
         t_prev, ds_prev = t, ds_used
         z, f, t, tests_prev = z_new, f_new, t_new, tests
-        pts.append(_point(prob, z, f, t, it, res))
-        if callback:
-            callback(pts[-1])
-    return Branch(pts, n_periods, status, message, 2 * np.pi * n_periods / model.omega_per_param,
-                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls},
-                  wall_time=time.perf_counter() - wall)
+        n_points += 1
+        emit(_point(prob, z, f, t, it, res))
 
 
-def _half_defect(model, z, options, integration, n_periods) -> np.ndarray:
+def _half_defect(model, z, scale, method, n_periods) -> np.ndarray:
     """u(T/n) - u0: zero on a period-1 orbit, sign-reversing through it."""
-    p = z[-1] * options.param_scale
-    tr = integrate(model, p, z[:-1], 0.0, model.excitation_period(p), options=integration)
+    p = z[-1] * scale
+    tr = integrate(model, p, z[:-1], 0.0, model.excitation_period(p), options=method.integration)
     return tr.u_end - z[:-1]
 
 
-def _switch_period_doubling(model, pd: BranchPoint, options, integration, callback) -> Branch:
+def _switch_period_doubling(model, pd: BranchPoint, method, options, callback) -> Branch:
     """Start the period-2 branch at a PD point along the flip eigenvector."""
-    mu, vecs = np.linalg.eig(periodic_flow(model, pd.param, pd.u0, options=integration).monodromy)
-    k = int(np.argmin(np.abs(mu + 1.0)))
-    w = np.real(vecs[:, k])
-    w /= np.linalg.norm(w)
+    scale = method.param_scale
+    w = flip_vector(periodic_flow(model, pd.param, pd.u0, options=method.integration).monodromy)
     t1 = pd.tangent
     t2 = np.concatenate([w, [0.0]])
     t2 = t2 - (t2 @ t1) * t1
     t2 /= np.linalg.norm(t2)
-    prob = _Problem(model, 2, integration, options.param_scale)
-    z_pd = np.concatenate([pd.u0, [pd.param / options.param_scale]])
-    for ds in (options.ds, 0.3 * options.ds, 0.1 * options.ds, 3 * options.ds):
-        got = _correct(prob, z_pd + ds * t2, t2, options.max_corrector_iter, options.tol)
+    prob = _Problem(model, 2, method)
+    z_pd = np.concatenate([pd.u0, [pd.param / scale]])
+    ds0 = options.ds / scale
+    for ds in (ds0, 0.3 * ds0, 0.1 * ds0, 3 * ds0):
+        got = _correct(prob, z_pd + ds * t2, t2, options.max_corrector_iter)
         if got is None:
             continue
         z, f, it, res = got
-        half = integrate(model, z[-1] * options.param_scale, z[:-1], 0.0, f.period / 2,
-                         options=integration)
+        half = integrate(model, z[-1] * scale, z[:-1], 0.0, f.period / 2,
+                         options=method.integration)
         if np.linalg.norm(half.u_end - z[:-1]) > 1e-6 * (1 + np.linalg.norm(z[:-1])):
             t = _tangent(prob.jac(f), None)
             # continue away from the PD point
             if t @ (z - z_pd) < 0:
                 t = -t
-            return _run_branch(model, z, t, options, 2, integration, callback)
-    return Branch([], 2, 1, f"could not switch onto the period-2 branch at param = {pd.param:.6g}",
-                  2 * np.pi * 2 / model.omega_per_param)
+            return _run_branch(model, z, t, method, options, 2, callback)
+    return Branch((), 2, Status.SWITCH_FAILED,
+                  f"{Status.SWITCH_FAILED.message} at param = {pd.param:.6g}",
+                  2 * np.pi * 2 / model.omega_per_param,
+                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls})

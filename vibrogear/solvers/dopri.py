@@ -15,16 +15,11 @@ from numba import njit
 from .kernels import (FAST, accel, accel_dparam, contact_modes, error_and_rate, harmonics, jac_times,
                       range_dot)
 
-__all__ = ["dopri_loop", "STATUS_TEXT"]
+__all__ = ["dopri_loop"]
 
-STATUS_TEXT = {
-    0: "ok",
-    -1: "maximum number of steps reached",
-    -2: "non-finite state (the solution blew up)",
-    -3: "too many events without progress (chattering / Zeno behaviour at a contact)",
-    -4: "step size underflow",
-    -5: "grazing switch with a jumping vector field: saltation undefined",
-}
+# status codes returned by the loop (numba has no enums): the values of the integrator
+# members of solvers.status.Status, which maps them (from_code)
+_OK, _MAX_STEPS, _NONFINITE, _CHATTERING, _STEP_TOO_SMALL, _GRAZING = 0, -1, -2, -3, -4, -5
 
 _C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 _A = np.zeros((7, 7))
@@ -128,6 +123,18 @@ def _error_norm(K, y, y1, h, rtol, atol):
         if not np.isfinite(y1[i]):
             finite = False
     return np.sqrt(err / n), finite
+
+
+@njit(cache=True, _nrt=False, inline="always")
+def _local_error(K, h):
+    """RMS norm of the embedded 4th-order local error estimate h sum_i E_i K_i (state units)."""
+    n = K.shape[1]
+    err = 0.0
+    for i in range(n):
+        e = h * (_E[0] * K[0, i] + _E[2] * K[2, i] + _E[3] * K[3, i] + _E[4] * K[4, i]
+                 + _E[5] * K[5, i] + _E[6] * K[6, i])
+        err += e * e
+    return np.sqrt(err / n)
 
 
 @njit(cache=True, _nrt=False, inline="always")
@@ -340,7 +347,8 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
     nev = 0
     losses = 0
     ext = np.array([np.inf, -np.inf])
-    status = 0
+    status = _OK
+    err_sum = 0.0     # sum of the local error estimates of the accepted steps
     consecutive = 0
     err_old = 1e-4
     t = t0
@@ -353,7 +361,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
         ie += 1
     while t < t1:
         if steps >= max_steps:
-            status = -1
+            status = _MAX_STEPS
             break
         if h > hmax:
             h = hmax
@@ -362,7 +370,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             h = t1 - t
             last = True
         if h <= 1e-14 * (abs(t) + 1.0) and not last:
-            status = -4
+            status = _STEP_TOO_SMALL
             break
         _stages(t, y, h, K, Ys, mode, A, Om, cs, sn, CxS, CvS, kdS, cdS, tmp, y1)
         nfev += 6
@@ -373,7 +381,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
                 rejected += 1
                 steps += 1
                 continue
-            status = -2
+            status = _NONFINITE
             break
         if err > 1.0:
             h *= max(0.2, 0.9 * err ** -0.2)
@@ -403,6 +411,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
             h_used = hs
         else:
             h_used = h
+        err_sum += _local_error(K, h_used)
         steps += 1
         # ---- recording: dense output at t_eval, extrema of the monitored deformation ----
         t_new = t + h_used if not (last and h_used == h) else t1
@@ -420,7 +429,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
         if event:
             consecutive += 1
             if consecutive > max_events:
-                status = -3
+                status = _CHATTERING
                 break
             j = j_ev
             newm = m_ev
@@ -444,7 +453,7 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
                     jump += abs(K[0, i] - K[6, i])
                 if jump > 0.0:
                     if abs(rate) < 1e-14:
-                        status = -5
+                        status = _GRAZING
                         break
                     harmonics(t, Om, cs, sn)
                     # d h / d param at fixed (t, x): h = c.x - e(t; Om) - gap
@@ -475,4 +484,5 @@ def dopri_loop(A, Om, dOm, dspin, y0, t0, t1, rtol, atol, h0, hmax, max_steps,
         h = h_next
     counters = np.array([steps, rejected, nfev, nev, losses])
     f_end = K[0].copy()
-    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end)
+    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end,
+            err_sum)

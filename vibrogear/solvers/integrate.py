@@ -7,25 +7,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..config.options import IntegrationOptions   # defined once, with the [integration] rules
 from ..models.reduced import ReducedModel
-from .dopri import STATUS_TEXT, dopri_loop
+from .dopri import dopri_loop
 from .kernels import model_arrays
+from .status import Status, from_code
 
 __all__ = ["IntegrationOptions", "Trajectory", "integrate"]
-
-
-@dataclass(frozen=True)
-class IntegrationOptions:
-    rtol: float = 1e-9
-    atol: float = 1e-11
-    max_steps: int = 5_000_000
-    max_events_per_step: int = 20
-    max_step_periods: float = 0.125   # largest step as a fraction of the excitation period
-    event_log: int = 10_000           # event times kept (all are counted)
-
-    def __post_init__(self):
-        if not (0 < self.rtol < 1 and self.atol > 0 and self.max_steps > 0):
-            raise ValueError("IntegrationOptions: need 0 < rtol < 1, atol > 0, max_steps > 0")
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,7 +22,7 @@ class Trajectory:
     u: np.ndarray               # (len(t), n) states there (dense output)
     t_end: float
     u_end: np.ndarray
-    status: int                 # 0 ok, < 0 failure (see message)
+    status: Status              # OK, or an integrator failure (see message)
     message: str
     steps: int
     rejected: int
@@ -51,10 +39,15 @@ class Trajectory:
     monodromy: np.ndarray | None = None   # d u_end / d u0
     dparam: np.ndarray | None = None      # d u_end / d param at fixed t_end
     wall_time: float = 0.0
+    #: sum over the accepted steps of the RMS norm of the embedded 4th-order local error
+    #: estimate (state units): a bound-like estimate of the global error of the embedded
+    #: solution when errors do not grow along the flow (the 5th-order solution that is
+    #: propagated is usually more accurate); 0 for an empty run
+    error_estimate: float = 0.0
 
     @property
     def ok(self) -> bool:
-        return self.status == 0
+        return self.status == Status.OK
 
 
 _W2_MAX: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -101,24 +94,25 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     h0 = min(_initial_step(model, param, span, options.rtol), hmax)
     mon = model.monitor if model.contacts.count else -1
     rec = t0 if record_from is None else float(record_from)
-    (status, t_end, y, Phi, u_eval, cnt, ev_t, ev_j, ev_m, qmin, qmax, modes,
-     f_end) = dopri_loop(arrs, Om, dOm, dspin, u0, float(t0), float(t1), options.rtol,
+    (code, t_end, y, Phi, u_eval, cnt, ev_t, ev_j, ev_m, qmin, qmax, modes,
+     f_end, err_sum) = dopri_loop(arrs, Om, dOm, dspin, u0, float(t0), float(t1), options.rtol,
                          options.atol, h0, hmax, options.max_steps,
                          options.max_events_per_step, variational, t_eval, rec, mon,
                          options.event_log)
-    if status == 0 and not np.all(np.isfinite(y)):
-        status = -2
+    status = from_code(code)
+    if status == Status.OK and not np.all(np.isfinite(y)):
+        status = Status.NONFINITE
     nev = int(cnt[3])
     keep = min(nev, options.event_log)
     n = model.n_states
     return Trajectory(
-        t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=int(status),
-        message=STATUS_TEXT[int(status)] + (f" at t = {t_end:.6g}" if status else ""),
+        t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=status,
+        message=status.message + (f" at t = {t_end:.6g}" if status else ""),
         steps=int(cnt[0]), rejected=int(cnt[1]), rhs_calls=int(cnt[2]), events=nev,
         event_times=ev_t[:keep], event_contacts=ev_j[:keep], event_modes=ev_m[:keep],
         monitor_min=float(qmin), monitor_max=float(qmax), monitor_losses=int(cnt[4]),
         final_modes=modes, f_end=f_end,
         monodromy=Phi[:, :n].copy() if variational else None,
         dparam=Phi[:, n].copy() if variational else None,
-        wall_time=time.perf_counter() - wall,
+        wall_time=time.perf_counter() - wall, error_estimate=float(err_sum),
     )

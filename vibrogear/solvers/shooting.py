@@ -14,8 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models.reduced import ReducedModel
-from .floquet import stability
+from .floquet import floquet_multipliers, liouville_error, stability
 from .integrate import IntegrationOptions, Trajectory, integrate
+from .status import Status
 
 __all__ = ["PeriodicFlow", "periodic_flow", "ShootingResult", "shoot", "residual_norm"]
 
@@ -57,24 +58,42 @@ def periodic_flow(model: ReducedModel, param: float, u0, *, n_periods: int = 1,
 @dataclass(frozen=True, eq=False)
 class ShootingResult:
     u0: np.ndarray
-    converged: bool
-    residual: float
+    residual: float              # periodicity residual |u(T) - u0| / (1 + |u0|)
     iterations: int
     floquet: np.ndarray          # complex Floquet multipliers
     monodromy: np.ndarray
     period: float
     n_periods: int
-    status: int                  # 0 converged, 1 not converged, < 0 integrator failure
-    message: str
+    status: Status               # OK, NOT_CONVERGED, SINGULAR, LINE_SEARCH_FAILED or the
+    message: str                 # integrator's failure
     wall_time: float
     monitor_min: float
     monitor_max: float
     impacts: int                 # contact losses of the monitored contact per orbit
     rhs_calls: int
+    flows: int = 0               # orbits integrated (with the variational equations)
+    integration_error: float = 0.0       # the last orbit's integrator error estimate
+    liouville_det_error: float | None = None   # det M against Liouville's formula
+
+    @property
+    def converged(self) -> bool:
+        return self.status == Status.OK
 
     @property
     def stable(self) -> bool:
         return stability(self.floquet)
+
+    @property
+    def counters(self) -> dict:
+        return {"iterations": self.iterations, "flows": self.flows, "rhs_calls": self.rhs_calls}
+
+    @property
+    def error_estimate(self) -> dict:
+        """Periodicity residual, the integrator's error estimate over the orbit and the
+        monodromy's determinant against Liouville's formula (None with contact damping)."""
+        return {"periodicity_residual": self.residual,
+                "integration_error": self.integration_error,
+                "liouville_det_error": self.liouville_det_error}
 
 
 def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
@@ -84,18 +103,19 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
     wall = time.perf_counter()
     u = np.array(u0_guess, dtype=float)
     n = u.size
-    calls = 0
+    calls, flows = 0, 1
     flow = periodic_flow(model, param, u, n_periods=n_periods, options=options)
     calls += flow.trajectory.rhs_calls
     it = 0
-    status, message = 1, "maximum Newton iterations reached"
+    status = Status.NOT_CONVERGED
+    message = status.message
     res = residual_norm(flow.G, u) if flow.ok else np.inf
     while True:
         if not flow.ok:
             status, message = flow.trajectory.status, flow.trajectory.message
             break
         if res < tol:
-            status, message = 0, "converged"
+            status, message = Status.OK, "converged"
             break
         if it >= max_iter:
             break
@@ -103,7 +123,8 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
         try:
             du = np.linalg.solve(flow.dG_du0, -flow.G)
         except np.linalg.LinAlgError:
-            status, message = 1, "singular shooting Jacobian (monodromy has a multiplier 1)"
+            status = Status.SINGULAR
+            message = "singular shooting Jacobian (monodromy has a multiplier 1)"
             break
         lam = 1.0
         accepted = False
@@ -111,20 +132,23 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
             trial = u + lam * du
             f2 = periodic_flow(model, param, trial, n_periods=n_periods, options=options)
             calls += f2.trajectory.rhs_calls
+            flows += 1
             r2 = residual_norm(f2.G, trial) if f2.ok else np.inf
             if r2 < res or r2 < tol:
                 u, flow, res, accepted = trial, f2, r2, True
                 break
             lam *= 0.5
         if not accepted:
-            status, message = 1, "Newton line search failed"
+            status = Status.LINE_SEARCH_FAILED
+            message = status.message
             break
     tr = flow.trajectory
-    floq = np.linalg.eigvals(flow.monodromy) if flow.ok else np.full(n, np.nan + 0j)
+    floq = floquet_multipliers(flow.monodromy) if flow.ok else np.full(n, np.nan + 0j)
     return ShootingResult(
-        u0=u, converged=status == 0, residual=res, iterations=it, floquet=floq,
+        u0=u, residual=res, iterations=it, floquet=floq,
         monodromy=flow.monodromy, period=flow.period, n_periods=n_periods, status=status,
         message=message, wall_time=time.perf_counter() - wall,
         monitor_min=tr.monitor_min, monitor_max=tr.monitor_max, impacts=tr.monitor_losses,
-        rhs_calls=calls,
+        rhs_calls=calls, flows=flows, integration_error=tr.error_estimate,
+        liouville_det_error=liouville_error(model, param, flow.period, floq) if flow.ok else None,
     )

@@ -1,0 +1,118 @@
+"""The solvers' own options, defined and validated once, and the continuation parameter a
+model declares.
+
+These frozen dataclasses live in the config layer (the lowest one) so that a scene section
+*is* the solver's options object ([integration], [shooting]) or builds it
+(:meth:`~vibrogear.config.sections.ContinuationSettings.options`), while the solvers
+import them from here (``vibrogear.solvers.integrate.IntegrationOptions`` is this class).
+Their ranges are the :func:`~vibrogear.config.base.spec` metadata of the fields: ``build``
+checks them while reading a scene (naming the field path), and ``__post_init__`` checks the
+same metadata and the cross-field invariants for objects made in code, so there is one
+definition and one set of rules.  A violation is a :class:`ConfigError` (a ValueError)
+naming the field.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from .base import ConfigError, check, spec
+
+__all__ = ["Parameter", "OMEGA", "RPM", "IntegrationOptions", "ShootingOptions",
+           "ContinuationSteps", "ContinuationOptions", "check_fields", "check_range"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A model's continuation parameter: ``name`` (in results and files), ``unit``, axis
+    ``label`` and ``key``, the stem of the scene keys that give it: ``<key>_min`` and
+    ``<key>_max`` for a range ([sweep], [continuation]), ``<key>`` for one value
+    ([time_response])."""
+    name: str
+    unit: str
+    label: str
+    key: str
+
+
+#: the impact pair's parameter: the nondimensional excitation frequency (paper eq. (12))
+OMEGA = Parameter(name="Omega", unit="", label="Omega", key="omega")
+#: a gearbox's parameter: the driving-shaft speed
+RPM = Parameter(name="rpm", unit="rpm", label="driving speed [rpm]", key="rpm")
+
+
+def check_fields(obj) -> None:
+    """The ranges of ``obj``'s numeric fields (their spec metadata); path = field name."""
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            check(v, f.metadata, f.name)
+
+
+def check_range(obj, path: str, lo: str, hi: str) -> None:
+    """``obj.lo < obj.hi``, else a ConfigError naming ``path.hi``."""
+    a, b = getattr(obj, lo), getattr(obj, hi)
+    if not a < b:
+        raise ConfigError(f"{path}.{hi}" if path else hi,
+                          f"must be greater than {lo} = {a:g}, got {b:g}")
+
+
+@dataclass(frozen=True)
+class IntegrationOptions:
+    """[integration]: the compiled Dormand-Prince 5(4) integrator (solvers/integrate.py)."""
+    rtol: float = spec(1e-9, gt=0.0, lt=1.0)
+    atol: float = spec(1e-11, gt=0.0)
+    max_steps: int = spec(5_000_000, gt=0)
+    max_events_per_step: int = spec(20, gt=0, doc="consecutive contact events without a "
+                                    "regular step before the run stops (chattering)")
+    max_step_periods: float = spec(0.125, gt=0.0, doc="largest step as a fraction of the "
+                                   "excitation period")
+    event_log: int = spec(10_000, ge=0, doc="event times kept (all are counted)")
+
+    def __post_init__(self):
+        check_fields(self)
+
+
+@dataclass(frozen=True)
+class ShootingOptions:
+    """[shooting]: Newton on the periodicity residual u(T) - u0 (solvers/shooting.py); the
+    tolerance is also the continuation corrector's."""
+    tol: float = spec(1e-9, gt=0.0, lt=1.0, doc="periodicity residual tolerance (relative)")
+    max_iter: int = spec(25, ge=1, le=1000)
+
+    def __post_init__(self):
+        check_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSteps:
+    """Steps and limits of pseudo-arclength continuation.  ``ds``, ``ds_min``, ``ds_max``
+    are in the parameter's unit: a step along the parameter axis moves it by ``ds``."""
+    ds: float = spec(0.02, gt=0.0)
+    ds_min: float = spec(1e-6, gt=0.0)
+    ds_max: float = spec(0.1, gt=0.0)
+    max_points: int = spec(2000, ge=2, le=1_000_000)
+    max_corrector_iter: int = spec(8, ge=1, le=100)
+    period_doubling_branch: bool = spec(True, doc="switch onto the period-2 branch at the "
+                                        "first PD")
+
+    def __post_init__(self):
+        check_fields(self)
+        if not self.ds_min <= self.ds <= self.ds_max:
+            raise ConfigError("ds", f"must satisfy ds_min <= ds <= ds_max ({self.ds_min:g} <= "
+                              f"ds <= {self.ds_max:g}), got {self.ds:g}")
+
+    def steps(self) -> dict:
+        """These fields as keyword arguments (for :class:`ContinuationOptions`)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(ContinuationSteps)}
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationOptions(ContinuationSteps):
+    """The options of :func:`vibrogear.solvers.continuation.continuation`: the steps and
+    the parameter range [param_min, param_max] the branch is traced in."""
+    param_min: float
+    param_max: float
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_range(self, "", "param_min", "param_max")

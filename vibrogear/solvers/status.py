@@ -1,0 +1,85 @@
+"""One status enumeration for every solver, with one table of messages.
+
+Every solver result (integration, shooting, static equilibrium, sweep, continuation)
+carries a :class:`Status` and a message that starts from :data:`MESSAGES`.  The compiled
+integrator loop returns plain negative integers (numba has no enums); they are the values
+of the integrator members below and become a :class:`Status` in one place,
+:func:`from_code`.  The integers are also what ``sweep.npz`` stores per point, so the files
+keep their meaning: 0 ok, < 0 integrator failure (see the table), > 0 a failure of the
+solver above the integrator.
+"""
+from __future__ import annotations
+
+from enum import IntEnum
+
+__all__ = ["Status", "MESSAGES", "from_code", "SUCCESS"]
+
+
+class Status(IntEnum):
+    OK = 0
+    # ---- integrator (values used inside the compiled loop, solvers/dopri.py)
+    MAX_STEPS = -1
+    NONFINITE = -2
+    CHATTERING = -3
+    STEP_TOO_SMALL = -4
+    GRAZING = -5
+    BAD_PARAMETER = -10
+    # ---- solvers above the integrator
+    PARTIAL = 1                 # a sweep: some points failed (the others are kept)
+    STOPPED_BY_CALLBACK = 2
+    NOT_CONVERGED = 3           # Newton: iteration limit reached
+    SINGULAR = 4                # Newton: singular Jacobian
+    LINE_SEARCH_FAILED = 5
+    LEFT_RANGE = 6              # continuation: the branch left the parameter range (done)
+    REJOINED = 7                # continuation: period-n branch rejoined the period-1 branch
+    MAX_POINTS = 8
+    DS_TOO_SMALL = 9            # continuation: step below ds_min
+    NO_START = 10               # continuation: no starting orbit
+    SWITCH_FAILED = 11          # continuation: could not switch onto the period-2 branch
+
+    @property
+    def message(self) -> str:
+        return MESSAGES[self]
+
+    @property
+    def success(self) -> bool:
+        """The solver finished its job (a continuation that left its range has)."""
+        return self in SUCCESS
+
+    @property
+    def text(self) -> str:
+        """The short name written to files (``"ok"``, ``"max_steps"``, ...)."""
+        return self.name.lower()
+
+
+MESSAGES = {
+    Status.OK: "ok",
+    Status.MAX_STEPS: "maximum number of steps reached",
+    Status.NONFINITE: "non-finite state (the solution blew up)",
+    Status.CHATTERING: "too many events without progress (chattering / Zeno behaviour at a "
+                       "contact)",
+    Status.STEP_TOO_SMALL: "step size underflow",
+    Status.GRAZING: "grazing switch with a jumping vector field: saltation undefined",
+    Status.BAD_PARAMETER: "excitation frequency must be finite and > 0",
+    Status.PARTIAL: "some points failed",
+    Status.STOPPED_BY_CALLBACK: "stopped by the callback",
+    Status.NOT_CONVERGED: "maximum Newton iterations reached",
+    Status.SINGULAR: "singular Jacobian",
+    Status.LINE_SEARCH_FAILED: "Newton line search failed",
+    Status.LEFT_RANGE: "left the parameter range",
+    Status.REJOINED: "rejoined the period-1 branch",
+    Status.MAX_POINTS: "maximum number of points reached",
+    Status.DS_TOO_SMALL: "step size below ds_min",
+    Status.NO_START: "no starting orbit",
+    Status.SWITCH_FAILED: "could not switch onto the period-2 branch",
+}
+
+SUCCESS = frozenset({Status.OK, Status.LEFT_RANGE, Status.REJOINED})
+
+
+def from_code(code: int) -> Status:
+    """The :class:`Status` of an integer code (from the compiled loop or a file)."""
+    try:
+        return Status(int(code))
+    except ValueError:
+        raise ValueError(f"unknown solver status code {code!r}") from None
