@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..models.contact_law import flank
 from ..solvers.contact_eval import contact_history
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrate import integrate
@@ -53,8 +54,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     names = model.contacts.names or tuple(f"c{j}" for j in range(model.contacts.count))
     half = tr.t >= 0.5 * tr.t[-1]
     primary = study.contact_groups.get("mesh", study.contact_groups.get("clearance", []))
-    losses = {names[j]: int(np.sum(np.diff((delta[j, half] > model.contacts.gap_hi[j])
-                                           .astype(int)) < 0)) for j in primary}
+    ct = model.contacts
+    losses = {names[j]: int(np.sum(np.diff(flank(delta[j, half], ct.gap_hi[j], ct.gap_lo[j]) > 0)
+                                   .astype(int) < 0)) for j in primary}
     summary = {
         "status": "ok", study.param_name: param, "periods": cfg.periods,
         "excitation_frequency_hz": model.excitation_frequency(param) / (2 * np.pi)

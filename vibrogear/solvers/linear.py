@@ -17,22 +17,17 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
 
 __all__ = ["tangent_matrices", "contact_slopes", "LinearModes", "linear_modes"]
 
 
 def contact_slopes(model: ReducedModel, x0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(k'_j, in_contact_j) of every contact at the static state x0."""
-    ct = model.contacts
-    d = ct.directions @ x0
-    up, lo = d > ct.gap_hi, d < ct.gap_lo
-    p = ct.exponent
-    s_up = np.where(up, d - ct.gap_hi, 1.0)
-    s_lo = np.where(lo, ct.gap_lo - d, 1.0)
-    k = np.where(up, ct.k_hi * p * s_up ** (p - 1), 0.0) + \
-        np.where(lo, ct.k_lo * p * s_lo ** (p - 1), 0.0)
-    return k, up | lo
+    """(k'_j, in_contact_j) of every contact at the static state x0 (the contact law at
+    zero velocity, mean stiffness, modes from the sign)."""
+    law = evaluate_set(model.contacts, model.contacts.directions @ x0)
+    return law.stiffness, law.mode != 0
 
 
 def tangent_matrices(model: ReducedModel, x0, param: float) -> tuple[np.ndarray, np.ndarray]:
@@ -46,10 +41,10 @@ def tangent_matrices(model: ReducedModel, x0, param: float) -> tuple[np.ndarray,
         K += cp.P.T @ (cp.Kc0 + s * cp.Kc1) @ cp.P
         D += cp.P.T @ (cp.Bc0 + s * cp.Bc1) @ cp.P
     if ct.count:
-        k, on = contact_slopes(model, x0)
+        law = evaluate_set(ct, ct.directions @ x0)
         C = ct.directions
-        K += C.T @ (k[:, None] * C)
-        D += C.T @ ((on * ct.damping)[:, None] * C)
+        K += C.T @ (law.stiffness[:, None] * C)
+        D += C.T @ (law.damping[:, None] * C)
     return K, D
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
 
 __all__ = ["StaticResult", "static_equilibrium"]
@@ -35,19 +36,9 @@ def _forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):
         r -= cp.P.T @ (Kc @ (cp.P @ x))
         J += cp.P.T @ Kc @ cp.P
     if ct.count:
-        d = ct.directions @ x
-        f = np.zeros(ct.count)
-        kd = np.zeros(ct.count)
-        up = d > ct.gap_hi
-        lo = d < ct.gap_lo
-        p = ct.exponent
-        s_up = np.where(up, d - ct.gap_hi, 0.0)
-        s_lo = np.where(lo, ct.gap_lo - d, 0.0)
-        f = ct.k_hi * s_up ** p - ct.k_lo * s_lo ** p
-        kd = np.where(up, ct.k_hi * p * np.where(up, s_up, 1.0) ** (p - 1), 0.0) + \
-            np.where(lo, ct.k_lo * p * np.where(lo, s_lo, 1.0) ** (p - 1), 0.0)
-        r -= ct.directions.T @ f
-        J += ct.directions.T @ (kd[:, None] * ct.directions)
+        law = evaluate_set(ct, ct.directions @ x)     # at rest: no damping force
+        r -= ct.directions.T @ law.force
+        J += ct.directions.T @ (law.stiffness[:, None] * ct.directions)
     return r, J
 
 

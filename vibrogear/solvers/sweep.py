@@ -35,6 +35,7 @@ import numpy as np
 
 from ..models.reduced import ReducedModel
 from ..pipeline.executors import broadcast, is_root, run_units, under_mpi
+from .contact_eval import contact_kinematics
 from .integrate import IntegrationOptions, integrate
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
@@ -120,18 +121,9 @@ class SweepResult:
 
 def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.ndarray:
     """delta_mon = c_mon . x - e_mon(t) at times ``t`` for states (len(t), 2m)."""
-    t = np.atleast_1d(np.asarray(t, dtype=float))
-    states = np.atleast_2d(states)
-    ct = model.contacts
-    if ct.count == 0:
-        return states[:, 0].copy()
-    j = model.monitor
-    m = model.n_modes
-    W = model.excitation_frequency(param)
-    h = np.arange(1, model.n_harmonics + 1)
-    arg = np.outer(t, h) * W
-    e = np.cos(arg) @ ct.error_cos[j] + np.sin(arg) @ ct.error_sin[j]
-    return states[:, :m] @ ct.directions[j] - e
+    if model.contacts.count == 0:
+        return np.atleast_2d(states)[:, 0].copy()
+    return contact_kinematics(model, param, t, states, rows=[model.monitor])[0][0]
 
 
 def _scaled(samples: np.ndarray, split: int | None) -> np.ndarray:
