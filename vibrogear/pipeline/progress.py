@@ -1,14 +1,15 @@
-"""A small progress bar with rate and ETA, silent when not on a terminal or when quiet."""
+"""Progress bars (tqdm) with rate and ETA, silent when not on a terminal or when quiet."""
 from __future__ import annotations
 
 import sys
-import time
 
 __all__ = ["Progress", "null_progress"]
 
 
 class Progress:
-    """``with Progress(total, label) as bar: bar.update(1)``; draws only on a TTY."""
+    """``with Progress(total, label) as bar: bar.update(1, info)``; draws only on a TTY.
+    A thin wrapper of :class:`tqdm.tqdm` that keeps the analyses' interface (``update``
+    with an info text, ``done``, ``close``)."""
 
     def __init__(self, total: int, label: str = "", *, quiet: bool = False, stream=None):
         self.total = max(int(total), 1)
@@ -16,8 +17,13 @@ class Progress:
         self.stream = stream if stream is not None else sys.stderr
         self.enabled = (not quiet) and hasattr(self.stream, "isatty") and self.stream.isatty()
         self.done = 0
-        self._t0 = time.perf_counter()
-        self._last = 0.0
+        self._bar = None
+        if self.enabled:
+            from tqdm import tqdm
+            self._bar = tqdm(total=self.total, desc=f"{label:<14}", file=self.stream,
+                             unit="pt", dynamic_ncols=True, mininterval=0.1, leave=True,
+                             bar_format="{desc} {bar} {n_fmt}/{total_fmt} {rate_fmt} "
+                                        "ETA {remaining}{postfix}")
 
     def __enter__(self) -> "Progress":
         return self
@@ -27,28 +33,16 @@ class Progress:
 
     def update(self, n: int = 1, info: str = "") -> None:
         self.done += n
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self._last < 0.1 and self.done < self.total:
-            return
-        self._last = now
-        elapsed = now - self._t0
-        rate = self.done / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
-        frac = min(self.done / self.total, 1.0)
-        width = 28
-        bar = "#" * int(frac * width) + "-" * (width - int(frac * width))
-        eta_s = f"{eta:5.0f}s" if eta != float("inf") else "    ?"
-        self.stream.write(f"\r{self.label:<14} [{bar}] {self.done}/{self.total} "
-                          f"{rate:6.1f}/s ETA {eta_s} {info[:30]:<30}")
-        self.stream.flush()
+        if self._bar is not None:
+            if info:
+                self._bar.set_postfix_str(info[:30], refresh=False)
+            self._bar.update(n)
 
     def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
-            self.enabled = False
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+        self.enabled = False
 
 
 def null_progress(total: int, label: str = "") -> Progress:
