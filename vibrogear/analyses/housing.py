@@ -58,7 +58,7 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
     np.savez(out / "housing_modes.npz", freqs_hz=res.freqs_hz, bore_values=res.bore_values,
              bore_points=res.bore_points, bore_centers=res.bore_centers, bore_axes=res.bore_axes,
              bore_center_values=res.bore_center_values, bore_n_points=np.array(res.bore_n_points),
-             bore_names=np.array(res.bore_names), beta=res.beta)
+             bore_names=np.array(res.bore_names), beta=res.beta, n_dofs=res.n_dofs)
     files["coupling"] = "housing_modes.npz"
     if res.shapes_path is not None and Path(res.shapes_path).is_file():
         src = Path(res.shapes_path)
@@ -67,18 +67,28 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
             if s.is_file():
                 shutil.copyfile(s, out / f"mode_shapes{ext}")
         files["shapes"] = "mode_shapes.xdmf"
-    if plot and res.n_modes:
+    if plot and res.n_modes and len(res.preview_points):
         from ..report.housing_plots import plot_mode_previews
         plot_mode_previews(res, out / "housing_modes.png")
         files["plot"] = "housing_modes.png"
     return files
 
 
-def modes_summary(res, cfg) -> dict:
+def _expected_mass(res, cfg) -> float | None:
+    """Independent mass: closed-form volume (parametric) or OCC's solid volume (STEP) x rho; a
+    mesh file's tetrahedron volumes (same mesh, so only a consistency check); none for modes."""
     from ..geometry.housing import housing_volume
 
-    expected = housing_volume(cfg) * cfg.material.rho
+    if cfg.source == "parametric":
+        return housing_volume(cfg) * cfg.material.rho
+    vol = (res.source_info or {}).get("volume_m3")
+    return vol * cfg.material.rho if vol else None
+
+
+def modes_summary(res, cfg) -> dict:
+    expected = _expected_mass(res, cfg)
     return {
+        "source": dict(res.source_info or {"source": cfg.source}),
         "status": res.status if res.status != "ok" else "ok",
         "message": res.message,
         "n_dofs": res.n_dofs,
@@ -90,7 +100,8 @@ def modes_summary(res, cfg) -> dict:
         "error_estimates": {
             "max_eigen_residual": float(res.residuals.max()) if res.n_modes else None,
             "mass_orthonormality_error": res.orthogonality_error,
-            "mass_vs_closed_form_rel": abs(res.mass_kg - expected) / expected,
+            "mass_vs_closed_form_rel": (abs(res.mass_kg - expected) / expected
+                                        if expected and np.isfinite(res.mass_kg) else None),
             "converged_reason": res.converged_reason,
             "n_converged": res.n_converged,
             "coupling_points_by_fallback": res.n_fallback_points,

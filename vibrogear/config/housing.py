@@ -1,6 +1,13 @@
 """Housing scene schema: ``[housing]`` and its sub-tables (the stator of paper eq. (3)).
 
-Coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y <= width``,
+``source`` says where the housing comes from: ``"parametric"`` (the default: the box below),
+``"step"`` (a CAD solid, meshed here), ``"mesh"`` (another FE program's tetrahedral mesh) or
+``"modal"`` (another FE program's modes at the coupling points).  The imported sources take
+``file`` (relative to the scene file), ``fixed_region`` (every boundary face inside the box is
+clamped) and bores given by ``center``, ``axis`` and ``bore_radius``; see
+:mod:`vibrogear.geometry.housing_import` and docs/housing.md.
+
+Parametric coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y <= width``,
 ``0 <= z <= height`` (z up; the base plate or feet lie below z = 0).  Each
 ``[[housing.bores]]`` entry is one shaft: a pair of coaxial bearing bosses through the two
 walls normal to y (the *front* wall at y = 0 and the *back* wall at y = width), with the shaft
@@ -9,33 +16,112 @@ axis parallel to y at (x, z).  Bosses protrude ``boss_length`` outwards from the
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 from .base import ConfigError, spec
 
-__all__ = ["HousingConfig", "BoreConfig", "MaterialConfig", "HousingMeshConfig",
+__all__ = ["HousingConfig", "BoreConfig", "FixedRegionConfig", "SOURCES", "FILE_SUFFIXES", "LENGTH_UNITS", "MaterialConfig", "HousingMeshConfig",
            "HousingModesConfig", "HousingSweepConfig", "HousingConvergenceConfig",
-           "MAX_SIZE_PER_WALL"]
+           "MAX_SIZE_PER_WALL", "check_file", "resolve_file"]
 
 #: largest global mesh size, in wall thicknesses, that still puts an element across the wall
 MAX_SIZE_PER_WALL = 2.0
 
+SOURCES = ("parametric", "step", "mesh", "modal")
+#: file suffixes (lower case) each imported source reads
+FILE_SUFFIXES = {
+    "step": (".step", ".stp"),
+    "mesh": (".inp", ".bdf", ".nas", ".msh", ".vtu", ".xdmf"),
+    "modal": (".npz", ".csv", ".unv", ".uff"),
+}
+#: metres per unit of a mesh / modal file (STEP files carry their own unit)
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3}
+#: the parametric box's keys, refused with an imported source
+_BOX_KEYS = ("length", "width", "height", "wall_thickness")
+
 
 @dataclass(frozen=True, kw_only=True)
 class BoreConfig:
-    """One shaft: a bearing-boss pair with coaxial bores through the front and back walls."""
-    x: float = spec(gt=0.0, doc="bore axis position along the length, m")
-    z: float = spec(gt=0.0, doc="bore axis height above the box bottom, m")
+    """One shaft.  Parametric: a bearing-boss pair with coaxial bores through the front and back
+    walls at (``x``, ``z``).  Imported: the shaft line through ``center`` along ``axis``; every
+    boundary face on the cylinder of ``bore_radius`` about it is a bore surface (see
+    :mod:`vibrogear.geometry.housing_import`).  With an axis parallel to y, ``x`` and ``z`` are
+    filled in from ``center`` (the gearbox takes the shaft axis from them)."""
+    x: float | None = spec(None, gt=0.0, doc="bore axis position along the length, m (parametric)")
+    z: float | None = spec(None, gt=0.0, doc="bore axis height above the box bottom, m (parametric)")
+    center: tuple[float, float, float] | None = spec(None, doc="a point on the shaft axis, m (imported)")
+    axis: tuple[float, float, float] | None = spec(None, doc="shaft axis direction (imported)")
+    length: float | None = spec(None, gt=0.0, doc="only faces within center +- length/2 (imported)")
     bore_radius: float = spec(gt=0.0, doc="bore (bearing outer race) radius, m")
-    boss_radius: float = spec(gt=0.0, doc="outer radius of the boss, m")
+    boss_radius: float | None = spec(None, gt=0.0, doc="outer radius of the boss, m (parametric)")
     boss_length: float = spec(0.02, ge=0.0, doc="protrusion of the boss outside the wall, m")
     rolling_elements: int = spec(ge=3, le=200, doc="coupling points per bore (one per rolling element)")
     name: str = spec("", doc="label, e.g. 'input shaft'")
 
+    def __post_init__(self) -> None:
+        if self.center is not None and self.axis is not None and self.x is None and self.z is None:
+            ax = self.axis
+            n = math.sqrt(sum(a * a for a in ax))
+            if n > 0 and math.hypot(ax[0], ax[2]) <= 1e-12 * n:      # parallel to y
+                object.__setattr__(self, "x", float(self.center[0]))
+                object.__setattr__(self, "z", float(self.center[2]))
+
+    @property
+    def unit_axis(self) -> tuple[float, float, float]:
+        """The axis normalised (imported bores)."""
+        n = math.sqrt(sum(a * a for a in self.axis))
+        return tuple(a / n for a in self.axis)
+
     def validate(self, path: str) -> None:
-        if not self.bore_radius < self.boss_radius:
+        if self.center is not None or self.axis is not None:
+            self._validate_line(path)
+            return
+        if self.boss_radius is not None and not self.bore_radius < self.boss_radius:
             raise ConfigError(f"{path}.boss_radius", f"must be greater than bore_radius = "
                               f"{self.bore_radius:g}, got {self.boss_radius:g}")
+
+    def _validate_line(self, path: str) -> None:
+        if self.center is None or self.axis is None:
+            missing = "center" if self.center is None else "axis"
+            raise ConfigError(f"{path}.{missing}", "missing required key: a bore given by its line "
+                              "needs center = [x, y, z] and axis = [ax, ay, az]")
+        for k, v in enumerate(self.center):
+            if not math.isfinite(v):
+                raise ConfigError(f"{path}.center[{k}]", f"must be a finite number, got {v!r}")
+        n = math.sqrt(sum(a * a for a in self.axis))
+        if not (math.isfinite(n) and n > 1e-12):
+            raise ConfigError(f"{path}.axis", f"must be a non-zero finite vector (length > 1e-12), got "
+                              f"{list(self.axis)} of length {n:g}")
+        if self.boss_radius is not None:
+            raise ConfigError(f"{path}.boss_radius", "only for the parametric housing (bores given by "
+                              "x and z); an imported housing's bosses are in its geometry")
+        ax = self.unit_axis
+        if self.x is not None and self.z is not None and math.hypot(ax[0], ax[2]) <= 1e-12 and (
+                abs(self.x - self.center[0]) > 1e-12 * max(1.0, abs(self.x))
+                or abs(self.z - self.center[2]) > 1e-12 * max(1.0, abs(self.z))):
+            raise ConfigError(f"{path}.x", f"give either x, z or center: x, z = {self.x:g}, {self.z:g} "
+                              f"disagree with center = {list(self.center)}")
+        if (self.x is not None or self.z is not None) and math.hypot(ax[0], ax[2]) > 1e-12:
+            raise ConfigError(f"{path}.x", "give either x, z (parametric) or center and axis (imported)")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FixedRegionConfig:
+    """``fixed_region = { min = [x, y, z], max = [x, y, z] }``: every boundary face of an imported
+    housing lying wholly inside this box (metres, after unit conversion) is clamped."""
+    min: tuple[float, float, float] = spec(doc="box corner with the smallest coordinates, m")
+    max: tuple[float, float, float] = spec(doc="box corner with the largest coordinates, m")
+
+    def validate(self, path: str) -> None:
+        for k, (a, b) in enumerate(zip(self.min, self.max)):
+            if not (math.isfinite(a) and math.isfinite(b)):
+                raise ConfigError(f"{path}.min", f"coordinates must be finite, got {list(self.min)}, "
+                                  f"{list(self.max)}")
+            if a > b:
+                raise ConfigError(f"{path}.max[{k}]", f"must be >= min[{k}] = {a:g}, got {b:g}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,11 +158,15 @@ class HousingModesConfig:
 
 @dataclass(frozen=True, kw_only=True)
 class HousingConfig:
-    length: float = spec(gt=0.0, doc="outer box length (x), m")
-    width: float = spec(gt=0.0, doc="outer box width (y, along the shafts), m")
-    height: float = spec(gt=0.0, doc="outer box height (z), m")
-    wall_thickness: float = spec(gt=0.0, doc="wall thickness, m")
-    bores: tuple[BoreConfig, ...] = spec(min_len=1, max_len=16, doc="one bearing-boss pair per shaft")
+    source: str = spec("parametric", choices=SOURCES, doc="parametric box, STEP solid, FE mesh or FE modes")
+    file: str | None = spec(None, doc="STEP / mesh / modal file (relative to the scene file)")
+    fixed_region: FixedRegionConfig | None = spec(None, doc="clamped boundary faces (imported housings)")
+    length_unit: str = spec("m", choices=tuple(LENGTH_UNITS), doc="unit of a mesh or modal file's lengths")
+    length: float | None = spec(None, gt=0.0, doc="outer box length (x), m")
+    width: float | None = spec(None, gt=0.0, doc="outer box width (y, along the shafts), m")
+    height: float | None = spec(None, gt=0.0, doc="outer box height (z), m")
+    wall_thickness: float | None = spec(None, gt=0.0, doc="wall thickness, m")
+    bores: tuple[BoreConfig, ...] = spec((), max_len=16, doc="one bearing-boss pair (or bore line) per shaft")
     base: str = spec("plate", choices=("plate", "feet", "none"), doc="what the housing stands on")
     base_thickness: float = spec(0.02, gt=0.0, doc="thickness of the base plate or feet, m")
     base_overhang: float = spec(0.03, ge=0.0, doc="plate overhang beyond the box, m")
@@ -91,7 +181,9 @@ class HousingConfig:
 
     @property
     def mesh_size(self) -> float:
-        return self.mesh.size if self.mesh.size is not None else 1.3 * self.wall_thickness
+        if self.mesh.size is not None:
+            return self.mesh.size
+        return 1.3 * self.wall_thickness if self.wall_thickness is not None else math.nan
 
     @property
     def bore_mesh_size(self) -> float:
@@ -101,8 +193,55 @@ class HousingConfig:
     def rib_t(self) -> float:
         return self.rib_thickness if self.rib_thickness is not None else self.wall_thickness
 
+    @property
+    def file_path(self) -> Path | None:
+        """The imported file (made absolute against the scene file's folder when loaded)."""
+        return Path(self.file) if self.file is not None else None
+
+    def key_data(self) -> dict[str, Any]:
+        """The config as cache-key data: a parametric housing's keys are those it had before the
+        imported sources existed; an imported one adds the file's SHA-256 (content, not name)."""
+        import dataclasses
+        import hashlib
+
+        d = dataclasses.asdict(self)
+        if self.source == "parametric":
+            for k in ("source", "file", "fixed_region", "length_unit"):
+                d.pop(k)
+            for b in d["bores"]:
+                for k in ("center", "axis", "length"):
+                    b.pop(k)
+            return d
+        h = hashlib.sha256()
+        with open(self.file, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+        d["file"] = {"name": Path(self.file).name, "sha256": h.hexdigest()}
+        return d
+
     def validate(self, path: str) -> None:
         p = path or "housing"
+        if self.source != "parametric":
+            self._validate_imported(p)
+            return
+        for k in _BOX_KEYS:
+            if getattr(self, k) is None:
+                raise ConfigError(f"{p}.{k}", "missing required key (source = 'parametric')")
+        for k in ("file", "fixed_region"):
+            if getattr(self, k) is not None:
+                raise ConfigError(f"{p}.{k}", f"only for an imported housing (source = 'step', 'mesh' or "
+                                  f"'modal'); the parametric housing is clamped at its base")
+        if not self.bores:
+            raise ConfigError(f"{p}.bores", "needs at least 1 entries, got 0 (the parametric housing is "
+                              "built around its bores)")
+        for i, b in enumerate(self.bores):
+            if b.center is not None or b.axis is not None:
+                raise ConfigError(f"{p}.bores[{i}].center", "only for an imported housing; the parametric "
+                                  "housing's bores are given by x and z")
+            for k in ("x", "z", "boss_radius"):
+                if getattr(b, k) is None:
+                    raise ConfigError(f"{p}.bores[{i}].{k}", "missing required key (source = 'parametric')")
+            b.validate(f"{p}.bores[{i}]")
         t = self.wall_thickness
         dims = {"length": self.length, "width": self.width, "height": self.height}
         name, smallest = min(dims.items(), key=lambda kv: kv[1])
@@ -122,9 +261,41 @@ class HousingConfig:
         if size < t / 50:
             raise ConfigError(f"{p}.mesh.size", f"must be >= wall_thickness / 50 = {t / 50:g} "
                               f"(millions of elements), got {size:g}")
+        self._validate_modes(p)
+
+    def _validate_modes(self, p: str) -> None:
         m = self.modes
         if m.cutoff_hz is None and m.count > m.max_count:
             raise ConfigError(f"{p}.modes.count", f"must be <= max_count = {m.max_count}, got {m.count}")
+
+    def _validate_imported(self, p: str) -> None:
+        src = self.source
+        for k in _BOX_KEYS:
+            if getattr(self, k) is not None:
+                raise ConfigError(f"{p}.{k}", f"only for source = 'parametric'; a {src!r} housing takes its "
+                                  "geometry from its file")
+        check_file(self.file, src, f"{p}.file")
+        if src in ("step", "mesh") and self.fixed_region is None and self.support == "fixed":
+            raise ConfigError(f"{p}.fixed_region", f"missing required key: a {src!r} housing is clamped on "
+                              "the boundary faces inside fixed_region = { min = [x, y, z], max = [x, y, z] }")
+        if src == "modal" and self.fixed_region is not None:
+            raise ConfigError(f"{p}.fixed_region", "not for source = 'modal': the modes were computed with "
+                              "their supports already")
+        if src == "step" and self.mesh.size is None:
+            raise ConfigError(f"{p}.mesh.size", "missing required key: a STEP housing needs the global "
+                              "element size, m (no wall thickness to derive it from)")
+        names = set()
+        for i, b in enumerate(self.bores):
+            bp = f"{p}.bores[{i}]"
+            if b.center is None or b.axis is None:
+                raise ConfigError(f"{bp}.center", f"missing required key: a {src!r} housing's bores are given "
+                                  "by center = [x, y, z], axis = [ax, ay, az] and bore_radius")
+            b.validate(bp)
+            label = b.name or f"shaft{i}"
+            if label in names:
+                raise ConfigError(f"{bp}.name", f"duplicate bore name {label!r}")
+            names.add(label)
+        self._validate_modes(p)
 
     def _validate_bores(self, p: str) -> None:
         t, L, H = self.wall_thickness, self.length, self.height
@@ -155,6 +326,33 @@ class HousingConfig:
                 if d < need:
                     raise ConfigError(bp, f"bores overlap bores[{j}]: centre distance must be >= the sum of "
                                       f"the bore radii + wall_thickness = {need:g}, got {d:g}")
+
+
+def check_file(file: str | None, source: str, path: str) -> Path:
+    """The file of an imported housing: given, existing, readable, with a supported suffix."""
+    suffixes = FILE_SUFFIXES[source]
+    if file is None:
+        raise ConfigError(path, f"missing required key: source = {source!r} reads a file "
+                          f"({', '.join(suffixes)})")
+    f = Path(file)
+    if f.suffix.lower() not in suffixes:
+        raise ConfigError(path, f"{file}: unsupported file type {f.suffix or '(no suffix)'!r} for source = "
+                          f"{source!r}; expected one of {', '.join(suffixes)}")
+    if not f.is_file():
+        raise ConfigError(path, f"{file}: no such file")
+    if not os.access(f, os.R_OK):
+        raise ConfigError(path, f"{file}: not readable (permission denied)")
+    return f
+
+
+def resolve_file(data: dict[str, Any], base_dir: str | Path) -> None:
+    """Make a relative ``housing.file`` of the scene ``data`` relative to ``base_dir`` (the scene
+    file's folder), in place."""
+    h = data.get("housing")
+    if isinstance(h, dict) and isinstance(h.get("file"), str) and h["file"]:
+        f = Path(h["file"]).expanduser()
+        if not f.is_absolute():
+            h["file"] = str(Path(base_dir) / f)
 
 
 @dataclass(frozen=True, kw_only=True)

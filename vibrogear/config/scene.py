@@ -8,7 +8,7 @@ from typing import Any
 
 from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig, ReductionAccuracyConfig
-from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig
+from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig, resolve_file
 from .options import Parameter
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
@@ -121,11 +121,16 @@ def read_toml(path: str | Path) -> dict[str, Any]:
     return read_toml_file(path, Scene)
 
 
-def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = ()) -> Scene:
+def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
+                    base_dir: str | Path | None = None) -> Scene:
+    """``base_dir``: the scene file's folder; relative data-file paths (``housing.file``) are
+    taken relative to it."""
     data = copy.deepcopy(data)
     for text in overrides:
         keys, value = parse_override(text)
         set_path(data, keys, value)
+    if base_dir is not None:
+        resolve_file(data, base_dir)
     # the sections that take the parameter read it under the model's keys
     return build(GearboxScene if "gearbox" in data else Scene, data)
 

@@ -21,7 +21,7 @@ import numpy as np
 from ..config.housing import HousingConfig
 
 __all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",
-           "build_beam_mesh", "housing_volume", "read_msh_arrays", "VOLUME_TAG", "BASE_TAG", "BORE_TAG0"]
+           "build_beam_mesh", "housing_volume", "read_msh_arrays", "ring_frame", "size_field", "write_housing_step", "VOLUME_TAG", "BASE_TAG", "BORE_TAG0"]
 
 VOLUME_TAG = 1
 BASE_TAG = 1
@@ -54,11 +54,28 @@ class BoreGeometry:
     n_points: int
 
     def points(self) -> np.ndarray:
-        """Coupling points (n_points, 3): theta_k = 2 pi k / n from +x towards +z."""
+        """Coupling points (n_points, 3): theta_k = 2 pi k / n from e1 towards e2 (:func:`ring_frame`;
+        for an axis along y: from +x towards +z)."""
         th = 2 * np.pi * np.arange(self.n_points) / self.n_points
-        cx, cy, cz = self.center
-        return np.column_stack([cx + self.radius * np.cos(th), np.full_like(th, cy),
-                                cz + self.radius * np.sin(th)])
+        e1, e2 = ring_frame(self.axis)
+        c = np.asarray(self.center, dtype=float)
+        return c + self.radius * (np.cos(th)[:, None] * e1 + np.sin(th)[:, None] * e2)
+
+
+def ring_frame(axis) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors (e1, e2) across a bore axis, the same for +axis and -axis: e1 is the first of
+    x, z, y projected off the axis (normalised), e2 = e1 x u with u = the axis signed so that its
+    largest component is positive.  Axis along y: e1 = +x, e2 = +z."""
+    a = np.asarray(axis, dtype=float)
+    u = a / np.linalg.norm(a)
+    if u[np.argmax(np.abs(u))] < 0:
+        u = -u
+    for ref in (np.array([1.0, 0, 0]), np.array([0, 0, 1.0]), np.array([0, 1.0, 0])):
+        p = ref - (ref @ u) * u
+        if np.linalg.norm(p) > 0.5:
+            break
+    e1 = p / np.linalg.norm(p)
+    return e1, np.cross(e1, u)
 
 
 def bore_layout(cfg: HousingConfig) -> tuple[BoreGeometry, ...]:
@@ -122,6 +139,60 @@ def _surfaces_in_box(gmsh, lo, hi) -> list[int]:
     return [tag for _, tag in ents]
 
 
+def _housing_solid(gmsh, cfg: HousingConfig) -> None:
+    """The housing solid in gmsh's OCC model (metres), synchronized."""
+    occ = gmsh.model.occ
+    L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
+    outer = occ.addBox(0, 0, 0, L, W, H)
+    inner = occ.addBox(t, t, t, L - 2 * t, W - 2 * t, H - 2 * t)
+    shell, _ = occ.cut([(3, outer)], [(3, inner)])
+    parts = []
+    if cfg.base == "plate":
+        o = cfg.base_overhang
+        parts.append((3, occ.addBox(-o, -o, -cfg.base_thickness, L + 2 * o, W + 2 * o, cfg.base_thickness)))
+    elif cfg.base == "feet":
+        f = cfg.foot_size
+        for x in (0.0, L - f):
+            for y in (0.0, W - f):
+                parts.append((3, occ.addBox(x, y, -cfg.base_thickness, f, f, cfg.base_thickness)))
+    holes = []
+    for b in cfg.bores:
+        lb = b.boss_length
+        if lb > 0:
+            parts.append((3, occ.addCylinder(b.x, -lb, b.z, 0, lb, 0, b.boss_radius)))
+            parts.append((3, occ.addCylinder(b.x, W, b.z, 0, lb, 0, b.boss_radius)))
+            if cfg.ribs:
+                rt = cfg.rib_t
+                parts.append((3, occ.addBox(b.x - rt / 2, -lb, 0, rt, lb, b.z)))
+                parts.append((3, occ.addBox(b.x - rt / 2, W, 0, rt, lb, b.z)))
+        holes.append((3, occ.addCylinder(b.x, -lb - 1e-3, b.z, 0, W + 2 * lb + 2e-3, 0, b.bore_radius)))
+    body = shell
+    if parts:
+        body, _ = occ.fuse(shell, parts)
+    occ.cut(body, holes)
+    occ.synchronize()
+
+
+def write_housing_step(cfg: HousingConfig, path: str | Path) -> Path:
+    """The parametric housing's solid as a STEP file in millimetres (what a CAD system exports):
+    gmsh writes its model coordinates with a millimetre unit label, so the model is scaled by 1000."""
+    path = Path(path)
+    gmsh = _start(False)
+    try:
+        gmsh.model.add("housing")
+        _housing_solid(gmsh, cfg)
+        gmsh.model.occ.dilate(gmsh.model.getEntities(3), 0, 0, 0, 1000.0, 1000.0, 1000.0)
+        gmsh.model.occ.synchronize()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        gmsh.write(str(path))
+    except Exception as exc:
+        raise _fail(gmsh, exc) from None
+    finally:
+        gmsh.logger.stop()
+        gmsh.finalize()
+    return path
+
+
 def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = False) -> HousingMesh:
     """Build, mesh and write the housing to ``path`` (.msh).  Raises MeshingError."""
     path = Path(path)
@@ -129,36 +200,8 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
     gmsh = _start(verbose)
     try:
         gmsh.model.add("housing")
-        occ = gmsh.model.occ
-        L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
-        outer = occ.addBox(0, 0, 0, L, W, H)
-        inner = occ.addBox(t, t, t, L - 2 * t, W - 2 * t, H - 2 * t)
-        shell, _ = occ.cut([(3, outer)], [(3, inner)])
-        parts = []
-        if cfg.base == "plate":
-            o = cfg.base_overhang
-            parts.append((3, occ.addBox(-o, -o, -cfg.base_thickness, L + 2 * o, W + 2 * o, cfg.base_thickness)))
-        elif cfg.base == "feet":
-            f = cfg.foot_size
-            for x in (0.0, L - f):
-                for y in (0.0, W - f):
-                    parts.append((3, occ.addBox(x, y, -cfg.base_thickness, f, f, cfg.base_thickness)))
-        holes = []
-        for b in cfg.bores:
-            lb = b.boss_length
-            if lb > 0:
-                parts.append((3, occ.addCylinder(b.x, -lb, b.z, 0, lb, 0, b.boss_radius)))
-                parts.append((3, occ.addCylinder(b.x, W, b.z, 0, lb, 0, b.boss_radius)))
-                if cfg.ribs:
-                    rt = cfg.rib_t
-                    parts.append((3, occ.addBox(b.x - rt / 2, -lb, 0, rt, lb, b.z)))
-                    parts.append((3, occ.addBox(b.x - rt / 2, W, 0, rt, lb, b.z)))
-            holes.append((3, occ.addCylinder(b.x, -lb - 1e-3, b.z, 0, W + 2 * lb + 2e-3, 0, b.bore_radius)))
-        body = shell
-        if parts:
-            body, _ = occ.fuse(shell, parts)
-        body, _ = occ.cut(body, holes)
-        occ.synchronize()
+        _housing_solid(gmsh, cfg)
+        L, W = cfg.length, cfg.width
         vols = gmsh.model.getEntities(3)
         if len(vols) != 1:
             raise MeshingError(f"housing geometry is not one connected solid ({len(vols)} volumes)")
@@ -208,12 +251,21 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
 
 
 def _size_field(gmsh, cfg: HousingConfig, bore_surfs: list[int]) -> None:
-    h, hb = cfg.mesh_size, cfg.bore_mesh_size
+    rings = [b.boss_radius - b.bore_radius for b in cfg.bores]
+    size_field(gmsh, cfg.mesh_size, cfg.bore_mesh_size, bore_surfs, dist_min=0.25 * max(rings),
+               dist_max=max(b.boss_radius for b in cfg.bores))
+
+
+def size_field(gmsh, h: float, hb: float, bore_surfs: list[int], *, dist_min: float, dist_max: float) -> None:
+    """The element-size rules of every meshed housing: size ``h``, ``hb`` within ``dist_min`` of the
+    bore surfaces' edges, growing linearly to ``h`` at ``dist_max``."""
     gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
     gmsh.option.setNumber("Mesh.MeshSizeMax", h)
     gmsh.option.setNumber("Mesh.MeshSizeMin", min(hb, h) * 0.5)
+    if not bore_surfs:
+        return
     curves = gmsh.model.getBoundary([(2, s) for s in bore_surfs], combined=False, oriented=False)
     fd = gmsh.model.mesh.field.add("Distance")  # gmsh 4.8 samples curves, not surfaces
     gmsh.model.mesh.field.setNumbers(fd, "CurvesList", sorted({abs(c) for _, c in curves}))
@@ -222,8 +274,8 @@ def _size_field(gmsh, cfg: HousingConfig, bore_surfs: list[int]) -> None:
     gmsh.model.mesh.field.setNumber(ft, "InField", fd)
     gmsh.model.mesh.field.setNumber(ft, "SizeMin", hb)
     gmsh.model.mesh.field.setNumber(ft, "SizeMax", h)
-    gmsh.model.mesh.field.setNumber(ft, "DistMin", 0.25 * max(b.boss_radius - b.bore_radius for b in cfg.bores))
-    gmsh.model.mesh.field.setNumber(ft, "DistMax", max(b.boss_radius for b in cfg.bores))
+    gmsh.model.mesh.field.setNumber(ft, "DistMin", dist_min)
+    gmsh.model.mesh.field.setNumber(ft, "DistMax", dist_max)
     gmsh.model.mesh.field.setAsBackgroundMesh(ft)
 
 

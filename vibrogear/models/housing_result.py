@@ -58,6 +58,7 @@ class HousingModes:
     shapes_path: Path | None = None       # XDMF of the first mode shapes (P1-interpolated)
     preview_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     preview_values: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
+    source_info: Mapping[str, object] = field(default_factory=dict)   # what the housing was made from
 
     @property
     def n_modes(self) -> int:
@@ -84,7 +85,7 @@ def save_modes(res: HousingModes, folder: Path) -> None:
     meta = {k: getattr(res, k) for k in ("bore_n_points", "bore_names", "beta", "n_dofs", "degree",
                                           "orthogonality_error", "mass_kg", "n_fallback_points",
                                           "status", "message", "converged_reason", "n_converged",
-                                          "peak_memory_mb", "n_processes")}
+                                          "peak_memory_mb", "n_processes", "source_info")}
     meta["timings"] = dict(res.timings)
     meta["shapes"] = res.shapes_path.name if res.shapes_path is not None else None
     (folder / "meta.json").write_text(json.dumps(meta, indent=1))
@@ -95,6 +96,7 @@ def load_modes(folder: Path, *, key: str = "") -> HousingModes:
     with np.load(folder / "modes.npz") as z:
         arrays = {k: z[k] for k in _ARRAYS}
     shapes = meta.pop("shapes")
+    meta["source_info"] = meta.get("source_info") or {}
     meta["bore_n_points"] = tuple(meta["bore_n_points"])
     meta["bore_names"] = tuple(meta["bore_names"])
     return HousingModes(**arrays, **meta, cached=True, cache_key=key,

@@ -25,7 +25,8 @@ from typing import Mapping
 import numpy as np
 
 from ..config.housing import HousingConfig
-from ..geometry.housing import HousingMesh, bore_layout, build_housing_mesh
+from ..geometry.housing import HousingMesh
+from ..geometry.housing_import import build_mesh, mesh_bores, mesh_info
 from ..cache import cache_key, discard_entry, entry_dir, new_workspace, open_entry, publish_entry
 from .housing_result import HousingModes, load_modes, save_modes
 
@@ -80,14 +81,14 @@ def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
     the geometry and mesh sizes only; ``"modes"`` and ``"matrices"`` on the whole housing
     config (and share its hash)."""
     if stage == "mesh":
-        geo = dataclasses.asdict(cfg)
+        geo = cfg.key_data()
         for k in ("material", "modes", "support", "foundation_stiffness"):
             geo.pop(k)
         geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
         return cache_key("housing-mesh", geo)
     if stage not in ("modes", "matrices"):
         raise ValueError(f"unknown housing cache stage {stage!r}")
-    return cache_key(f"housing-{stage}", dataclasses.asdict(cfg))
+    return cache_key(f"housing-{stage}", cfg.key_data())
 
 
 def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
@@ -110,6 +111,9 @@ def _cached_modes(key: str) -> HousingModes | None:
 def housing_modes(cfg: HousingConfig, *, cache: bool = True) -> HousingModes:
     """Mesh -> assemble -> solve, with the on-disk cache (a hit does no FE work; an invalid
     entry is rebuilt with a warning)."""
+    if cfg.source == "modal":                # another FE program's modes: read, no FE work here
+        from .housing_modal import read_modal_housing
+        return read_modal_housing(cfg)
     comm = _comm()
     mesh_key, modes_key = housing_cache_keys(cfg)
     if cache and _bcast(comm, _cached_modes(modes_key) is not None if _rank(comm) == 0 else None):
@@ -152,7 +156,7 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
 
     try:
         res = solve_mesh_modes(hm, material=cfg.material, degree=cfg.mesh.degree,
-                               bores=bore_layout(cfg), count=m.count, cutoff_hz=m.cutoff_hz,
+                               bores=mesh_bores(cfg, hm), count=m.count, cutoff_hz=m.cutoff_hz,
                                max_count=m.max_count, tol=m.tol, solver=m.solver,
                                support=cfg.support, foundation_stiffness=cfg.foundation_stiffness,
                                shapes=m.shapes, shapes_dir=work)
@@ -160,7 +164,8 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
         if rank == 0:
             shutil.rmtree(work, ignore_errors=True)      # no half-built entry left behind
         raise
-    res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key)
+    res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key,
+                              source_info={"source": cfg.source, **mesh_info(cfg, hm)})
     if rank == 0:
         save_modes(res, work)
         if cache:
@@ -179,7 +184,7 @@ def _mesh(cfg, mesh_key, root, cache) -> tuple[HousingMesh, float]:
         except Exception as exc:             # valid checksums but unreadable: another layout
             discard_entry(mesh_key, f"cannot be read: {exc}")
     tmp = new_workspace(mesh_key) if cache else Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
-    hm = build_housing_mesh(cfg, tmp / "mesh.msh")
+    hm = build_mesh(cfg, tmp / "mesh.msh")
     seconds = hm.seconds
     _save_mesh_meta(hm, tmp)
     if cache:
@@ -279,6 +284,10 @@ def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatric
 
     if under_mpi():
         raise RuntimeError("housing_matrices is serial: call it without mpirun")
+    if cfg.source == "modal":
+        from ..config.base import ConfigError
+        raise ConfigError("housing.source", "the full housing matrices need an FE model; a 'modal' "
+                          "housing has only its modes at the coupling points")
     key = housing_matrices_key(cfg)
     res = _cached_matrices(key) if cache else None
     if res is not None:
@@ -287,7 +296,7 @@ def housing_matrices(cfg: HousingConfig, *, cache: bool = True) -> HousingMatric
     hm, t_mesh = _mesh(cfg, housing_cache_key(cfg, "mesh"), root, cache)
     from .housing import assemble_mesh_matrices
 
-    bores = bore_layout(cfg)
+    bores = mesh_bores(cfg, hm)
     try:
         raw = assemble_mesh_matrices(hm, material=cfg.material, degree=cfg.mesh.degree, bores=bores,
                                      support=cfg.support, foundation_stiffness=cfg.foundation_stiffness)
