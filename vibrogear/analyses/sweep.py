@@ -18,6 +18,7 @@ import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
+from ..solvers.status import Status
 from ..solvers.sweep import PointRecord, SweepResult, sweep
 from .study import Study, integration_options
 
@@ -109,7 +110,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     up = res.direction == "up"
     classes = {str(int(k)): int(np.sum(res.period_n == k)) for k in np.unique(res.period_n)}
     summary = {
-        "status": "ok" if res.status_code == 0 else "partial",
+        "status": "ok" if res.status_code == Status.OK else "partial",
         "message": res.status_message, "points": int(res.param.size),
         "resumed_points": resumed, "failed_points": failed, "period_classes": classes,
         "points_with_contact_loss": int(np.sum(res.impacts > 0)),
@@ -121,7 +122,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     }
     if store is not None and store.note:
         summary["resume"] = store.note
-    keep = store is None or res.status_code == 2           # stopped: keep the partial file
+    # stopped: keep the partial file
+    keep = store is None or res.status_code == Status.STOPPED_BY_CALLBACK
     return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
                            partial_files=() if keep else (store.path,),
                            warnings=tuple(warnings))

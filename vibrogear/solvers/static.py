@@ -6,12 +6,14 @@ by a semi-smooth Newton method with backtracking; bounded iterations.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
+from .status import Status
 
 __all__ = ["StaticResult", "static_equilibrium"]
 
@@ -20,10 +22,23 @@ __all__ = ["StaticResult", "static_equilibrium"]
 class StaticResult:
     x: np.ndarray
     u0: np.ndarray          # [x, 0]
-    converged: bool
-    residual: float
+    residual: float         # |force residual| / (1 + |F0|): the error estimate
     iterations: int
     message: str
+    status: Status = Status.OK      # OK or NOT_CONVERGED
+    wall_time: float = 0.0
+
+    @property
+    def converged(self) -> bool:
+        return self.status == Status.OK
+
+    @property
+    def counters(self) -> dict:
+        return {"iterations": self.iterations}
+
+    @property
+    def error_estimate(self) -> dict:
+        return {"relative_force_residual": self.residual}
 
 
 def _forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):
@@ -69,6 +84,7 @@ def static_equilibrium(model: ReducedModel, param: float = 0.0, *, x0=None, tol:
                        max_iter: int = 100) -> StaticResult:
     """Newton from ``x0``; where the tangent stiffness is singular (a dead zone, a free
     gear) a homotopy adds a vanishing artificial stiffness mu I, mu -> 0."""
+    wall = time.perf_counter()
     m = model.n_modes
     x = np.zeros(m) if x0 is None else np.array(x0, dtype=float)
     scale = 1.0 + np.linalg.norm(model.forcing.F0)
@@ -84,7 +100,9 @@ def static_equilibrium(model: ReducedModel, param: float = 0.0, *, x0=None, tol:
             x, res, it = _newton(model, x, param, mu, tol if mu == 0 else 1e-10, max_iter, scale)
             its += it
     ok = bool(res <= tol and np.all(np.isfinite(x)))
-    return StaticResult(x=x, u0=np.concatenate([x, np.zeros(m)]), converged=ok,
+    return StaticResult(x=x, u0=np.concatenate([x, np.zeros(m)]),
                         residual=float(res), iterations=its,
                         message="converged" if ok else "no static equilibrium found "
-                        "(unloaded free body or load beyond every contact)")
+                        "(unloaded free body or load beyond every contact)",
+                        status=Status.OK if ok else Status.NOT_CONVERGED,
+                        wall_time=time.perf_counter() - wall)

@@ -37,6 +37,7 @@ from ..models.reduced import ReducedModel
 from ..pipeline.executors import broadcast, is_root, run_units, under_mpi
 from .contact_eval import contact_kinematics
 from .integrate import IntegrationOptions, integrate
+from .status import Status
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
            "count_clusters", "monitored_deformation", "assemble_result"]
@@ -57,7 +58,7 @@ class PointRecord:
     impacts: float               # contact losses of the monitored contact per period
     defect: float                # max_k |P_{k+n} - P_k| / scale (periodic points), else NaN
     clusters: int                # distinct Poincare clusters (0 if failed)
-    status: int                  # integrator status: 0 ok, < 0 failure
+    status: int                  # Status: OK, or the integrator's failure (< 0)
     message: str
     u_end: np.ndarray            # (n,) state at the end (phase 0): seeds the next point
     steps: int = 0
@@ -99,7 +100,7 @@ class SweepResult:
     atol: float
     period_tol: float
     param_name: str = "param"
-    status_code: int = 0         # 0 all ok, 1 some points failed, 2 stopped by the callback
+    status_code: Status = Status.OK   # OK, PARTIAL (some points failed), STOPPED_BY_CALLBACK
     status_message: str = "ok"
     states: np.ndarray | None = None   # (N, R, n) when kept
     records: tuple = field(default=(), repr=False)
@@ -201,8 +202,8 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
     wall = time.perf_counter()
     R = int(record_periods)
     if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
-        return _failed(direction, index, param, R, -10,
-                       "excitation frequency must be finite and > 0", u_seed)
+        return _failed(direction, index, param, R, Status.BAD_PARAMETER,
+                       Status.BAD_PARAMETER.message, u_seed)
     T = model.excitation_period(param)
     seed = np.array(u_seed, dtype=float)
     tp = int(transient_periods)
@@ -216,7 +217,7 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
         tr = integrate(model, param, seed, 0.0, t1, t_eval=t_eval, options=options,
                        record_from=t_rec)
         counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
-        if tr.status < 0:
+        if not tr.ok:
             return _failed(direction, index, param, R, tr.status, tr.message, u_seed, tr,
                            time.perf_counter() - wall)
         states = tr.u
@@ -225,7 +226,8 @@ def _run_point(model, param, u_seed, direction, index, *, transient_periods, rec
               and (not has_monitor or (math.isfinite(tr.monitor_min)
                                        and math.isfinite(tr.monitor_max))))
         if not ok:
-            return _failed(direction, index, param, R, -2, "non-finite state or monitor values",
+            return _failed(direction, index, param, R, Status.NONFINITE,
+                           "non-finite state or monitor values",
                            u_seed, tr, time.perf_counter() - wall)
         m = model.n_modes
         n, defect = classify_period(states, max_period, period_tol, split=m)
@@ -340,11 +342,12 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
                for r in (done.get((d, i)) or new.get((d, i)),) if r is not None]
     failed = sum(1 for r in records if not r.ok)
     if stopped:
-        code, msg = 2, f"stopped by the callback after {len(records)} points"
+        code = Status.STOPPED_BY_CALLBACK
+        msg = f"{code.message} after {len(records)} points"
     elif failed:
-        code, msg = 1, f"{failed} of {len(records)} points failed"
+        code, msg = Status.PARTIAL, f"{failed} of {len(records)} points failed"
     else:
-        code, msg = 0, "ok"
+        code, msg = Status.OK, Status.OK.message
     result = assemble_result(records, n_states=n_states, record_periods=int(record_periods),
                              options=options, period_tol=period_tol,
                              param_name=model.param_name, status_code=code,
@@ -353,7 +356,7 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
 
 
 def assemble_result(records, *, n_states: int, record_periods: int, options, period_tol,
-                    param_name="param", status_code=0, status_message="ok",
+                    param_name="param", status_code=Status.OK, status_message="ok",
                     wall_time=0.0) -> SweepResult:
     """Stack point records into a :class:`SweepResult` (also used after reading files)."""
     recs = tuple(records)
@@ -379,5 +382,5 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
         rhs_calls=int(sum(r.rhs_calls for r in recs)),
         events=int(sum(r.events for r in recs)), wall_time=float(wall_time),
         point_wall=f("wall_time"), rtol=float(options.rtol), atol=float(options.atol),
-        period_tol=float(period_tol), param_name=param_name, status_code=int(status_code),
+        period_tol=float(period_tol), param_name=param_name, status_code=Status(status_code),
         status_message=status_message, states=states, records=recs)
