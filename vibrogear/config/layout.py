@@ -75,6 +75,14 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
         if sh.x is not None or sh.z is not None:
             raise ConfigError(f"gearbox.shafts[{i}].x", "with a housing the axis is the bore's: "
                               "leave x and z out")
+    if housing.source != "parametric":   # imported: no box; its bores are found in its file
+        for i, sh in enumerate(cfg.shafts):
+            if bores[sh.bore].x is None:
+                k = next(j for j, b in enumerate(housing.bores) if b.name == sh.bore)
+                raise ConfigError(f"housing.bores[{k}].axis", f"bore {sh.bore!r} carries "
+                                  f"gearbox.shafts[{i}]: its axis must be parallel to the housing "
+                                  "y axis (shafts run along y)")
+        return
     t = housing.wall_thickness
     used: dict[tuple[str, str], int] = {}
     for i, b in enumerate(cfg.bearings):

@@ -139,6 +139,6 @@ def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
     """Read, override (``section.key=value``) and validate a scene file."""
     data = read_toml(path)
     try:
-        return scene_from_dict(data, overrides)
+        return scene_from_dict(data, overrides, base_dir=Path(path).parent)
     except RecursionError:
         raise ConfigError(str(path), "arrays or tables nested too deeply") from None
