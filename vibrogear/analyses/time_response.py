@@ -67,7 +67,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "deformation_second_half": {names[j]: [float(delta[j, half].min()),
                                                float(delta[j, half].max())] for j in primary},
         "contact_losses_second_half": losses,
-        "error_estimate": dict(getattr(tr, "error_estimate", None) or
-                               {"rtol": scene.integration.rtol, "atol": scene.integration.atol}),
+        "error_estimate": {"accumulated_local_error": tr.error_estimate,
+                           "rtol": scene.integration.rtol, "atol": scene.integration.atol},
     }
     return AnalysisOutcome(summary=summary, result=result)

@@ -19,7 +19,8 @@ from dataclasses import dataclass
 from .base import ConfigError, check, spec
 
 __all__ = ["Parameter", "OMEGA", "RPM", "IntegrationOptions", "ShootingOptions",
-           "ContinuationSteps", "ContinuationOptions", "check_fields", "check_range"]
+           "SweepOptions", "ContinuationSteps", "ContinuationOptions", "check_fields",
+           "check_range"]
 
 
 @dataclass(frozen=True)
@@ -81,6 +82,32 @@ class ShootingOptions:
 
     def __post_init__(self):
         check_fields(self)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SweepOptions:
+    """The settings of :func:`vibrogear.solvers.sweep.sweep` (sequential continuation)."""
+    transient_periods: int = spec(200, ge=0, le=1_000_000)
+    extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
+                                        doc="more transient allowed while not yet periodic")
+    record_periods: int = spec(32, ge=1, le=100_000)
+    directions: tuple[str, ...] = spec(("up", "down"), min_len=1, max_len=2,
+                                       choices=("up", "down"))
+    max_period: int = spec(8, ge=1, le=64, doc="largest n classified as period-n")
+    period_tol: float = spec(1e-5, gt=0.0, lt=1.0, doc="relative Poincare-sample tolerance")
+    segments: int = spec(1, ge=1, le=1000, doc="independent pieces per direction, each "
+                         "starting from the static equilibrium (parallel work units)")
+    workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
+                               "(default: all cores; 1: serial; under mpirun: the ranks)")
+
+    def __post_init__(self):
+        check_fields(self)
+        d = tuple(self.directions)
+        if not d or len(set(d)) != len(d) or any(x not in ("up", "down") for x in d):
+            raise ConfigError("directions", f"must be 'up', 'down' or both, got {list(d)}")
+        if self.max_period > self.record_periods:
+            raise ConfigError("max_period", f"must be <= record_periods = "
+                              f"{self.record_periods}, got {self.max_period}")
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -18,7 +18,7 @@ from typing import ClassVar
 
 from .base import ConfigError, check_name, spec
 from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
-                      Parameter, ShootingOptions, check_range)
+                      Parameter, ShootingOptions, SweepOptions, check_range)
 
 __all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
            "SweepSettings", "ContinuationSettings", "TimeResponseSettings", "with_parameter",
@@ -69,28 +69,20 @@ class ImpactPairConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SweepSettings:
-    """[sweep] less the parameter range (see :func:`with_parameter`)."""
+class SweepSettings(SweepOptions):
+    """[sweep]: the solver's settings (:class:`SweepOptions`), the number of grid points and
+    the parameter range (see :func:`with_parameter`)."""
     n_points: int = spec(200, ge=2, le=1_000_000)
-    transient_periods: int = spec(200, ge=0, le=1_000_000)
-    extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
-                                        doc="more transient allowed while not yet periodic")
-    record_periods: int = spec(32, ge=1, le=100_000)
-    directions: tuple[str, ...] = spec(("up", "down"), min_len=1, max_len=2, choices=("up", "down"))
-    max_period: int = spec(8, ge=1, le=64, doc="largest n classified as period-n")
-    period_tol: float = spec(1e-5, gt=0.0, lt=1.0, doc="relative Poincare-sample tolerance")
-    segments: int = spec(1, ge=1, le=1000, doc="independent pieces per direction, each "
-                         "starting from the static equilibrium (parallel work units)")
-    workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
-                               "(default: all cores; 1: serial; under mpirun: the ranks)")
     range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
         if len(self.range_keys) == 2:
             check_range(self, path, *self.range_keys)
-        if self.max_period > self.record_periods:
-            raise ConfigError(f"{path}.max_period",
-                              f"must be <= record_periods = {self.record_periods}")
+
+    def options(self) -> SweepOptions:
+        """The solver's settings (without the grid)."""
+        return SweepOptions(**{f.name: getattr(self, f.name)
+                               for f in dataclasses.fields(SweepOptions)})
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -36,6 +36,7 @@ import numpy as np
 from ..models.reduced import ReducedModel
 from ..pipeline.executors import broadcast, is_root, run_units, under_mpi
 from .contact_eval import contact_kinematics
+from ..config.options import SweepOptions
 from .integrate import IntegrationOptions, integrate
 from .status import Status
 
@@ -302,15 +303,11 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
     if params.size == 0:
         raise ValueError("sweep: params must not be empty")
     directions = tuple(directions)
-    if not directions or any(d not in DIRECTIONS for d in directions):
-        raise ValueError(f"sweep: directions must be a non-empty subset of {DIRECTIONS}")
-    if int(transient_periods) < 0 or int(record_periods) < 1 or int(max_period) < 1:
-        raise ValueError("sweep: need transient_periods >= 0, record_periods >= 1, "
-                         "max_period >= 1")
-    if not 0 < period_tol < 1:
-        raise ValueError("sweep: need 0 < period_tol < 1")
-    if int(segments) < 1 or (workers is not None and int(workers) < 1):
-        raise ValueError("sweep: need segments >= 1 and workers >= 1 (or None)")
+    # the settings' rules, defined once with the [sweep] section (ConfigError: a ValueError)
+    SweepOptions(transient_periods=int(transient_periods), record_periods=int(record_periods),
+                 extra_transient_periods=int(extra_transient_periods), directions=directions,
+                 max_period=int(max_period), period_tol=float(period_tol),
+                 segments=int(segments), workers=None if workers is None else int(workers))
     n_states = model.n_states
     seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
     if seed.shape != (n_states,):
