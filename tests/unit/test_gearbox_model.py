@@ -1,9 +1,9 @@
 """The gearbox model against its physics: modal synthesis with every shaft mode kept is the
 full FE model, fewer modes approximate it from above (Rayleigh-Ritz); the reduced contact
-forces (numpy post-processing and compiled kernel) are the physical gear-mesh forces of
-``couplings.gear_mesh_forces`` projected on the modes (free-gear DOF, omega_ref scaling);
-speed ratios, mesh sign, static equilibrium and torque balance; layout errors name the
-field (``vibrogear check`` exits 2)."""
+forces (numpy post-processing and compiled kernel) are the physical gear-mesh forces (the
+contact law on ``couplings.mesh_contact_parameters`` in SI units) projected on the modes
+(free-gear DOF, omega_ref scaling); speed ratios, mesh sign, static equilibrium and torque
+balance; layout errors name the field (``vibrogear check`` exits 2)."""
 from __future__ import annotations
 
 import math
@@ -16,7 +16,8 @@ import scipy.linalg as sla
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.models.couplings import gear_mesh_forces, gear_mesh_geometry, transmission_error
+from vibrogear.models.contact_law import evaluate, harmonic_series
+from vibrogear.models.couplings import gear_mesh_geometry, mesh_contact_parameters
 from vibrogear.models.gearbox import RPM, build_gearbox, housing_to_rotor
 from vibrogear.models.synthesis import subsystem_offsets
 from vibrogear.solvers.contact_eval import contact_history
@@ -190,9 +191,9 @@ def _gear_dofs(gm, s, gear):
 
 
 def _physical_mesh_forces(gm, cfg, x, v, tau, rpm):
-    """Sum over the meshes of V^T F_phys (in model units, / omega_ref^2) with F_phys from
-    couplings.gear_mesh_forces at q = V x, q' = omega_ref V x', t = tau / omega_ref; and
-    the physical deformations delta = c . q - e(t)."""
+    """Sum over the meshes of V^T F_phys (in model units, / omega_ref^2) with F_phys = -c f,
+    f the contact law on the mesh's parameters in SI units at q = V x, q' = omega_ref V x',
+    t = tau / omega_ref; and the physical deformations delta = c . q - e(t)."""
     om = gm.omega_ref
     off = subsystem_offsets(gm.subsystems)
     q = [s.vectors @ x[off[k]:off[k + 1]] for k, s in enumerate(gm.subsystems)]
@@ -203,15 +204,18 @@ def _physical_mesh_forces(gm, cfg, x, v, tau, rpm):
     for i, m in enumerate(cfg.meshes):
         geom, (sa, ga), (sb, gb) = _mesh_geometry_from_config(cfg, i)
         ia, ib = _gear_dofs(gm, sa, ga), _gear_dofs(gm, sb, gb)
-        F, _, _ = gear_mesh_forces(geom, q[sa][ia], q[sb][ib], qd[sa][ia], qd[sb][ib], tau / om,
-                                   stiffness=m.stiffness, backlash=m.backlash,
-                                   damping=m.damping, stiffness_cos=m.stiffness_cos,
-                                   stiffness_sin=m.stiffness_sin, mesh_frequency=w_mesh,
-                                   te_cos=m.te_cos, te_sin=m.te_sin)
+        law = mesh_contact_parameters(m.stiffness, m.backlash, m.damping, m.stiffness_cos,
+                                      m.stiffness_sin, m.te_cos, m.te_sin)
+        e, e_dot = harmonic_series(m.te_cos, m.te_sin, w_mesh, tau / om)
+        mu = 1.0 + harmonic_series(m.stiffness_cos, m.stiffness_sin, w_mesh, tau / om)[0]
+        delta = geom.c @ np.concatenate([q[sa][ia], q[sb][ib]]) - e[0]
+        delta_dot = geom.c @ np.concatenate([qd[sa][ia], qd[sb][ib]]) - e_dot[0]
+        f = evaluate(delta, delta_dot, modulation=mu[0], **{k: law[k] for k in (
+            "k_hi", "k_lo", "gap_hi", "gap_lo", "exponent", "damping")}).force
+        F = -geom.c * float(f)
         gen[off[sa]:off[sa + 1]] += gm.subsystems[sa].vectors[ia].T @ F[:6]
         gen[off[sb]:off[sb + 1]] += gm.subsystems[sb].vectors[ib].T @ F[6:]
-        e, _ = transmission_error(tau / om, m.te_cos, m.te_sin, w_mesh)
-        deltas.append(geom.c @ np.concatenate([q[sa][ia], q[sb][ib]]) - e)
+        deltas.append(delta)
     return gen / om ** 2, np.array(deltas)
 
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from ..config.base import ConfigError
 from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
-from .couplings import gear_mesh_geometry
+from .couplings import gear_mesh_geometry, mesh_contact_parameters
 from .gearbox_supports import bearings as _bearings, gravity_load, housing_to_rotor
 from .iso6336 import MeshStiffness, involute, inverse_involute, mesh_stiffness
 from .rotor import build_rotor_model, master_modes
@@ -329,10 +329,8 @@ def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
             node = rotor.node_at(g.position)
             idx = list(rotor.node_dofs(node)[:5]) + [_gear_psi(rotor, node, k, free_dof)]
             parts.append((s, idx, c))
-        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), k_hi=k_mesh,
-                              k_lo=k_mesh, gap_hi=0.0, gap_lo=-m.backlash, exponent=1.0,
-                              damping=m.damping, stiffness_cos=hc, stiffness_sin=hs,
-                              error_cos=m.te_cos, error_sin=m.te_sin, kind="mesh",
+        law = mesh_contact_parameters(k_mesh, m.backlash, m.damping, hc, hs, m.te_cos, m.te_sin)
+        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), **law, kind="mesh",
                               group=m.name))
     return out, records
 

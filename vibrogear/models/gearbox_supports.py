@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from ..config.base import ConfigError
-from .couplings import bearing_geometry
+from .couplings import bearing_contact_parameters, bearing_geometry
 from .synthesis import ContactLaw, LinearBlock, LinearLink, PhysicalVector
 
 __all__ = ["housing_to_rotor", "bearings", "gravity_load"]
@@ -131,13 +131,12 @@ def bearings(scene, cfg, rotors, hm):
             for lab, e in (("x", ex), ("y", ey)):
                 links.append(LinearLink(f"{b.name}:damping {lab}", centre(e), 0.0, b.damping))
         geom = bearing_geometry(angles)
+        law = bearing_contact_parameters(b.stiffness, b.clearance, b.exponent, b.contact_damping)
         for k in range(n):
             parts = [(s, jd, geom.journal[k])]
             if ring is not None:
                 parts.append((len(rotors), [ring[k] + c for c in range(3)],
                               housing_to_rotor(geom.housing[k])))
             contacts.append(ContactLaw(name=f"{b.name}:{k}", vector=PhysicalVector.of(*parts),
-                                       k_hi=b.stiffness, k_lo=0.0, gap_hi=b.clearance,
-                                       gap_lo=-np.inf, exponent=b.exponent,
-                                       damping=b.contact_damping, kind="bearing", group=b.name))
+                                       **law, kind="bearing", group=b.name))
     return contacts, links, blocks
