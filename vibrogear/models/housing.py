@@ -10,9 +10,9 @@ orchestration live in :mod:`.housing_run` (``housing_modes``).
 """
 from __future__ import annotations
 
+import logging
 import os
 import resource
-import sys
 import time
 from pathlib import Path
 
@@ -24,6 +24,8 @@ from .block_lanczos import Breakdown, block_lanczos
 from .housing_result import HousingModes
 
 __all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes", "assemble_mesh_matrices"]
+
+log = logging.getLogger(__name__)
 
 _PREVIEW_MODES = 6
 _PREVIEW_POINTS = 4000
@@ -51,8 +53,8 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
         K, M, count=count, cutoff_hz=cutoff_hz, max_count=max_count, tol=tol, comm=comm, solver=solver)
     timings["eigensolve"] = time.perf_counter() - t0
     timings.update({f"eigensolve_{k}": v for k, v in info.pop("timings").items()})
-    if os.environ.get("VIBROGEAR_HOUSING_VERBOSE") and comm.rank == 0:
-        sys.stderr.write(f"housing eigensolve: {info}\n")
+    if comm.rank == 0:
+        log.debug("housing eigensolve: %s", info)
 
     t0 = time.perf_counter()
     nmode = Vloc.shape[1]

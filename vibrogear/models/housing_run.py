@@ -14,10 +14,8 @@ import dataclasses
 import logging
 import os
 import shutil
-import sys
 import tempfile
 import time
-import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
@@ -125,9 +123,8 @@ def housing_modes(cfg: HousingConfig, *, cache: bool = True) -> HousingModes:
         return _compute(cfg, comm, mesh_key, modes_key, cache)
     except Exception as exc:
         if comm is not None and comm.size > 1:
-            sys.stderr.write(f"[rank {comm.rank}] housing FE failed; aborting all ranks\n")
-            traceback.print_exc()
-            sys.stderr.flush()
+            log.critical("[rank %d] housing FE failed; aborting all ranks", comm.rank,
+                         exc_info=True)
             comm.Abort(1)
         if _is_numerical(exc):
             raise _solve_failure(cfg, "modal solve", exc) from exc

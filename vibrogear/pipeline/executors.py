@@ -23,15 +23,17 @@ backend or the number of workers, as long as ``fn`` is deterministic.
 """
 from __future__ import annotations
 
+import logging
 import os
 import queue as _queue
 import signal
-import sys
 import time
 import traceback
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers"]
+
+log = logging.getLogger(__name__)
 
 
 class UnitError(RuntimeError):
@@ -234,9 +236,8 @@ def _run_mpi(fn, units, on_result) -> list:
             outcome = None
         outcome = comm.bcast(outcome, root=0)
     except BaseException:                       # noqa: BLE001 - never leave mpirun hanging
-        sys.stderr.write(f"[rank {comm.rank}] work-unit executor failed; aborting all ranks\n")
-        traceback.print_exc()
-        sys.stderr.flush()
+        log.critical("[rank %d] work-unit executor failed; aborting all ranks", comm.rank,
+                     exc_info=True)
         comm.Abort(1)
         raise
     if outcome[0] == "error":
