@@ -160,3 +160,35 @@ def test_modes_summary_shows_the_iso_stiffness(tmp_path):
     sc = scene_from_dict(read_toml(scene_file))
     assert build_gearbox(sc).contacts[0].k_hi == pytest.approx(rec["used_N_per_m"], rel=1e-15)
     assert data["gearbox"]["meshes"][0]["stiffness"] == 3.5e8
+
+
+def test_profile_shifted_pair_meshes_on_its_working_pitch_circles():
+    """x_a + x_b = 0.5: zero-backlash working pressure angle from
+    inv(alpha_w) = inv(alpha) + 2 tan(alpha) (x_a + x_b) / (z_a + z_b) (solved here by
+    brentq), working centre distance a cos(alpha) / cos(alpha_w).  The reference centre
+    distance is refused naming the mesh; at a_w the mesh normal makes alpha_w with the
+    tangent and the gear's lever arm is the unchanged base radius."""
+    from scipy.optimize import brentq
+
+    alpha = 20 * DEG
+    inv = lambda a: math.tan(a) - a                       # noqa: E731
+    alpha_w = brentq(lambda a: inv(a) - inv(alpha) - 2 * math.tan(alpha) * 0.5 / 120,
+                     0.1, 1.2)
+    a_w = 0.12 * math.cos(alpha) / math.cos(alpha_w)
+    assert a_w - 0.12 > 9e-4
+    data = read_toml(GEAR_PAIR)
+    data["scene"]["analyses"] = ["modes"]
+    data["gearbox"]["meshes"][0].update(profile_shift_a=0.3, profile_shift_b=0.2)
+    with pytest.raises(ConfigError) as exc:
+        scene_from_dict(data)
+    assert exc.value.path == "gearbox.meshes[0]" and "working pitch" in str(exc.value)
+    data["gearbox"]["shafts"][1]["x"] = 0.12 + a_w
+    gm = build_gearbox(scene_from_dict(data))
+    s, idx, val = gm.contacts[0].vector.parts[0]
+    n, c_psi = val[:3], val[5]
+    assert abs(n[0]) == pytest.approx(math.sin(alpha_w), rel=1e-12)      # along the centres
+    assert abs(c_psi) == pytest.approx(0.04 * math.cos(alpha), rel=1e-12)  # r_b of z1
+    rec = gm.mesh_stiffness_summary()[0]
+    iso = mesh_stiffness(40, 80, 0.002, 0.025, x1=0.3, x2=0.2)
+    assert rec["iso6336_N_per_m"] == pytest.approx(iso.k_normal, rel=1e-15)
+    assert iso.working_centre_distance == pytest.approx(a_w, rel=1e-12)
