@@ -192,3 +192,11 @@ def test_profile_shifted_pair_meshes_on_its_working_pitch_circles():
     iso = mesh_stiffness(40, 80, 0.002, 0.025, x1=0.3, x2=0.2)
     assert rec["iso6336_N_per_m"] == pytest.approx(iso.k_normal, rel=1e-15)
     assert iso.working_centre_distance == pytest.approx(a_w, rel=1e-12)
+
+
+def test_low_contact_ratio_is_flagged():
+    """ISO states c_gamma_alpha = c'(0.75 eps_alpha + 0.25) for eps_alpha >= 1.2; below it
+    the summary carries a note (h_aP = 0.6 m_n: eps_alpha = 1.10 for 40 / 80 teeth)."""
+    rec = build_gearbox(_scene(stiffness="iso6336", addendum=0.6)).mesh_stiffness_summary()[0]
+    assert rec["eps_alpha"] == pytest.approx(1.1045, abs=1e-3) and "1.2" in rec["note"]
+    assert build_gearbox(_scene()).mesh_stiffness_summary()[0]["note"] == ""

@@ -90,7 +90,8 @@ class GearboxModel:
                         "iso6336_c_prime_N_per_mm_um": iso.get("c_prime_N_per_mm_um"),
                         "iso6336_c_gamma_alpha_N_per_mm_um": iso.get("c_gamma_alpha_N_per_mm_um"),
                         "eps_alpha": iso.get("eps_alpha"), "eps_beta": iso.get("eps_beta"),
-                        "harmonics_cos": r["harmonics_cos"], "harmonics_sin": r["harmonics_sin"]})
+                        "harmonics_cos": r["harmonics_cos"], "harmonics_sin": r["harmonics_sin"],
+                        "note": r.get("iso6336_note", "")})
         return out
 
     def contact_indices(self, kind: str) -> np.ndarray:
@@ -309,6 +310,10 @@ def _mesh_law(cfg, i) -> tuple[float, tuple, tuple, dict]:
            "iso6336": None if iso is None else iso.as_dict()}
     if iso is None:
         rec["iso6336_note"] = note
+    elif iso.eps_alpha < 1.2:
+        rec["iso6336_note"] = (f"eps_alpha = {iso.eps_alpha:.3f} < 1.2: ISO's c_gamma_alpha "
+                               "may be up to 10 % too high")
+        log.warning("mesh %s: %s", m.name, rec["iso6336_note"])
     log.info("mesh %s: stiffness %.4g N/m (%s)%s", m.name, k, rec["source"],
              "" if iso is None else f"; ISO 6336-1: {iso.k_normal:.4g} N/m along the normal, "
              f"c' = {iso.c_prime / 1e9:.3f} N/(mm um), eps_alpha = {iso.eps_alpha:.3f}, "
