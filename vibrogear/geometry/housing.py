@@ -139,33 +139,35 @@ def _surfaces_in_box(gmsh, lo, hi) -> list[int]:
     return [tag for _, tag in ents]
 
 
-def _housing_solid(gmsh, cfg: HousingConfig) -> None:
-    """The housing solid in gmsh's OCC model (metres), synchronized."""
+def _housing_solid(gmsh, cfg: HousingConfig, scale: float = 1.0) -> None:
+    """The housing solid in gmsh's OCC model (lengths x ``scale``: 1 for metres), synchronized."""
     occ = gmsh.model.occ
-    L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
+    k = scale
+    L, W, H, t = k * cfg.length, k * cfg.width, k * cfg.height, k * cfg.wall_thickness
+    tb, eps = k * cfg.base_thickness, k * 1e-3
     outer = occ.addBox(0, 0, 0, L, W, H)
     inner = occ.addBox(t, t, t, L - 2 * t, W - 2 * t, H - 2 * t)
     shell, _ = occ.cut([(3, outer)], [(3, inner)])
     parts = []
     if cfg.base == "plate":
-        o = cfg.base_overhang
-        parts.append((3, occ.addBox(-o, -o, -cfg.base_thickness, L + 2 * o, W + 2 * o, cfg.base_thickness)))
+        o = k * cfg.base_overhang
+        parts.append((3, occ.addBox(-o, -o, -tb, L + 2 * o, W + 2 * o, tb)))
     elif cfg.base == "feet":
-        f = cfg.foot_size
+        f = k * cfg.foot_size
         for x in (0.0, L - f):
             for y in (0.0, W - f):
-                parts.append((3, occ.addBox(x, y, -cfg.base_thickness, f, f, cfg.base_thickness)))
+                parts.append((3, occ.addBox(x, y, -tb, f, f, tb)))
     holes = []
     for b in cfg.bores:
-        lb = b.boss_length
+        lb, bx, bz = k * b.boss_length, k * b.x, k * b.z
         if lb > 0:
-            parts.append((3, occ.addCylinder(b.x, -lb, b.z, 0, lb, 0, b.boss_radius)))
-            parts.append((3, occ.addCylinder(b.x, W, b.z, 0, lb, 0, b.boss_radius)))
+            parts.append((3, occ.addCylinder(bx, -lb, bz, 0, lb, 0, k * b.boss_radius)))
+            parts.append((3, occ.addCylinder(bx, W, bz, 0, lb, 0, k * b.boss_radius)))
             if cfg.ribs:
-                rt = cfg.rib_t
-                parts.append((3, occ.addBox(b.x - rt / 2, -lb, 0, rt, lb, b.z)))
-                parts.append((3, occ.addBox(b.x - rt / 2, W, 0, rt, lb, b.z)))
-        holes.append((3, occ.addCylinder(b.x, -lb - 1e-3, b.z, 0, W + 2 * lb + 2e-3, 0, b.bore_radius)))
+                rt = k * cfg.rib_t
+                parts.append((3, occ.addBox(bx - rt / 2, -lb, 0, rt, lb, bz)))
+                parts.append((3, occ.addBox(bx - rt / 2, W, 0, rt, lb, bz)))
+        holes.append((3, occ.addCylinder(bx, -lb - eps, bz, 0, W + 2 * lb + 2 * eps, 0, k * b.bore_radius)))
     body = shell
     if parts:
         body, _ = occ.fuse(shell, parts)
@@ -175,14 +177,14 @@ def _housing_solid(gmsh, cfg: HousingConfig) -> None:
 
 def write_housing_step(cfg: HousingConfig, path: str | Path) -> Path:
     """The parametric housing's solid as a STEP file in millimetres (what a CAD system exports):
-    gmsh writes its model coordinates with a millimetre unit label, so the model is scaled by 1000."""
+    gmsh writes its model coordinates with a millimetre unit label, so the model is built in mm."""
     path = Path(path)
     gmsh = _start(False)
     try:
+        # OCC's STEP unit is process-wide: after an import in metres the writer would convert
+        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
         gmsh.model.add("housing")
-        _housing_solid(gmsh, cfg)
-        gmsh.model.occ.dilate(gmsh.model.getEntities(3), 0, 0, 0, 1000.0, 1000.0, 1000.0)
-        gmsh.model.occ.synchronize()
+        _housing_solid(gmsh, cfg, scale=1000.0)  # in mm: OCC's dilation approximates cylinders
         path.parent.mkdir(parents=True, exist_ok=True)
         gmsh.write(str(path))
     except Exception as exc:
