@@ -298,3 +298,41 @@ def test_modal_uff_without_modes_names_dataset_58(tmp_path):
     pyuff.UFF(str(f)).write_sets(d, mode="overwrite")
     with pytest.raises(ConfigError, match="dataset 58 holds response functions"):
         housing_modes(_cfg(source="modal", file=str(f)))
+
+
+def test_modal_uff_dataset_55_round_trip(tmp_path):
+    """Nodes (dataset 15) and normal modes (dataset 55) written by pyuff: the ring nodes on the
+    config bore's cylinder are found, grouped front/back and ordered by angle; values agree to
+    the precision of the UFF fields, modal masses 4 and 9 divide the modes by 2 and 3."""
+    import pyuff
+
+    from vibrogear.models.housing_run import housing_modes
+
+    d = _modal_npz(tmp_path / "m.npz")
+    pts = d["bore_points"].reshape(-1, 3)
+    vals = d["bore_values"].reshape(-1, 3, 3)
+    order = np.random.default_rng(0).permutation(len(pts))         # node numbers in any order
+    extra = np.array([[0.0, 0.0, 0.0], [0.3, 0.16, 0.15]])         # nodes off the bores
+    X = np.vstack([pts[order], extra])
+    V = np.concatenate([vals[order], np.ones((2, 3, 3))])
+    nodes = np.arange(1, len(X) + 1)
+    f = tmp_path / "modes.unv"
+    uff = pyuff.UFF(str(f))
+    uff.write_sets(pyuff.prepare_15(node_nums=nodes, def_cs=[0] * len(X), disp_cs=[0] * len(X),
+                                    color=[0] * len(X), x=X[:, 0], y=X[:, 1], z=X[:, 2]), mode="overwrite")
+    mu = [1.0, 4.0, 9.0]
+    for i, fr in enumerate(d["freqs_hz"]):
+        uff.write_sets(pyuff.prepare_55(
+            model_type=1, id1="m", id2="m", id3="m", id4="m", id5="m", analysis_type=2, data_ch=2,
+            spec_data_type=8, data_type=2, n_data_per_node=3, r1=V[:, 0, i], r2=V[:, 1, i], r3=V[:, 2, i],
+            node_nums=nodes, load_case=1, mode_n=i + 1, modal_m=mu[i], freq=fr, modal_damp_vis=0.0,
+            modal_damp_his=0.0), mode="add")
+    r = housing_modes(_modal_cfg(f))
+    assert r.bore_names == ("input/front", "input/back") and r.bore_n_points == (4, 4)
+    assert np.allclose(r.freqs_hz, d["freqs_hz"], rtol=1e-5)
+    assert np.allclose(r.bore_points, d["bore_points"], atol=1e-6)
+    assert np.allclose(r.bore_values, d["bore_values"] / np.sqrt(mu), atol=1e-6)
+    assert np.allclose(r.bore_axes, [[0, -1, 0], [0, 1, 0]])
+    with pytest.raises(ConfigError) as exc:
+        housing_modes(_cfg(source="modal", file=str(f), bores=[{**BORE, "center": [0.075, 0, 0.09]}]))
+    assert exc.value.path == "housing.bores[0].rolling_elements"
