@@ -64,7 +64,7 @@ def read_modal_housing(cfg: HousingConfig) -> HousingModes:
     log.info("housing modal %s: %s", cfg.file, ", ".join(f"{k} = {v}" for k, v in info.items() if k != "file"))
     n = data.pop("n_dofs")
     return HousingModes(**data, beta=cfg.material.beta, n_dofs=int(n), degree=0,
-                        residuals=np.zeros(keep), orthogonality_error=float("nan"), mass_kg=float("nan"),
+                        residuals=np.full(keep, np.nan), orthogonality_error=float("nan"), mass_kg=float("nan"),
                         n_fallback_points=0, status="ok", message="", converged_reason="read from file",
                         n_converged=keep, timings={"read": time.perf_counter() - t0},
                         peak_memory_mb=0.0, n_processes=1, source_info={"source": "modal", **info})
