@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config.options import OMEGA
 from .reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 
 __all__ = ["impact_pair_model"]
@@ -29,7 +30,7 @@ def impact_pair_model(zeta: float, kappa: float, f_m: float, f_p: float, b_r: fl
         omega2=np.array([kappa]), damping=np.array([2.0 * zeta]),
         coupling=LinearCoupling.none(1), forcing=forcing, contacts=contacts,
         omega_per_param=1.0, spin_per_param=0.0, monitor=0, name="impact_pair",
-        param_name="Omega", state_names=("q", "dq/dtau"),
+        param_name=OMEGA.name, state_names=("q", "dq/dtau"),
     )
 
 
