@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config.base import ConfigError
-from ..config.options import RPM
+from ..config.options import RPM as RPM_PARAMETER
 from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
 from .gearbox_supports import bearings as _bearings, gravity_load, housing_to_rotor
@@ -201,7 +201,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
-                         monitor=0, name=cfg.name, param_name=RPM.name, blocks=blocks)
+                         monitor=0, name=cfg.name, param_name=RPM_PARAMETER.name, blocks=blocks)
     t_end = time.perf_counter()
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
