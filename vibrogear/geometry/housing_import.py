@@ -51,12 +51,28 @@ class ImportedHousing(NamedTuple):
     info: dict           # what was read: file, unit, solids, volume, faces per group, bbox
 
 
-def _on_cylinder(pts: np.ndarray, c: np.ndarray, u: np.ndarray, r: float) -> tuple[bool, np.ndarray]:
-    """(all points on the cylinder, axial coordinates s of the points)."""
-    d = pts - c
-    s = d @ u
-    radial = np.linalg.norm(d - s[:, None] * u, axis=1)
-    return bool(np.all(np.abs(radial - r) <= 1e-6 + 1e-4 * r)), s
+def _as_array(samples) -> tuple[np.ndarray, np.ndarray | list]:
+    """(face ids, points (k, n, 3) or a list of (n_i, 3) arrays)."""
+    if isinstance(samples, np.ndarray):
+        return np.arange(len(samples)), samples
+    return np.array(list(samples), dtype=np.int64), list(samples.values())
+
+
+def _cylinder_faces(samples, c: np.ndarray, u: np.ndarray, r: float):
+    """(mask of faces with every sample point on the cylinder, s_min, s_max along the axis)."""
+    ids, pts = _as_array(samples)
+    if isinstance(pts, np.ndarray):                       # triangles: all at once
+        d = pts - c
+        s = d @ u
+        rad = np.linalg.norm(d - s[..., None] * u, axis=-1)
+        return ids, np.all(np.abs(rad - r) <= 1e-6 + 1e-4 * r, axis=1), s.min(axis=1), s.max(axis=1)
+    out = np.zeros(len(pts), bool), np.zeros(len(pts)), np.zeros(len(pts))
+    for k, p in enumerate(pts):
+        d = p - c
+        sk = d @ u
+        rad = np.linalg.norm(d - sk[:, None] * u, axis=1)
+        out[0][k], out[1][k], out[2][k] = np.all(np.abs(rad - r) <= 1e-6 + 1e-4 * r), sk.min(), sk.max()
+    return (ids, *out)
 
 
 def bore_segments(intervals: list[tuple[float, float]], tol: float) -> list[tuple[float, float, list[int]]]:
@@ -101,13 +117,11 @@ def _select_bores(cfg: HousingConfig, samples: dict[int, np.ndarray], file: str,
     bores, groups = [], []
     for i, b in enumerate(cfg.bores):
         c, u = np.asarray(b.center, float), np.asarray(b.unit_axis, float)
-        hits, intervals = [], []
-        for fid, pts in samples.items():
-            ok, s = _on_cylinder(pts, c, u, b.bore_radius)
-            if ok and (b.length is None or (s.min() >= -0.5 * b.length - BOX_TOL
-                                            and s.max() <= 0.5 * b.length + BOX_TOL)):
-                hits.append(fid)
-                intervals.append((float(s.min()), float(s.max())))
+        ids, on, smin, smax = _cylinder_faces(samples, c, u, b.bore_radius)
+        if b.length is not None:
+            on &= (smin >= -0.5 * b.length - BOX_TOL) & (smax <= 0.5 * b.length + BOX_TOL)
+        hits = [int(f) for f in ids[on]]
+        intervals = list(zip(smin[on].tolist(), smax[on].tolist()))
         if not hits:
             raise ConfigError(f"housing.bores[{i}]", f"{file}: the bore cuts no boundary face: no face lies on "
                               f"the cylinder of radius {b.bore_radius:g} m about the line through "
@@ -119,16 +133,17 @@ def _select_bores(cfg: HousingConfig, samples: dict[int, np.ndarray], file: str,
     return tuple(bores), groups
 
 
-def _in_box(pts: np.ndarray, cfg: HousingConfig) -> bool:
-    lo = np.asarray(cfg.fixed_region.min) - BOX_TOL
-    hi = np.asarray(cfg.fixed_region.max) + BOX_TOL
-    return bool(np.all((pts >= lo) & (pts <= hi)))
-
-
-def _fixed(cfg: HousingConfig, samples: dict[int, np.ndarray], bore_groups, file: str) -> list[int]:
+def _fixed(cfg: HousingConfig, samples, bore_groups, file: str) -> list[int]:
     if cfg.fixed_region is None:
         return []
-    fixed = [f for f, pts in samples.items() if _in_box(pts, cfg)]
+    lo = np.asarray(cfg.fixed_region.min) - BOX_TOL
+    hi = np.asarray(cfg.fixed_region.max) + BOX_TOL
+    ids, pts = _as_array(samples)
+    if isinstance(pts, np.ndarray):
+        inside = np.all((pts >= lo) & (pts <= hi), axis=(1, 2))
+    else:
+        inside = np.array([bool(np.all((p >= lo) & (p <= hi))) for p in pts], dtype=bool)
+    fixed = [int(f) for f in ids[inside]]
     if not fixed:
         raise ConfigError("housing.fixed_region", f"{file}: selects no boundary face: none lies inside "
                           f"min = {list(cfg.fixed_region.min)}, max = {list(cfg.fixed_region.max)} (m)")
@@ -281,7 +296,7 @@ def build_imported_mesh(cfg: HousingConfig, path: str | Path) -> ImportedHousing
     t0 = time.perf_counter()
     x, tets, info = read_tet_mesh(file, LENGTH_UNITS[cfg.length_unit])
     facets = _boundary_facets(tets)
-    samples = {k: x[f] for k, f in enumerate(facets)}
+    samples = x[facets]                                   # (k, 3, 3): every triangle's vertices
     scale = float(np.linalg.norm(np.ptp(x, axis=0)))
     bores, groups = _select_bores(cfg, samples, file, scale)
     fixed = _fixed(cfg, samples, groups, file)
