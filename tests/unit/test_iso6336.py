@@ -200,3 +200,11 @@ def test_low_contact_ratio_is_flagged():
     rec = build_gearbox(_scene(stiffness="iso6336", addendum=0.6)).mesh_stiffness_summary()[0]
     assert rec["eps_alpha"] == pytest.approx(1.1045, abs=1e-3) and "1.2" in rec["note"]
     assert build_gearbox(_scene()).mesh_stiffness_summary()[0]["note"] == ""
+
+
+def test_check_exits_2_naming_the_mesh(capsys):
+    rc = main(["check", str(ROOT / "configs" / "gear_pair_iso.toml"), "--set",
+               "gearbox.meshes[0].addendum=0.2"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "gearbox.meshes[0].stiffness" in err and "eps_alpha" in err
