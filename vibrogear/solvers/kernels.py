@@ -247,6 +247,22 @@ def _rows_combine(M, k, lo, hi, Q, z):
                 z[c] += w * q[c]
 
 
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+def _rows_scatter(A, g, OV, z):
+    """OV[i] -= G[g, i] z over the nonzeros of row g of G (rows of OV contiguous)."""
+    lo = A.glo[g]
+    hi = A.ghi[g]
+    Gr = A.G[g, lo:hi]
+    OVs = OV[lo:hi]
+    ncol = z.shape[0]
+    for i in range(hi - lo):
+        w = Gr[i]
+        if w != 0.0:
+            o = OVs[i]
+            for c in range(ncol):
+                o[c] -= w * z[c]
+
+
 def jac_workspace(A, ncol: int) -> np.ndarray:
     """Workspace for :func:`jac_times` on ``ncol`` columns."""
     return np.empty((3 * A.P.shape[0] + 1, ncol))
@@ -323,16 +339,7 @@ def jac_times(Phi, mode, A, kd, cd, out, W):
                     for c in range(ncol):
                         o[c] -= val * z[c]
                 continue
-            lo = A.glo[g]
-            hi = A.ghi[g]
-            Gr = A.G[g, lo:hi]
-            OVs = OV[lo:hi]
-            for i in range(hi - lo):
-                w = Gr[i]
-                if w != 0.0:
-                    o = OVs[i]
-                    for c in range(ncol):
-                        o[c] -= w * z[c]
+            _rows_scatter(A, g, OV, z)
     S = W[3 * r]
     for j in range(A.C.shape[0]):
         a = kd[j]
@@ -344,7 +351,6 @@ def jac_times(Phi, mode, A, kd, cd, out, W):
         Gr = A.G[j, lo:hi]
         Xs = X[lo:hi]
         Vs = V[lo:hi]
-        OVs = OV[lo:hi]
         for c in range(ncol):
             S[c] = 0.0
         for i in range(hi - lo):
@@ -361,12 +367,7 @@ def jac_times(Phi, mode, A, kd, cd, out, W):
                     wb = w * b
                     for c in range(ncol):
                         S[c] += wa * xi[c] + wb * vi[c]
-        for i in range(hi - lo):
-            w = Gr[i]
-            if w != 0.0:
-                o = OVs[i]
-                for c in range(ncol):
-                    o[c] -= w * S[c]
+        _rows_scatter(A, j, OV, S)
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
