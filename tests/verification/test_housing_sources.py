@@ -217,7 +217,7 @@ def test_mesh_housing_bores_and_clamp_from_the_parametric_mesh(tmp_path, cache):
     ("bore", "housing.bores[0]", "cuts no boundary face"),
     ("shell", "housing.file", "holds no solid"),
 ])
-def test_bad_files_exit_2_naming_field_and_file(beam_mesh, tmp_path, capsys, case, field, words):
+def test_bad_files_exit_2_naming_field_and_file(beam_mesh, tmp_path, capsys, cache, case, field, words):
     import meshio
 
     d, x, tets, _ = beam_mesh
@@ -255,6 +255,7 @@ def test_bad_files_exit_2_naming_field_and_file(beam_mesh, tmp_path, capsys, cas
     err = capsys.readouterr().err
     assert field in err and words in err and f.name in err
     assert not (out / "summary.json").exists()
+    assert not [p for p in Path(cache).glob("*") if p.name.startswith(".housing")]   # no half-built entry
 
 
 # ----------------------------------------------------------------------------- modes from a file

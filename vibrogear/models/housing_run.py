@@ -144,7 +144,11 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
     root = entry_dir(modes_key).parent if cache else Path(tempfile.gettempdir())
     work = _bcast(comm, (new_workspace(modes_key) if cache else
                          Path(tempfile.mkdtemp(prefix=f".{modes_key}.", dir=root))) if rank == 0 else None)
-    hm, t_mesh = _mesh(cfg, mesh_key, root, cache) if rank == 0 else (None, 0.0)
+    try:
+        hm, t_mesh = _mesh(cfg, mesh_key, root, cache) if rank == 0 else (None, 0.0)
+    except BaseException:                    # e.g. an imported file's bore cuts no face
+        shutil.rmtree(work, ignore_errors=True)
+        raise
     hm = _bcast(comm, hm)
     if comm is not None and os.environ.get("VIBROGEAR_HOUSING_FAIL_RANK") == str(comm.rank):
         raise RuntimeError("injected failure (VIBROGEAR_HOUSING_FAIL_RANK, for the MPI abort test)")
@@ -181,7 +185,11 @@ def _mesh(cfg, mesh_key, root, cache) -> tuple[HousingMesh, float]:
         except Exception as exc:             # valid checksums but unreadable: another layout
             discard_entry(mesh_key, f"cannot be read: {exc}")
     tmp = new_workspace(mesh_key) if cache else Path(tempfile.mkdtemp(prefix=f".{mesh_key}.", dir=root))
-    hm = build_mesh(cfg, tmp / "mesh.msh")
+    try:
+        hm = build_mesh(cfg, tmp / "mesh.msh")
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
     seconds = hm.seconds
     _save_mesh_meta(hm, tmp)
     if cache:
