@@ -28,7 +28,9 @@ Which flank is in contact (the mode) is part of the law's input:
 
 :func:`contact_force` is the compiled scalar law the kernels inline; :func:`evaluate`
 and :func:`evaluate_set` are the numpy wrappers (vectorised over contacts and samples)
-every non-compiled caller uses; they run the same compiled law.
+every non-compiled caller uses; they run the same compiled law.  numba's on-disk cache
+checks only the caller's own source file: after editing this module, delete the cached
+kernels (``find vibrogear -name '*.nb[ic]' -delete``), which inline the old law otherwise.
 """
 from __future__ import annotations
 

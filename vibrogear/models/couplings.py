@@ -32,12 +32,11 @@ Gear mesh (concentrated at the pitch point on the normal pressure line):
   ``psi_b = -(r_a / r_b) psi_a`` give ``delta = 0``; so does any rigid-body motion of the pair.
 * kinematic transmission error ``e(t) = sum_h a_h cos(h W t) + b_h sin(h W t)`` (``h = 1..H``,
   ``W`` the mesh frequency in rad/s); the contact law acts on ``delta - e(t)``.
-* law parameters (:func:`mesh_contact_parameters`): a dead zone of width ``backlash`` with
-  contact on both flanks, ``gap_hi = 0``, ``gap_lo = -backlash``, ``k_hi = k_lo = stiffness``,
-  exponent 1, stiffness modulation ``1 + sum_h a_h cos(h W t) + b_h sin(h W t)``:
-  ``f = k delta + damping delta'`` for ``delta > 0`` (working flank), ``f = 0`` for
-  ``-backlash <= delta <= 0``, ``f = k (delta + backlash) + damping delta'`` for
-  ``delta < -backlash`` (back flank, f < 0).  Damping acts only in contact.
+* law parameters (:func:`mesh_contact_parameters`): a dead zone of width ``backlash``,
+  ``gap_hi = 0``, ``gap_lo = -backlash``, ``k_hi = k_lo = stiffness``, exponent 1, the
+  relative mesh-stiffness harmonics as the law's stiffness modulation: f > 0 on the working
+  flank (``delta > 0``), f < 0 on the back flank (``delta < -backlash``), 0 in between;
+  damping only in contact.
 
 Rolling-element bearing (rolling neglected: elements at fixed angles):
 
@@ -48,8 +47,8 @@ Rolling-element bearing (rolling neglected: elements at fixed angles):
   displacement of bore point k (rotor frame).
 * law parameters (:func:`bearing_contact_parameters`): one-sided, ``gap_hi = clearance``
   (a negative clearance is a preload, an interference), ``gap_lo = -inf``, ``k_lo = 0``:
-  ``f_k = stiffness (delta_k - clearance)^exponent (+ damping delta_k')`` beyond the
-  clearance, else 0; ``-f_k e_k`` acts on the journal and ``+f_k e_k`` on bore point k.
+  a force ``f_k >= 0`` beyond the clearance, ``-f_k e_k`` on the journal and ``+f_k e_k``
+  on bore point k.
 """
 from __future__ import annotations
 
