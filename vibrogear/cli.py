@@ -70,10 +70,9 @@ def main(argv: list[str] | None = None) -> int:
         scene = load_scene(args.scene, tuple(args.overrides))
         if args.command in SINGLE:
             from .config.base import as_data, build
-            from .config.scene import Scene
             data = as_data(scene)
             data["scene"]["analyses"] = [SINGLE[args.command]]
-            scene = build(Scene, data)
+            scene = build(type(scene), data)
         out = (check_output_dir(args.out) if args.out is not None else
                check_output_dir(Path("out") / scene.scene.name, "scene.name"))
         from .runner import resolve

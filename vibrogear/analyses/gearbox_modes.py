@@ -16,19 +16,12 @@ import time
 import numpy as np
 
 from ..pipeline.outcome import RunContext
+from .sweep import param_range
 
 __all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL"]
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
 RIGID_TOL = 1e-7
-
-
-def _speed_range(sec) -> tuple[float, float]:
-    lo = getattr(sec, "param_min", None)
-    hi = getattr(sec, "param_max", None)
-    if lo is None:                      # sections without the param_* names
-        lo, hi = sec.omega_min, sec.omega_max
-    return float(lo), float(hi)
 
 
 def reference_rpm(scene) -> float:
@@ -38,10 +31,10 @@ def reference_rpm(scene) -> float:
         return float(scene.gearbox.modes_rpm)
     tr = scene.time_response
     if tr is not None:
-        return float(getattr(tr, "param", None) if hasattr(tr, "param") else tr.omega)
+        return float(tr.param if hasattr(tr, "param") else tr.omega)
     for sec in (scene.sweep, scene.continuation):
         if sec is not None:
-            return 0.5 * sum(_speed_range(sec))
+            return 0.5 * sum(param_range(sec))
     return 0.0
 
 
@@ -89,7 +82,7 @@ def run(study, scene, ctx: RunContext) -> dict:
     write_modes_csv(ctx.out / "modes.csv", f_hz, fd_hz, zeta, names, shares, mesh,
                     [c.name for c in gm.contacts if c.kind == "mesh"])
     if scene.sweep is not None:
-        lo, hi = _speed_range(scene.sweep)
+        lo, hi = param_range(scene.sweep)
     elif rpm > 0:
         lo, hi = 0.5 * rpm, 1.5 * rpm
     else:            # at rest: the speeds up to the 1x resonance of the highest mode listed
