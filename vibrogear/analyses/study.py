@@ -10,6 +10,7 @@ fingerprint of its physics (for resuming).  The verbs are written once against i
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -19,7 +20,8 @@ from ..models.reduced import ReducedModel
 from ..pipeline.outcome import NumericalFailure
 from ..pipeline.resume import fingerprint
 
-__all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state"]
+__all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state",
+           "tolerances_for", "rtol_given", "ACCURACY_RULE", "ATOL_PER_RTOL"]
 
 
 @dataclass(frozen=True)
@@ -88,9 +90,60 @@ def start_state(model: ReducedModel, param: float, *, strict: bool = True) -> np
                            f"(residual {st.residual:.3g} after {st.iterations} iterations)")
 
 
-def integration_options(scene) -> IntegrationOptions:
-    """The scene's [integration] section: it is the integrator's options object."""
-    return scene.integration
+#: err = coefficient * rtol ** exponent: the error of the monitored mesh deformation over a
+#: record window, max |delta - delta_ref| / (max delta_ref - min delta_ref), measured on nine
+#: settled, non-chaotic points of gear_pair (4600-7000 rpm) and single_stage (2500-5500 rpm)
+#: at rtol 1e-3 ... 1e-8 against rtol = 1e-10 from the same static state (least-squares fit
+#: of benchmarks/calibrate_tolerance.py: err = 0.238 rtol^0.991, worst point 6.8x above the
+#: fit, results/calibrate_tolerance.json).  The safety factor 10 divides the accuracy asked
+#: for: it covers that worst point with a margin of 1.5.  (two_stage rattles chaotically over
+#: its whole speed range: its error stays 0.3-0.7 at every rtol, so no rule exists for it.)
+ACCURACY_RULE = {"coefficient": 0.238, "exponent": 0.991, "safety": 10.0}
+#: atol / rtol of the rule (the gearbox scenes' 1e-12 / 1e-6: modal coordinates ~1e-6)
+ATOL_PER_RTOL = 1e-6
+#: the rule's rtol is kept inside this range
+RTOL_RANGE = (1e-10, 1e-3)
+
+
+def tolerances_for(accuracy: float) -> tuple[float, float]:
+    """(rtol, atol) that deliver ``accuracy``: the loosest rtol whose fitted error
+    (:data:`ACCURACY_RULE`) times the safety factor is ``accuracy``, within
+    :data:`RTOL_RANGE`."""
+    c, p, s = (ACCURACY_RULE[k] for k in ("coefficient", "exponent", "safety"))
+    rtol = (accuracy / (s * c)) ** (1.0 / p)
+    rtol = float(min(max(rtol, RTOL_RANGE[0]), RTOL_RANGE[1]))
+    return rtol, ATOL_PER_RTOL * rtol
+
+
+def rtol_given(scene) -> bool:
+    """Whether the scene sets [integration] rtol: a value other than the built-in default
+    (the scene object does not keep which keys were written, so an rtol equal to the
+    default, 1e-9, counts as not given)."""
+    return scene.integration.rtol != IntegrationOptions.__dataclass_fields__["rtol"].default
+
+
+def integration_options(scene, *, record: bool = False,
+                        period_tol: float | None = None) -> IntegrationOptions:
+    """The scene's [integration] section: it is the integrator's options object.
+
+    ``record=True`` (sweep, time response: results read from recorded motion) on a gearbox
+    scene whose [integration] rtol is not given (:func:`rtol_given`): rtol and atol come from
+    the accuracy asked for, ``[sweep] accuracy`` (default 1e-3; the error of the monitored
+    mesh deformation relative to its range over the record window), by
+    :func:`tolerances_for`, and no looser than ``period_tol`` where given (the sweep's
+    Poincare-sample tolerance: integration error alone must not make a periodic point look
+    not periodic).  An explicit rtol always wins (atol then is the section's).  Shooting and
+    continuation (``record=False``) always take the section as written."""
+    opts = scene.integration
+    if not record or scene.gearbox is None or rtol_given(scene):
+        return opts
+    from ..config.options import SweepOptions
+
+    acc = getattr(scene.sweep, "accuracy", None) or \
+        SweepOptions.__dataclass_fields__["accuracy"].default
+    rtol, _ = tolerances_for(acc)
+    rtol = rtol if period_tol is None else min(rtol, period_tol)
+    return dataclasses.replace(opts, rtol=rtol, atol=ATOL_PER_RTOL * rtol)
 
 
 def build_study(scene) -> Study:

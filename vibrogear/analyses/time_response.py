@@ -43,8 +43,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     T = model.excitation_period(param)
     n = int(round(cfg.periods * cfg.samples_per_period))
     t_eval = np.linspace(0.0, cfg.periods * T, n + 1)
+    opts = integration_options(scene, record=True)
     tr = integrate(model, param, study.start(param), 0.0, cfg.periods * T, t_eval=t_eval,
-                   options=integration_options(scene))
+                   options=opts)
     if not tr.ok:
         raise NumericalFailure(f"time response at {study.param_name} = {param:g}: {tr.message}")
     delta, ddot, force = contact_history(model, param, tr.t, tr.u)
@@ -68,6 +69,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                                float(delta[j, half].max())] for j in primary},
         "contact_losses_second_half": losses,
         "error_estimate": {"accumulated_local_error": tr.error_estimate,
-                           "rtol": scene.integration.rtol, "atol": scene.integration.atol},
+                           "rtol": opts.rtol, "atol": opts.atol},
     }
     return AnalysisOutcome(summary=summary, result=result)

@@ -95,6 +95,11 @@ class SweepOptions:
                                        choices=("up", "down"))
     max_period: int = spec(8, ge=1, le=64, doc="largest n classified as period-n")
     period_tol: float = spec(1e-5, gt=0.0, lt=1.0, doc="relative Poincare-sample tolerance")
+    accuracy: float = spec(1e-3, gt=0.0, lt=1.0, doc="error asked of the recorded motion: max "
+                           "|delta - delta_exact| over the record window / the range of delta "
+                           "(delta: the monitored mesh deformation); sets the integrator's "
+                           "rtol/atol of a gearbox sweep or time response unless [integration] "
+                           "rtol is given")
     segments: int = spec(1, ge=1, le=1000, doc="independent pieces per direction, each "
                          "starting from the static equilibrium (parallel work units)")
     workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
