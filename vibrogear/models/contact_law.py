@@ -28,9 +28,8 @@ Which flank is in contact (the mode) is part of the law's input:
 
 :func:`contact_force` is the compiled scalar law the kernels inline; :func:`evaluate`
 and :func:`evaluate_set` are the numpy wrappers (vectorised over contacts and samples)
-every non-compiled caller uses; they run the same compiled law.  numba's on-disk cache
-checks only the caller's own source file: after editing this module, delete the cached
-kernels (``find vibrogear -name '*.nb[ic]' -delete``), which inline the old law otherwise.
+every non-compiled caller uses; they run the same compiled law.  The kernels that inline
+the law are recompiled when this module changes (:mod:`vibrogear.models.numba_cache`).
 """
 from __future__ import annotations
 
@@ -38,6 +37,8 @@ from collections import namedtuple
 
 import numpy as np
 from numba import njit
+
+from . import numba_cache  # noqa: F401  (joint cache stamps, before any compiled call)
 
 __all__ = ["power", "contact_mode", "resolve_mode", "contact_force", "smooth_contacts",
            "ContactForces", "evaluate", "evaluate_set", "flank", "harmonic_series"]
