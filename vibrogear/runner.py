@@ -24,7 +24,8 @@ from .config import Scene
 from .pipeline.files import atomic_write_text
 from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 
-__all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure"]
+__all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure",
+           "is_interrupt"]
 
 
 @dataclass(frozen=True)
@@ -146,7 +147,12 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
             summary["results"][name] = {"status": "failed", "message": str(exc)}
             summary["status"] = "failed"
             failure = exc
-        except KeyboardInterrupt as exc:
+        except (KeyboardInterrupt, SystemError) as exc:
+            # Ctrl-C inside compiled (numba) code surfaces as a SystemError whose context
+            # is the KeyboardInterrupt
+            if not is_interrupt(exc):
+                raise
+            exc = KeyboardInterrupt()
             summary["results"][name] = {"status": "interrupted",
                                         "message": "stopped by the user (Ctrl-C); run the same "
                                         "command again to resume"}
@@ -161,6 +167,17 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
     if failure is not None:
         raise failure
     return summary
+
+
+def is_interrupt(exc: BaseException) -> bool:
+    """Whether ``exc`` is, or was caused by, a KeyboardInterrupt (Ctrl-C)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def _versions() -> dict[str, str]:
