@@ -97,7 +97,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             record_periods=cfg.record_periods,
             extra_transient_periods=cfg.extra_transient_periods, max_period=cfg.max_period,
             period_tol=cfg.period_tol, options=opts, u0=study.start(params[0]),
-            segments=cfg.segments, workers=cfg.workers)
+            segments=cfg.segments, workers=cfg.workers, lyapunov=cfg.lyapunov)
     failed = int(np.sum(res.status != 0))
     if failed == res.param.size:
         raise NumericalFailure(f"sweep: all {failed} points failed; first: "
@@ -156,7 +156,10 @@ def record_to_json(r: PointRecord) -> dict:
          "clusters": int(r.clusters), "status": int(r.status), "message": r.message,
          "u_end": _arr(r.u_end), "steps": int(r.steps), "rejected": int(r.rejected),
          "rhs_calls": int(r.rhs_calls), "events": int(r.events),
-         "wall_time": _num(r.wall_time)}
+         "wall_time": _num(r.wall_time), "motion_class": int(r.motion_class),
+         "lyapunov": _num(r.lyapunov), "lyapunov_ci": _arr(r.lyapunov_ci),
+         "transient_used": int(r.transient_used), "settled_by": r.settled_by,
+         "metrics": {k: _num(v) for k, v in r.metrics.items()}}
     if r.states is not None:
         d["states_shape"] = list(np.shape(r.states))
         d["states"] = _arr(r.states)
@@ -174,4 +177,9 @@ def record_from_json(d: dict) -> PointRecord:
         clusters=int(d["clusters"]), status=int(d["status"]), message=d["message"],
         u_end=_a(d["u_end"]), steps=int(d["steps"]), rejected=int(d["rejected"]),
         rhs_calls=int(d["rhs_calls"]), events=int(d["events"]),
-        wall_time=_f(d["wall_time"]), states=states)
+        wall_time=_f(d["wall_time"]), states=states,
+        motion_class=int(d.get("motion_class", 0)), lyapunov=_f(d.get("lyapunov")),
+        lyapunov_ci=tuple(_a(d.get("lyapunov_ci") or [None, None])),
+        transient_used=int(d.get("transient_used", 0)), settled_by=d.get("settled_by", ""),
+        metrics={k: (int(v) if k.startswith(("period_n_", "motion_class_")) and v is not None
+                     else _f(v)) for k, v in (d.get("metrics") or {}).items()})

@@ -89,7 +89,8 @@ class SweepOptions:
     """The settings of :func:`vibrogear.solvers.sweep.sweep` (sequential continuation)."""
     transient_periods: int = spec(200, ge=0, le=1_000_000)
     extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
-                                        doc="more transient allowed while not yet periodic")
+                                        doc="more transient allowed while not yet settled "
+                                        "(the budget is transient_periods + this)")
     record_periods: int = spec(32, ge=1, le=100_000)
     directions: tuple[str, ...] = spec(("up", "down"), min_len=1, max_len=2,
                                        choices=("up", "down"))
@@ -104,6 +105,8 @@ class SweepOptions:
                          "starting from the static equilibrium (parallel work units)")
     workers: int | None = spec(None, ge=1, le=4096, doc="local worker processes "
                                "(default: all cores; 1: serial; under mpirun: the ranks)")
+    lyapunov: bool = spec(True, doc="largest Lyapunov exponent (with its 95 % interval) of "
+                          "points without a period: it tells chaotic from quasi-periodic")
 
     def __post_init__(self):
         check_fields(self)

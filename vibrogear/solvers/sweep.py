@@ -6,22 +6,20 @@ contiguous pieces; every unit starts from ``u0`` (or zeros) at its first point a
 its points in order, each point starting from the end state of the previous good point
 of the same unit.  Units never depend on each other, so they run in parallel (local
 processes or MPI ranks, :mod:`vibrogear.pipeline.executors`) and the results do not
-depend on the number of workers.  Each point integrates ``transient_periods``
-excitation periods that are dropped (plus up to ``extra_transient_periods`` more while
-the motion is not yet periodic) and then ``record_periods`` periods that are recorded:
+depend on the number of workers.
 
-* stroboscopic (Poincare) samples of the full state at t = (N_tr + k) T, k = 1..R, and
-  of the monitored deformation delta_mon = c_mon . x - e_mon(t) at the same instants;
-* the extrema of delta_mon over the record window (located on the dense output);
-* the contact losses of the monitored contact (mesh interruptions), per period.
+Each point (:mod:`.sweep_point`) integrates a transient that stops when the stroboscopic
+map has converged or the statistics have settled (at most ``transient_periods +
+extra_transient_periods`` periods), then ``record_periods`` periods that are recorded:
+stroboscopic (Poincare) samples of the full state and of the monitored deformation
+delta_mon = c_mon . x - e_mon(t), its extrema (located on the dense output), the contact
+losses of the monitored contact, the contact events.  The motion class with its evidence
+(period-n, else the largest Lyapunov exponent with its interval) and the rattle / contact
+metrics per contact group come from them (:mod:`.motion`, :mod:`.lyapunov`).
 
 Each point starts at t = 0 where the excitation phase is cos(W t) = 1; since a whole
 number of periods is integrated, the end state is again at phase 0 and seeds the next
-point directly.  The motion is classified as period-n for the smallest n <= max_period
-with |P_{k+n} - P_k| <= period_tol * scale for every recorded k (scales: the largest
-sampled |x| for the displacements, the largest |x'| for the velocities), else 0 (not
-periodic: quasi-periodic or chaotic).  A cheap chaos indicator is the number of distinct
-Poincare clusters.  A failed point keeps NaN values and its integrator status and
+point directly.  A failed point keeps NaN values and its integrator status and
 message; the unit goes on from its last good state.  Solvers never print.
 """
 from __future__ import annotations
@@ -33,45 +31,18 @@ from functools import partial
 
 import numpy as np
 
+from ..config.options import SweepOptions
 from ..models.reduced import ReducedModel
 from ..pipeline.executors import broadcast, is_root, run_units, under_mpi
-from .contact_eval import contact_kinematics
-from ..config.options import SweepOptions
-from .integrate import IntegrationOptions, integrate
+from .integrate import IntegrationOptions
+from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
 from .status import Status
+from .sweep_point import PointRecord, run_point
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
-           "count_clusters", "monitored_deformation", "assemble_result"]
+           "count_clusters", "monitored_deformation", "assemble_result", "MOTION_LEGEND"]
 
 DIRECTIONS = ("up", "down")
-
-
-@dataclass(frozen=True, eq=False)
-class PointRecord:
-    """One finished point of a sweep (what the callback receives and resuming needs)."""
-    direction: str
-    index: int                   # index into the ``params`` array given to :func:`sweep`
-    param: float
-    qmin: float                  # extrema of the monitored deformation (NaN if failed)
-    qmax: float
-    poincare: np.ndarray         # (R,) monitored deformation at the period multiples
-    period_n: int                # 1..max_period, 0 = not periodic (or failed)
-    impacts: float               # contact losses of the monitored contact per period
-    defect: float                # max_k |P_{k+n} - P_k| / scale (periodic points), else NaN
-    clusters: int                # distinct Poincare clusters (0 if failed)
-    status: int                  # Status: OK, or the integrator's failure (< 0)
-    message: str
-    u_end: np.ndarray            # (n,) state at the end (phase 0): seeds the next point
-    steps: int = 0
-    rejected: int = 0
-    rhs_calls: int = 0
-    events: int = 0
-    wall_time: float = 0.0
-    states: np.ndarray | None = None   # (R, n) Poincare samples of the full state (optional)
-
-    @property
-    def ok(self) -> bool:
-        return self.status == 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,6 +76,12 @@ class SweepResult:
     status_message: str = "ok"
     states: np.ndarray | None = None   # (N, R, n) when kept
     records: tuple = field(default=(), repr=False)
+    motion_class: np.ndarray | None = None    # (N,) int, index into MOTION_LEGEND
+    lyapunov: np.ndarray | None = None        # (N,) largest exponent (NaN: not computed)
+    lyapunov_ci: np.ndarray | None = None     # (N, 2) its 95 % interval
+    transient_used: np.ndarray | None = None  # (N,) transient periods integrated
+    settled_by: np.ndarray | None = None      # (N,) "map" / "statistics" / "budget"
+    metrics: dict = field(default_factory=dict)   # {name: (N,)} per-group classes, metrics
 
     @property
     def ok(self) -> np.ndarray:
@@ -117,136 +94,6 @@ class SweepResult:
         return {"rtol": self.rtol, "atol": self.atol, "period_tol": self.period_tol,
                 "max_periodicity_defect": float(d.max()) if d.size else None,
                 "failed_points": int(np.sum(self.status != 0))}
-
-
-# ---------------------------------------------------------------- analysis helpers
-
-def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.ndarray:
-    """delta_mon = c_mon . x - e_mon(t) at times ``t`` for states (len(t), 2m)."""
-    if model.contacts.count == 0:
-        return np.atleast_2d(states)[:, 0].copy()
-    return contact_kinematics(model, param, t, states, rows=[model.monitor])[0][0]
-
-
-def _scaled(samples: np.ndarray, split: int | None) -> np.ndarray:
-    """Samples divided by block scales (largest |value| in each block; tiny floor)."""
-    s = np.asarray(samples, dtype=float)
-    if s.ndim == 1:
-        s = s[:, None]
-    blocks = [slice(0, s.shape[1])] if not split else [slice(0, split), slice(split, None)]
-    out = np.empty_like(s)
-    for b in blocks:
-        sc = float(np.max(np.abs(s[:, b]), initial=0.0))
-        out[:, b] = s[:, b] / (sc if sc > 1e-300 else 1.0)
-    return out
-
-
-def classify_period(samples, max_period: int, period_tol: float, *,
-                    split: int | None = None) -> tuple[int, float]:
-    """(n, defect): smallest n <= max_period with max_k |P_{k+n} - P_k| <= period_tol.
-
-    ``samples`` (R,) or (R, n) stroboscopic samples; ``split``: index where the velocity
-    block starts (the two blocks are scaled separately).  Differences are measured in
-    units of each block's largest |value|.  Returns (0, nan) when no n qualifies or the
-    samples are not finite.
-    """
-    s = np.asarray(samples, dtype=float)
-    if s.ndim == 1:
-        s = s[:, None]
-    if s.shape[0] < 2 or not np.all(np.isfinite(s)):
-        return 0, math.nan
-    z = _scaled(s, split)
-    defects = {}
-    for n in range(1, min(int(max_period), s.shape[0] - 1) + 1):
-        defects[n] = float(np.max(np.abs(z[n:] - z[:-n])))
-        if defects[n] > period_tol:
-            continue
-        # a genuine period-n cycle is resolved from every shorter divisor cycle; a slowly
-        # decaying transient can pass at n > 1 by aliasing while n = 1 nearly passes
-        if all(defects[d] > 10.0 * period_tol for d in range(1, n) if n % d == 0):
-            return n, defects[n]
-    return 0, math.nan
-
-
-def count_clusters(samples, rel_tol: float = 1e-3, *, split: int | None = None) -> int:
-    """Number of distinct Poincare clusters (greedy, inf-norm radius ``rel_tol`` in scaled
-    units).  Period-n motion gives n; quasi-periodic or chaotic motion gives many."""
-    s = np.asarray(samples, dtype=float)
-    if s.ndim == 1:
-        s = s[:, None]
-    if s.shape[0] == 0 or not np.all(np.isfinite(s)):
-        return 0
-    z = _scaled(s, split)
-    centres: list[np.ndarray] = []
-    for p in z:
-        if not any(float(np.max(np.abs(p - c))) <= rel_tol for c in centres):
-            centres.append(p)
-    return len(centres)
-
-
-# ---------------------------------------------------------------- one point
-
-def _failed(direction, index, param, R, status, message, u_seed, traj=None, wall=0.0):
-    nan = math.nan
-    return PointRecord(direction, int(index), float(param), nan, nan, np.full(R, nan), 0,
-                       nan, nan, 0, int(status), message, np.array(u_seed, dtype=float),
-                       steps=traj.steps if traj else 0, rejected=traj.rejected if traj else 0,
-                       rhs_calls=traj.rhs_calls if traj else 0,
-                       events=traj.events if traj else 0, wall_time=wall)
-
-
-def _run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
-               max_period, period_tol, cluster_tol, options, keep_states,
-               extra_transient_periods=0) -> PointRecord:
-    """Integrate the transient, record; while the motion is not yet periodic and the
-    extra-transient budget lasts, drop the record as transient too and record again."""
-    wall = time.perf_counter()
-    R = int(record_periods)
-    if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
-        return _failed(direction, index, param, R, Status.BAD_PARAMETER,
-                       Status.BAD_PARAMETER.message, u_seed)
-    T = model.excitation_period(param)
-    seed = np.array(u_seed, dtype=float)
-    tp = int(transient_periods)
-    budget = int(extra_transient_periods)
-    counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
-    while True:
-        t_rec = tp * T
-        t1 = (tp + R) * T
-        t_eval = (tp + np.arange(1, R + 1)) * T
-        t_eval[-1] = t1
-        tr = integrate(model, param, seed, 0.0, t1, t_eval=t_eval, options=options,
-                       record_from=t_rec)
-        counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
-        if not tr.ok:
-            return _failed(direction, index, param, R, tr.status, tr.message, u_seed, tr,
-                           time.perf_counter() - wall)
-        states = tr.u
-        has_monitor = model.contacts.count > 0   # else the extrema come from the samples only
-        ok = (np.all(np.isfinite(states)) and np.all(np.isfinite(tr.u_end))
-              and (not has_monitor or (math.isfinite(tr.monitor_min)
-                                       and math.isfinite(tr.monitor_max))))
-        if not ok:
-            return _failed(direction, index, param, R, Status.NONFINITE,
-                           "non-finite state or monitor values",
-                           u_seed, tr, time.perf_counter() - wall)
-        m = model.n_modes
-        n, defect = classify_period(states, max_period, period_tol, split=m)
-        if n > 0 or budget <= 0:
-            break
-        # not periodic yet: the recorded window becomes transient, integrate on
-        seed = tr.u_end.copy()
-        tp = min(max(int(transient_periods), R), budget)
-        budget -= tp + R
-    delta = monitored_deformation(model, param, t_eval, states)
-    clusters = count_clusters(states, cluster_tol, split=m)
-    qmin = min(tr.monitor_min, float(delta.min())) if has_monitor else float(delta.min())
-    qmax = max(tr.monitor_max, float(delta.max())) if has_monitor else float(delta.max())
-    return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
-                       tr.monitor_losses / R, defect, clusters, 0, "ok", tr.u_end.copy(),
-                       steps=int(counts[0]), rejected=int(counts[1]), rhs_calls=int(counts[2]),
-                       events=int(counts[3]), wall_time=time.perf_counter() - wall,
-                       states=states.copy() if keep_states else None)
 
 
 # ---------------------------------------------------------------- the sweep
@@ -271,7 +118,7 @@ def _walk_unit(model, kw, unit, emit) -> int:
     for i, p in zip(indices, params):
         rec = done.get(i)
         if rec is None:
-            rec = _run_point(model, float(p), seed, direction, i, **kw)
+            rec = run_point(model, float(p), seed, direction, i, **kw)
             emit(rec)
             new += 1
         if rec.ok:
@@ -284,9 +131,14 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
           options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
           done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
           extra_transient_periods: int = 0, segments: int = 1,
-          workers: int | None = None) -> SweepResult:
+          workers: int | None = None, lyapunov: bool = True,
+          settle: bool = True) -> SweepResult:
     """Sequential continuation of ``model`` over ``params`` in independent units (see the
     module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
+
+    ``lyapunov``: the largest Lyapunov exponent of points without a period (their class
+    evidence); ``settle``: stop a transient whose statistics have settled (a transient
+    always stops once the stroboscopic map has converged).
 
     ``segments``: pieces per direction (each starts again from ``u0``).  ``workers``:
     local processes (None: min(units, cores); 1: in this process); under ``mpirun``
@@ -307,7 +159,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
     SweepOptions(transient_periods=int(transient_periods), record_periods=int(record_periods),
                  extra_transient_periods=int(extra_transient_periods), directions=directions,
                  max_period=int(max_period), period_tol=float(period_tol),
-                 segments=int(segments), workers=None if workers is None else int(workers))
+                 segments=int(segments), workers=None if workers is None else int(workers),
+                 lyapunov=bool(lyapunov))
     n_states = model.n_states
     seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
     if seed.shape != (n_states,):
@@ -316,7 +169,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
     kw = dict(transient_periods=int(transient_periods), record_periods=int(record_periods),
               max_period=int(max_period), period_tol=float(period_tol),
               cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
-              extra_transient_periods=int(extra_transient_periods))
+              extra_transient_periods=int(extra_transient_periods), lyapunov=bool(lyapunov),
+              settle=bool(settle))
     layout = sweep_units(params.size, directions, int(segments))
     units = [(d, idx, params[list(idx)], seed, {i: done[(d, i)] for i in idx if (d, i) in done})
              for d, idx in layout]
@@ -369,6 +223,12 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
     states = None
     if N and all(r.states is not None for r in recs):
         states = np.stack([r.states for r in recs])
+    keys = sorted({k for r in recs for k in r.metrics})
+    metrics = {k: np.array([r.metrics.get(k, math.nan) for r in recs], dtype=float)
+               for k in keys}
+    for k in keys:                      # classes and periods stay integers (-1: absent)
+        if k.startswith(("period_n_", "motion_class_")):
+            metrics[k] = np.where(np.isfinite(metrics[k]), metrics[k], -1).astype(np.int64)
     return SweepResult(
         param=f("param"), direction=np.array([r.direction for r in recs], dtype="<U4"),
         index=i("index"), qmin=f("qmin"), qmax=f("qmax"), poincare=poinc,
@@ -380,4 +240,8 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
         events=int(sum(r.events for r in recs)), wall_time=float(wall_time),
         point_wall=f("wall_time"), rtol=float(options.rtol), atol=float(options.atol),
         period_tol=float(period_tol), param_name=param_name, status_code=Status(status_code),
-        status_message=status_message, states=states, records=recs)
+        status_message=status_message, states=states, records=recs,
+        motion_class=i("motion_class"), lyapunov=f("lyapunov"),
+        lyapunov_ci=np.array([r.lyapunov_ci for r in recs], dtype=float).reshape(N, 2),
+        transient_used=i("transient_used"),
+        settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics)

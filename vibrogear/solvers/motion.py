@@ -1,0 +1,254 @@
+"""Motion classes with evidence and the rattle / contact metrics of a sweep point.
+
+Motion classes (integer codes, :data:`MOTION_LEGEND`):
+
+* ``PERIODIC`` (1): the stroboscopic samples repeat with a period n <= max_period
+  (``period_n`` gives n; evidence: the periodicity defect);
+* ``QUASI_PERIODIC`` (2): no period, the transient stopped because its statistics
+  settled, and the 95 % interval of the largest Lyapunov exponent contains 0;
+* ``CHAOTIC`` (3): no period, and the interval lies above 0;
+* ``NOT_SETTLED`` (4): no period, not chaotic, and either the interval lies below 0 (the
+  motion still converges: a transient longer than the budget, or a period > max_period)
+  or the transient budget was used up;
+* ``APERIODIC`` (5): no period, the transient stopped because its statistics settled,
+  no exponent computed (``[sweep] lyapunov = false``);
+* ``FAILED`` (0): the integration failed.
+
+Per contact group (each gear mesh, i.e. each two-sided contact; each bearing, its
+one-sided rolling-element contacts grouped by the name before ':') the period is
+classified again on the group's deformations alone: the loaded mesh can be period-1
+while a free gear rattles; a group without a period of its own takes the point's class.
+
+Contact metrics over a record window of P excitation periods, from the integrator's
+located contact events (exact switch times) and the contact law's modes:
+
+* ``impacts_drive_<g>`` / ``impacts_back_<g>``: contact onsets on the upper (drive,
+  delta > gap_hi) / lower (back, delta < gap_lo) flank per excitation period;
+* ``impact_velocity_rms_<g>`` / ``impact_velocity_max_<g>``: RMS and largest normal
+  approach speed |delta'| at those onsets (model units: deformation per model time);
+* ``contact_fraction_<g>``: fraction of the time in contact (mode != 0);
+* ``rattle_<g>``: impact energy per period, sum over onsets of m_eff v^2 / 2 divided by
+  P, with m_eff = 1 / (c . c) the effective mass of the contact direction c in the
+  model's mass-normalised modal coordinates (model units);
+* ``unloaded_<bearing>``: mean number of its rolling elements out of contact.
+
+Each metric has an ``_err`` companion: half the difference of its values on the two
+halves of the record window (for independent halves, the standard error of their mean).
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from ..models.contact_law import flank
+from ..models.reduced import ReducedModel
+from .contact_eval import contact_kinematics
+
+__all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
+           "MOTION_LEGEND", "motion_class", "contact_groups", "mode_timeline",
+           "window_metrics", "metrics_with_errors", "METRIC_KINDS", "classify_period",
+           "count_clusters", "monitored_deformation", "best_defect"]
+
+FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
+MOTION_LEGEND = ("failed", "periodic", "quasi-periodic", "chaotic", "not settled",
+                 "not periodic (no exponent)")
+#: metric name stems of a mesh (two-sided contact) and of a bearing
+METRIC_KINDS = {"mesh": ("impacts_drive", "impacts_back", "impact_velocity_rms",
+                         "impact_velocity_max", "contact_fraction", "rattle"),
+                "bearing": ("unloaded",)}
+
+
+def motion_class(period_n: int, ci=(math.nan, math.nan), *, budget_used: bool = False,
+                 failed: bool = False) -> int:
+    """The class code of a point (module docstring) from its period, the exponent's
+    interval ``ci`` (NaN: not computed) and whether the transient budget ran out."""
+    if failed:
+        return FAILED
+    if period_n > 0:
+        return PERIODIC
+    lo, hi = (float(c) for c in ci)
+    if math.isfinite(lo) and math.isfinite(hi):
+        if lo > 0.0:
+            return CHAOTIC
+        if hi < 0.0 or budget_used:
+            return NOT_SETTLED
+        return QUASI_PERIODIC
+    return NOT_SETTLED if budget_used else APERIODIC
+
+
+def _key(name: str) -> str:
+    return re.sub(r"[^0-9A-Za-z]+", "_", str(name)).strip("_") or "contact"
+
+
+def contact_groups(model: ReducedModel) -> dict:
+    """{key: ("mesh" | "bearing", contact indices)}: every two-sided contact alone (a
+    gear mesh, the impact pair's clearance), one-sided contacts grouped by the part of
+    their name before ':' (a bearing's rolling elements)."""
+    ct = model.contacts
+    out: dict = {}
+    names = ct.names or tuple(f"c{j}" for j in range(ct.count))
+    for j in range(ct.count):
+        if np.isfinite(ct.gap_lo[j]):
+            key = _key(names[j])
+            while key in out:
+                key += "_"
+            out[key] = ("mesh", np.array([j]))
+        else:
+            key = "bearing_" + _key(str(names[j]).split(":")[0])
+            kind, idx = out.get(key, ("bearing", np.zeros(0, int)))
+            out[key] = (kind, np.append(idx, j).astype(int))
+    return out
+
+
+def mode_timeline(model: ReducedModel, param: float, u_start, events, t0: float, t1: float):
+    """Per contact: (initial mode at t0 from the sign of its deformation, the events
+    (t, new mode) inside [t0, t1]).  ``events``: (times, contacts, modes) arrays."""
+    ct = model.contacts
+    delta = contact_kinematics(model, param, [t0], np.atleast_2d(u_start))[0][:, 0]
+    mode0 = flank(delta, ct.gap_hi, ct.gap_lo)
+    t, j, md = (np.asarray(a) for a in events)
+    sel = (t >= t0) & (t <= t1)
+    return mode0, (t[sel], j[sel].astype(int), md[sel].astype(int))
+
+
+def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:
+    """Fraction of [t0, t1] with mode != 0, from the initial mode and the switches."""
+    edges = np.concatenate([[t0], times, [t1]])
+    states = np.concatenate([[mode0], modes])
+    return float(np.sum(np.diff(edges) * (states != 0)) / (t1 - t0))
+
+
+def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed,
+                   t0: float, t1: float, period: float) -> dict:
+    """The metrics (module docstring) over [t0, t1]: ``mode0`` (nc,) the modes at t0,
+    ``events`` (t, contact, new mode) of the window in time order, ``onset_speed`` (len
+    events,) |delta'| at each event (NaN where not needed)."""
+    t, j, md = events
+    speed = np.asarray(onset_speed, dtype=float)
+    P = (t1 - t0) / period
+    out = {}
+    c2 = np.sum(model.contacts.directions ** 2, axis=1)
+    for key, (kind, idx) in groups.items():
+        if kind == "mesh":
+            c = int(idx[0])
+            mine = j == c
+            drive = mine & (md == 1)
+            back = mine & (md == -1)
+            onset = drive | back
+            v = speed[onset]
+            out[f"impacts_drive_{key}"] = float(np.sum(drive) / P)
+            out[f"impacts_back_{key}"] = float(np.sum(back) / P)
+            out[f"impact_velocity_rms_{key}"] = float(np.sqrt(np.mean(v ** 2))) if v.size \
+                else 0.0
+            out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else 0.0
+            out[f"contact_fraction_{key}"] = _fraction(int(mode0[c]), t[mine], md[mine], t0, t1)
+            out[f"rattle_{key}"] = float(np.sum(0.5 * v ** 2 / c2[c]) / P)
+        else:
+            out[f"unloaded_{key}"] = float(sum(
+                1.0 - _fraction(int(mode0[c]), t[j == c], md[j == c], t0, t1) for c in idx))
+    return out
+
+
+def metrics_with_errors(model: ReducedModel, groups: dict, mode0, events, onset_speed,
+                        t0: float, t1: float, period: float) -> dict:
+    """:func:`window_metrics` over [t0, t1] and the ``_err`` companions from its two
+    halves (the split falls on a period end when the window has an even count)."""
+    t, j, md = (np.asarray(a) for a in events)
+    speed = np.asarray(onset_speed, dtype=float)
+    full = window_metrics(model, groups, mode0, (t, j, md), speed, t0, t1, period)
+    P = int(round((t1 - t0) / period))
+    if P < 2:
+        return {**full, **{f"{k}_err": math.nan for k in full}}
+    tm = t0 + (P // 2) * period
+    first = t < tm
+    a = window_metrics(model, groups, mode0, (t[first], j[first], md[first]), speed[first],
+                       t0, tm, period)
+    # modes at the split: the last switch of each contact before it, else its start mode
+    mode_mid = np.array(mode0, dtype=int).copy()
+    for k in np.nonzero(first)[0]:
+        mode_mid[j[k]] = md[k]
+    b = window_metrics(model, groups, mode_mid, (t[~first], j[~first], md[~first]),
+                       speed[~first], tm, t1, period)
+    return {**full, **{f"{k}_err": 0.5 * abs(a[k] - b[k]) for k in full}}
+
+
+# ---------------------------------------------------------------- periodicity
+
+def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.ndarray:
+    """delta_mon = c_mon . x - e_mon(t) at times ``t`` for states (len(t), 2m)."""
+    if model.contacts.count == 0:
+        return np.atleast_2d(states)[:, 0].copy()
+    return contact_kinematics(model, param, t, states, rows=[model.monitor])[0][0]
+
+
+def _scaled(samples: np.ndarray, split: int | None, ref=None) -> np.ndarray:
+    """Samples divided by block scales (largest |value| in each block of ``ref``, default
+    the samples themselves; tiny floor)."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    r = s if ref is None else np.asarray(ref, dtype=float).reshape(-1, s.shape[1])
+    blocks = [slice(0, s.shape[1])] if not split else [slice(0, split), slice(split, None)]
+    out = np.empty_like(s)
+    for b in blocks:
+        sc = float(np.max(np.abs(r[:, b]), initial=0.0))
+        out[:, b] = s[:, b] / (sc if sc > 1e-300 else 1.0)
+    return out
+
+
+def classify_period(samples, max_period: int, period_tol: float, *,
+                    split: int | None = None) -> tuple[int, float]:
+    """(n, defect): smallest n <= max_period with max_k |P_{k+n} - P_k| <= period_tol.
+
+    ``samples`` (R,) or (R, n) stroboscopic samples; ``split``: index where the velocity
+    block starts (the two blocks are scaled separately).  Differences are measured in
+    units of each block's largest |value|.  Returns (0, nan) when no n qualifies or the
+    samples are not finite.
+    """
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    if s.shape[0] < 2 or not np.all(np.isfinite(s)):
+        return 0, math.nan
+    z = _scaled(s, split)
+    defects = {}
+    for n in range(1, min(int(max_period), s.shape[0] - 1) + 1):
+        defects[n] = float(np.max(np.abs(z[n:] - z[:-n])))
+        if defects[n] > period_tol:
+            continue
+        # a genuine period-n cycle is resolved from every shorter divisor cycle; a slowly
+        # decaying transient can pass at n > 1 by aliasing while n = 1 nearly passes
+        if all(defects[d] > 10.0 * period_tol for d in range(1, n) if n % d == 0):
+            return n, defects[n]
+    return 0, math.nan
+
+
+def count_clusters(samples, rel_tol: float = 1e-3, *, split: int | None = None) -> int:
+    """Number of distinct Poincare clusters (greedy, inf-norm radius ``rel_tol`` in scaled
+    units).  Period-n motion gives n; quasi-periodic or chaotic motion gives many."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    if s.shape[0] == 0 or not np.all(np.isfinite(s)):
+        return 0
+    z = _scaled(s, split)
+    centres: list[np.ndarray] = []
+    for p in z:
+        if not any(float(np.max(np.abs(p - c))) <= rel_tol for c in centres):
+            centres.append(p)
+    return len(centres)
+
+
+def best_defect(samples, max_period: int) -> float:
+    """min over n <= max_period of max_k |P_{k+n} - P_k| (raw units, inf-norm): the
+    distance of the stroboscopic samples from the nearest period.  It shrinks while a
+    transient decays and stays put on a quasi-periodic or chaotic attractor; compare it
+    between windows of one run (it carries the samples' units)."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    d = [float(np.max(np.abs(s[n:] - s[:-n]))) for n in range(1, min(int(max_period),
+                                                                   s.shape[0] - 1) + 1)]
+    return min(d) if d else math.nan

@@ -1,0 +1,279 @@
+"""One point of a sweep: a transient that stops when settled, a record window, the motion
+class with its evidence (period, Lyapunov exponent) and the contact metrics.
+
+Every integration starts at phase 0 (t = 0, cos(W t) = 1) and covers whole excitation
+periods T, so its end state is again at phase 0.
+
+* **Transient** in blocks of max(max_period + 2, 8) periods, at most ``transient_periods +
+  extra_transient_periods`` (the budget).  It stops after a block when
+
+  - the stroboscopic map has converged: the last max_period + 2 samples have a period
+    n <= max_period within ``period_tol`` (:func:`~.motion.classify_period`), or
+  - the statistics have settled (``settle``): with windows of W = max(record_periods,
+    ``SETTLE_WINDOW``) periods, the mean and the standard deviation of the monitored
+    deformation (8 samples per period) over the last two windows differ by at most
+    ``SETTLE_TOL`` of its range, and over the last three windows the distance of the
+    stroboscopic samples from the nearest period (:func:`~.motion.best_defect`) has not
+    shrunk below ``NO_CONTRACTION`` of the previous window's, twice (a decaying
+    transient shrinks it, an attractor does not).
+
+  ``transient_used`` is the number of periods integrated; ``settled_by`` says why it
+  stopped ("map", "statistics" or "budget").
+* **Record** of ``record_periods`` periods in chunks of :data:`~.lyapunov.CHUNK` periods
+  (one integrator call each), 16 dense samples per period: stroboscopic samples, extrema
+  of the monitored deformation, located contact events.
+* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
+  is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
+  (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
+  trajectory per chunk) decides chaotic / quasi-periodic / not settled.  Per contact
+  group, the period again on the group's deformations alone.
+* **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
+  (the state at each onset by a short integration from the dense sample before it),
+  contact fractions, rattle energy, unloaded rolling elements, each with a two-window
+  error.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..models.contact_law import flank
+from .contact_eval import contact_kinematics
+from .integrate import integrate
+from .lyapunov import CHUNK, block_estimate, state_scale, tangent_chunk
+from .motion import (FAILED, best_defect, classify_period, contact_groups, count_clusters,
+                     metrics_with_errors, monitored_deformation, motion_class)
+from .status import Status
+
+__all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
+           "SETTLE_WINDOW"]
+
+#: settled statistics: mean and std of two windows within this fraction of the range
+SETTLE_TOL = 0.1
+#: ... and the distance from the nearest period not below this fraction of the last one
+NO_CONTRACTION = 0.8
+#: shortest window of the statistics test (periods)
+SETTLE_WINDOW = 32
+_S_TRANSIENT = 8      # dense samples per period for the transient's statistics
+_S_RECORD = 16        # dense samples per period in the record (impact-speed starts)
+
+
+@dataclass(frozen=True, eq=False)
+class PointRecord:
+    """One finished point of a sweep (what the callback receives and resuming needs)."""
+    direction: str
+    index: int                   # index into the ``params`` array given to the sweep
+    param: float
+    qmin: float                  # extrema of the monitored deformation (NaN if failed)
+    qmax: float
+    poincare: np.ndarray         # (R,) monitored deformation at the period multiples
+    period_n: int                # 1..max_period, 0 = not periodic (or failed)
+    impacts: float               # contact losses of the monitored contact per period
+    defect: float                # max_k |P_{k+n} - P_k| / scale (periodic points), else NaN
+    clusters: int                # distinct Poincare clusters (0 if failed)
+    status: int                  # Status: OK, or the integrator's failure (< 0)
+    message: str
+    u_end: np.ndarray            # (n,) state at the end (phase 0): seeds the next point
+    steps: int = 0
+    rejected: int = 0
+    rhs_calls: int = 0
+    events: int = 0
+    wall_time: float = 0.0
+    states: np.ndarray | None = None   # (R, n) Poincare samples of the full state (optional)
+    motion_class: int = FAILED         # motion.MOTION_LEGEND index
+    lyapunov: float = math.nan         # largest Lyapunov exponent (per model time unit)
+    lyapunov_ci: tuple = (math.nan, math.nan)   # its 95 % interval
+    transient_used: int = 0            # transient periods integrated
+    settled_by: str = ""               # "map", "statistics", "budget"
+    metrics: dict = field(default_factory=dict)  # per-group classes and contact metrics
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+
+def failed_point(direction, index, param, R, status, message, u_seed, counts=None,
+                 wall=0.0, used=0) -> PointRecord:
+    nan = math.nan
+    c = np.zeros(4, np.int64) if counts is None else counts
+    return PointRecord(direction, int(index), float(param), nan, nan, np.full(R, nan), 0,
+                       nan, nan, 0, int(status), message, np.array(u_seed, dtype=float),
+                       steps=int(c[0]), rejected=int(c[1]), rhs_calls=int(c[2]),
+                       events=int(c[3]), wall_time=wall, transient_used=int(used))
+
+
+def _count(counts, tr):
+    counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+
+
+def _settled(dense, strob, W: int, max_period: int) -> bool:
+    """The statistics test of the module docstring on the last three windows of W
+    periods: the last two have equal statistics, and neither step between the three
+    shrank the distance from the nearest period."""
+    S = _S_TRANSIENT
+    a, b = dense[-2 * S * W: -S * W], dense[-S * W:]
+    rng = float(np.ptp(np.concatenate([a, b])))
+    if not rng > 0:
+        return False
+    if abs(a.mean() - b.mean()) > SETTLE_TOL * rng or abs(a.std() - b.std()) > SETTLE_TOL * rng:
+        return False
+    d = [best_defect(strob[len(strob) - (k + 1) * W - 1: len(strob) - k * W], max_period)
+         for k in (2, 1, 0)]
+    return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
+
+
+def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
+    """period_n of each contact group from its deformations and rates alone."""
+    out = {}
+    t = np.zeros(strob.shape[0])          # period ends are at phase 0
+    d, dd, _ = contact_kinematics(model, param, t, strob)
+    for key, (_kind, idx) in groups.items():
+        s = np.hstack([d[idx].T, dd[idx].T])
+        out[f"period_n_{key}"] = classify_period(s, max_period, period_tol, split=len(idx))[0]
+    return out
+
+
+def run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
+              max_period, period_tol, cluster_tol, options, keep_states,
+              extra_transient_periods=0, lyapunov=True, settle=True) -> PointRecord:
+    """One sweep point (module docstring)."""
+    wall = time.perf_counter()
+    R = int(record_periods)
+    counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
+    if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
+        return failed_point(direction, index, param, R, Status.BAD_PARAMETER,
+                            Status.BAD_PARAMETER.message, u_seed)
+    T = model.excitation_period(param)
+    m = model.n_modes
+    has_monitor = model.contacts.count > 0
+    seed = np.array(u_seed, dtype=float)
+
+    def fail(st, msg, used):
+        return failed_point(direction, index, param, R, st, msg, u_seed, counts,
+                            time.perf_counter() - wall, used)
+
+    # ---- transient, stopped when settled
+    budget = int(transient_periods) + int(extra_transient_periods)
+    block = max(int(max_period) + 2, 8)
+    W = max(R, SETTLE_WINDOW)
+    strob, dense = [seed], []
+    used, settled_by = 0, "budget"
+    while used < budget:
+        k = min(block, budget - used)
+        t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        _count(counts, tr)
+        used += k
+        if not tr.ok or not np.all(np.isfinite(tr.u_end)):
+            return fail(tr.status or Status.NONFINITE, tr.message, used)
+        seed = tr.u_end.copy()
+        strob.extend(tr.u[_S_TRANSIENT - 1::_S_TRANSIENT])
+        dense.append(monitored_deformation(model, param, t_eval, tr.u))
+        L = int(max_period) + 2
+        if len(strob) >= L and classify_period(np.array(strob[-L:]), max_period, period_tol,
+                                               split=m)[0] > 0:
+            settled_by = "map"
+            break
+        if settle and used >= 3 * W and _settled(np.concatenate(dense), np.array(strob), W,
+                                                  int(max_period)):
+            settled_by = "statistics"
+            break
+
+    # ---- record in chunks
+    u_rec = seed.copy()
+    chunks = []                        # (start state, period-end states, time offset)
+    states, ev_t, ev_j, ev_m, speeds = [], [], [], [], []
+    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
+    groups = contact_groups(model)
+    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
+    t0 = 0.0
+    while t0 < R * T * (1 - 1e-12):
+        k = min(CHUNK, R - int(round(t0 / T)))
+        t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        _count(counts, tr)
+        if not tr.ok:
+            return fail(tr.status, tr.message, used)
+        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
+                and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                         and math.isfinite(tr.monitor_max)))):
+            return fail(Status.NONFINITE, "non-finite state or monitor values", used)
+        ends = tr.u[_S_RECORD - 1::_S_RECORD]
+        chunks.append((seed.copy(), ends, t0))
+        states.append(ends)
+        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
+        losses += tr.monitor_losses
+        lost_events |= tr.events > tr.event_times.size
+        for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
+            v = math.nan
+            if md != 0 and int(j) in mesh_rows:
+                i = int(math.floor(te / (T / _S_RECORD) * (1 + 1e-14))) - 1
+                ts, us = (0.0, seed) if i < 0 else (t_eval[i], tr.u[i])
+                if te - ts > 1e-12 * T:
+                    loc = integrate(model, param, us, ts, te, options=options)
+                    _count(counts, loc)
+                    us = loc.u_end
+                v = abs(float(contact_kinematics(model, param, [te], us[None, :],
+                                                 rows=[int(j)])[1][0, 0]))
+            ev_t.append(t0 + te)
+            ev_j.append(int(j))
+            ev_m.append(int(md))
+            speeds.append(v)
+        seed = tr.u_end.copy()
+        t0 += k * T
+    states = np.concatenate(states)
+
+    # ---- class and evidence
+    n, defect = classify_period(states, max_period, period_tol, split=m)
+    lam, ci = math.nan, (math.nan, math.nan)
+    msg = "ok"
+    if n == 0 and lyapunov and len(chunks) >= 2:
+        scale = state_scale(np.vstack([u_rec, states]), m)
+        v = np.random.default_rng(index).standard_normal(u_rec.size)
+        v /= np.linalg.norm(v)
+        logs = []
+        for start, ends, _ in chunks:
+            g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
+                                            options=options)
+            counts[2] += calls
+            if st != Status.OK:
+                msg = f"Lyapunov exponent not determined: {st.message}"
+                logs = []
+                break
+            logs.append(g)
+        if logs:
+            lam, ci, _ = block_estimate(np.concatenate(logs), T, CHUNK, burn=1)
+    cls = motion_class(n, ci, budget_used=settled_by == "budget")
+    mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
+                  model.contacts.gap_hi, model.contacts.gap_lo) if has_monitor else ()
+    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
+        if has_monitor else {}
+    for key in list(metrics):
+        gn = metrics[key]
+        metrics[key.replace("period_n_", "motion_class_")] = motion_class(
+            gn, ci, budget_used=settled_by == "budget") if gn > 0 else cls
+    if has_monitor:
+        metrics.update(metrics_with_errors(model, groups, mode0,
+                                           (np.array(ev_t), np.array(ev_j, int),
+                                            np.array(ev_m, int)),
+                                           np.array(speeds), 0.0, R * T, T))
+        if lost_events:
+            msg = "event log full: raise [integration] event_log for the contact metrics"
+            metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
+                       for k, v in metrics.items()}
+    delta = monitored_deformation(model, param, np.zeros(R), states)
+    qmin = min(qmin, float(delta.min())) if has_monitor else float(delta.min())
+    qmax = max(qmax, float(delta.max())) if has_monitor else float(delta.max())
+    return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
+                       losses / R, defect, count_clusters(states, cluster_tol, split=m), 0,
+                       msg, seed.copy(), steps=int(counts[0]), rejected=int(counts[1]),
+                       rhs_calls=int(counts[2]), events=int(counts[3]),
+                       wall_time=time.perf_counter() - wall,
+                       states=states.copy() if keep_states else None, motion_class=int(cls),
+                       lyapunov=float(lam), lyapunov_ci=tuple(float(c) for c in ci),
+                       transient_used=int(used), settled_by=settled_by, metrics=metrics)
