@@ -74,17 +74,20 @@ class BranchPoint:
     iterations: int = 0
     integration_error: float = 0.0      # the orbit's integrator error estimate
     liouville_det_error: float | None = None
+    neutral: int = 0        # trivial multipliers 1 (orbit family of a free DOF), bordered out
 
     @property
     def stable(self) -> bool:
-        return stability(self.floquet)
+        """Orbitally stable: the nontrivial multipliers inside the unit circle."""
+        return stability(self.floquet, trivial=self.neutral)
 
 
 @dataclass(frozen=True, eq=False)
 class Branch:
     points: tuple           # BranchPoint, in order of continuation
     n_periods: int          # 1: period-1 branch, 2: period-2 branch
-    status: Status          # LEFT_RANGE / REJOINED when done, else why it stopped
+    status: Status          # LEFT_RANGE / REJOINED / GRAZING_END / CASCADE when done, else
+    #                         why it stopped
     message: str
     period_scale: float     # period of the orbit = n_periods * 2 pi / (omega_per_param * param)
     counters: dict = field(default_factory=dict)

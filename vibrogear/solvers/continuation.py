@@ -8,7 +8,18 @@ tangent changes sign), period doublings (PD: det(M + I) changes sign) and
 Neimark-Sacker points (NS: prod_{i<j}(mu_i mu_j - 1) changes sign with a complex
 pair on the unit circle), each located by bisection in arclength.  At the first PD
 the solver switches onto the period-2 branch (the shooting problem over 2T, started
-along the flip eigenvector, orthogonal to the period-1 tangent) and continues it.
+along the flip eigenvector, orthogonal to the period-1 tangent) and continues it; a PD on
+that branch ends it as a cascade (CASCADE).
+
+Orbit families (a free gear that touches nothing): the k neutral directions V of the
+orbit (:meth:`.shooting.PeriodicFlow.neutral`) are bordered out of the augmented system,
+[[M - I, dH/dp, B], [V^T, 0, 0]] (n + k rows, n + 1 + k columns, B the left null vectors
+with their multipliers), whose one null vector is the tangent; the corrector appends the
+arclength row.  The k trivial multipliers 1 are stored per point (``neutral``) and left
+out of stability and the test functions.  Where k changes between two points a free
+coordinate has started (or stopped) touching a contact: the branch ends there as a
+grazing (GRAZING_END), as it does when the steps shrink below ds_min on an orbit whose
+integration failed on a grazing switch.
 
 Call shape (BifurcationKit's): ``continuation(problem, method, options, callback)`` ->
 :class:`~.branch.ContinuationResult`, with the problem, method and result types in
@@ -48,6 +59,7 @@ class _Problem:
         self.scale = method.param_scale
         self.flows = 0
         self.rhs_calls = 0
+        self.last_failure = None        # Status of the last failed integration
 
     def flow(self, z: np.ndarray) -> PeriodicFlow:
         self.flows += 1
@@ -56,21 +68,35 @@ class _Problem:
         self.rhs_calls += f.trajectory.rhs_calls
         return f
 
+    def neutral(self, f: PeriodicFlow) -> int:
+        return f.neutral(self.model)[0].shape[1]
+
     def jac(self, f: PeriodicFlow) -> np.ndarray:
-        return np.hstack([f.dG_du0, (f.dG_dparam * self.scale)[:, None]])
+        """[[dH/du0, dH/dp, B], [V^T, 0, 0]]: (n + k) x (n + 1 + k), k neutral directions."""
+        V, B = f.neutral(self.model)
+        n, k = f.G.size, V.shape[1]
+        J = np.zeros((n + k, n + 1 + k))
+        J[:n, :n] = f.dG_du0
+        J[:n, n] = f.dG_dparam * self.scale
+        J[:n, n + 1:] = B
+        J[n:, :n] = V.T
+        return J
 
 
 def _tangent(J: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
-    """Unit null vector of the n x (n+1) Jacobian, oriented along ``prev``."""
+    """Unit null vector (its z = (u0, p) part) of the bordered Jacobian, oriented along
+    ``prev``."""
     _, _, vt = np.linalg.svd(J)
-    t = vt[-1]
+    k = J.shape[1] - J.shape[0] - 1
+    t = vt[-1][:J.shape[1] - k]
     if prev is not None and t @ prev < 0:
         t = -t
     return t / np.linalg.norm(t)
 
 
 def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int):
-    """Newton on [H(z); t.(z - z_pred)] = 0. Returns (z, flow, iterations, residual) or None."""
+    """Newton on [H(z) + B lam; V^T dz = 0; t.(z - z_pred)] = 0. Returns (z, flow,
+    iterations, residual) or None (the last integrator failure in ``prob.last_failure``)."""
     tol = prob.method.tol
     z = z_pred.copy()
     for it in range(max_iter + 1):
@@ -78,16 +104,19 @@ def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int):
             return None
         f = prob.flow(z)
         if not f.ok:
+            prob.last_failure = f.trajectory.status
             return None
         res = residual_norm(f.G, z[:-1])
         if res < tol:
             return z, f, it, res
         if it == max_iter:
             return None
-        A = np.vstack([prob.jac(f), t[None, :]])
-        rhs = -np.concatenate([f.G, [t @ (z - z_pred)]])
+        J = prob.jac(f)
+        n1 = z.size
+        A = np.vstack([J, np.concatenate([t, np.zeros(J.shape[1] - n1)])[None, :]])
+        rhs = -np.concatenate([f.G, np.zeros(J.shape[0] - f.G.size), [t @ (z - z_pred)]])
         try:
-            dz = np.linalg.solve(A, rhs)
+            dz = np.linalg.solve(A, rhs)[:n1]
         except np.linalg.LinAlgError:
             return None
         z = z + dz
@@ -104,7 +133,8 @@ def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPo
                        qmin=tr.monitor_min, qmax=tr.monitor_max, impacts=tr.monitor_losses,
                        tangent=t.copy(), label=label, iterations=it,
                        integration_error=tr.error_estimate,
-                       liouville_det_error=liouville_error(prob.model, p, f.period, mu))
+                       liouville_det_error=liouville_error(prob.model, p, f.period, mu),
+                       neutral=prob.neutral(f))
 
 
 def _locate(prob, za, ta, ds_total, fa, fb, which, options):
@@ -126,7 +156,7 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options):
             break
         z, f, it, res = got
         t = _tangent(prob.jac(f), ta)
-        val = test_functions(f.monodromy, t)[which]
+        val = test_functions(f.monodromy, t, prob.neutral(f))[which]
         best = (z, f, t, it, res)
         if np.sign(val) == np.sign(f_lo):
             lo, f_lo = mid, val
@@ -150,8 +180,8 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
     """Continue the periodic orbit of ``problem`` over [param_min, param_max].
 
     Returns the branch and, when a PD is found and ``options.period_doubling_branch``, the
-    period-2 branch switched onto there.  ``callback(point)`` is called with every new
-    point (special points included); returning False stops the run with status
+    period-doubled branch switched onto there.  ``callback(point)`` is called with every
+    new point (special points included); returning False stops the run with status
     STOPPED_BY_CALLBACK, keeping the points so far.
     """
     wall = time.perf_counter()
@@ -171,9 +201,10 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
         branches = (_run_branch(model, z0, t0, method, options, n_periods, callback),)
         first = branches[0]
         pd = [p for p in first.points if p.label == "PD"]
-        if (options.period_doubling_branch and pd and n_periods == 1
+        if (options.period_doubling_branch and pd
                 and first.status != Status.STOPPED_BY_CALLBACK):
-            branches += (_switch_period_doubling(model, pd[0], method, options, callback),)
+            branches += (_switch_period_doubling(model, pd[0], method, options, callback,
+                                                 n_periods),)
     special = tuple(SpecialPoint(p.label, p.param, b, i) for b, br in enumerate(branches)
                     for i, p in enumerate(br.points) if p.label)
     status = branches[0].status
@@ -192,10 +223,10 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
                               wall_time=time.perf_counter() - wall)
 
 
-def _run_branch(model, z0, t_hint, method, options, n_periods, callback) -> Branch:
+def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
+                doubled: bool = False) -> Branch:
     wall = time.perf_counter()
     prob = _Problem(model, n_periods, method)
-    scale = method.param_scale
     pts: list[BranchPoint] = []
 
     def emit(point):
@@ -208,25 +239,39 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback) -> Bran
         f = prob.flow(z0)
         t = _tangent(prob.jac(f), t_hint)
         emit(_point(prob, z0, f, t, 0, residual_norm(f.G, z0[:-1])))
-        status, message = _walk(prob, z0, f, t, method, options, n_periods, emit)
+        status, message = _walk(prob, z0, f, t, method, options, n_periods, emit, doubled)
     except _Stop:
         status = Status.STOPPED_BY_CALLBACK
         message = f"{status.message} after {len(pts)} points"
+    message += _stability_notes(pts, model.param_name)
     return Branch(tuple(pts), n_periods, status, message,
                   2 * np.pi * n_periods / model.omega_per_param,
                   counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls},
                   wall_time=time.perf_counter() - wall)
 
 
-def _walk(prob, z, f, t, method, options, n_periods, emit) -> tuple[Status, str]:
+def _stability_notes(pts, name: str) -> str:
+    """Where the branch loses stability at an NS point: the motion there leaves the
+    periodic orbit for a torus (quasi-periodic), stated in the branch's message."""
+    notes = []
+    for k, p in enumerate(pts):
+        if p.label == "NS" and 0 < k < len(pts) - 1:
+            a, b = pts[k - 1].stable, pts[k + 1].stable
+            if a != b:
+                notes.append(f"stable orbit ends at NS {name} = {p.param:.6g} (onto a torus)")
+    return "".join(f"; {n}" for n in notes)
+
+
+def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Status, str]:
     """The predictor-corrector loop; each new point goes to ``emit``."""
     model, scale = prob.model, method.param_scale
     ds = options.ds / scale
     ds_min, ds_max = options.ds_min / scale, options.ds_max / scale
     n_points = 1
-    tests_prev = test_functions(f.monodromy, t)
+    k_prev = prob.neutral(f)
+    tests_prev = test_functions(f.monodromy, t, k_prev)
     t_prev, ds_prev = None, ds
-    d_prev = _half_defect(model, z, scale, method, n_periods) if n_periods > 1 else None
+    d_prev = _half_defect(model, z, scale, method, n_periods) if doubled else None
     # a start on the range's end may lie an ulp outside it: only a point beyond the range
     # by more than round-off ends the branch
     slack = 1e-9 * (abs(options.param_max) + abs(options.param_min))
@@ -253,9 +298,23 @@ def _walk(prob, z, f, t, method, options, n_periods, emit) -> tuple[Status, str]
         if got is None:
             ds *= 0.5
             if ds < ds_min:
+                if prob.last_failure == Status.GRAZING:
+                    return Status.GRAZING_END, (f"{Status.GRAZING_END.message}: integration "
+                                                f"fails on a grazing switch beyond "
+                                                f"{model.param_name} = {p:.6g}")
                 return Status.DS_TOO_SMALL, f"{Status.DS_TOO_SMALL.message} at param = {p:.6g}"
             continue
-        tests = test_functions(f_new.monodromy, t_new)
+        k_new = prob.neutral(f_new)
+        p_new = z_new[-1] * scale
+        if k_new != k_prev:
+            # a free coordinate starts (k drops) or stops (k grows) touching a contact
+            n_points += 1
+            emit(_point(prob, z_new, f_new, t_new, it, res))
+            return Status.GRAZING_END, (
+                f"{Status.GRAZING_END.message}: the orbit family's neutral directions go "
+                f"from {k_prev} to {k_new} between {model.param_name} = {p:.6g} and "
+                f"{p_new:.6g}")
+        tests = test_functions(f_new.monodromy, t_new, k_new)
         labels = []
         for which in ("LP", "PD", "NS"):
             a, b = tests_prev[which], tests[which]
@@ -268,43 +327,52 @@ def _walk(prob, z, f, t, method, options, n_periods, emit) -> tuple[Status, str]
             loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
-                if not (which == "NS" and not test_functions(fl.monodromy, tl)["NS_valid"]):
+                if not (which == "NS" and not test_functions(fl.monodromy, tl,
+                                                             k_new)["NS_valid"]):
                     n_points += 1
                     emit(_point(prob, zl, fl, tl, itl, resl, label=which))
+                    if which == "PD" and doubled:
+                        return Status.CASCADE, (f"{Status.CASCADE.message}: PD at "
+                                                f"{model.param_name} = {zl[-1] * scale:.6g}")
         ds_used = ds
         ds = min(ds * 1.5, ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
         ds = max(ds, ds_min)
-        if n_periods > 1:
+        if doubled:
             # the signed half-period defect changes sign where the branch passes
-            # through the period-1 orbit (the other PD): there it has rejoined
+            # through the period-n orbit (the other PD): there it has rejoined
             d_new = _half_defect(model, z_new, scale, method, n_periods)
             if d_prev is not None and d_new @ d_prev < 0:
-                p_new = z_new[-1] * scale
-                return Status.REJOINED, (f"period-{n_periods} branch rejoined the period-1 "
-                                         f"branch between param = {p:.6g} and {p_new:.6g}")
+                return Status.REJOINED, (f"period-{n_periods} branch rejoined the "
+                                         f"period-{n_periods // 2} branch between param = "
+                                         f"{p:.6g} and {p_new:.6g}")
             d_prev = d_new
         t_prev, ds_prev = t, ds_used
-        z, f, t, tests_prev = z_new, f_new, t_new, tests
+        z, f, t, tests_prev, k_prev = z_new, f_new, t_new, tests, k_new
         n_points += 1
         emit(_point(prob, z, f, t, it, res))
 
 
 def _half_defect(model, z, scale, method, n_periods) -> np.ndarray:
-    """u(T/n) - u0: zero on a period-1 orbit, sign-reversing through it."""
+    """u(T/2) - u0 of a period-doubled orbit: zero on the period-halved orbit,
+    sign-reversing through it."""
     p = z[-1] * scale
-    tr = integrate(model, p, z[:-1], 0.0, model.excitation_period(p), options=method.integration)
+    tr = integrate(model, p, z[:-1], 0.0, (n_periods // 2) * model.excitation_period(p),
+                   options=method.integration)
     return tr.u_end - z[:-1]
 
 
-def _switch_period_doubling(model, pd: BranchPoint, method, options, callback) -> Branch:
-    """Start the period-2 branch at a PD point along the flip eigenvector."""
+def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
+                            n_periods: int = 1) -> Branch:
+    """Start the period-2n branch at a PD point of the period-n branch along the flip
+    eigenvector."""
     scale = method.param_scale
-    w = flip_vector(periodic_flow(model, pd.param, pd.u0, options=method.integration).monodromy)
+    w = flip_vector(periodic_flow(model, pd.param, pd.u0, n_periods=n_periods,
+                                  options=method.integration).monodromy)
     t1 = pd.tangent
     t2 = np.concatenate([w, [0.0]])
     t2 = t2 - (t2 @ t1) * t1
     t2 /= np.linalg.norm(t2)
-    prob = _Problem(model, 2, method)
+    prob = _Problem(model, 2 * n_periods, method)
     z_pd = np.concatenate([pd.u0, [pd.param / scale]])
     ds0 = options.ds / scale
     for ds in (ds0, 0.3 * ds0, 0.1 * ds0, 3 * ds0):
@@ -319,8 +387,11 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback) -
             # continue away from the PD point
             if t @ (z - z_pd) < 0:
                 t = -t
-            return _run_branch(model, z, t, method, options, 2, callback)
-    return Branch((), 2, Status.SWITCH_FAILED,
+            br = _run_branch(model, z, t, method, options, 2 * n_periods, callback,
+                             doubled=True)
+            br.counters["switch_flows"] = prob.flows
+            return br
+    return Branch((), 2 * n_periods, Status.SWITCH_FAILED,
                   f"{Status.SWITCH_FAILED.message} at param = {pd.param:.6g}",
-                  2 * np.pi * 2 / model.omega_per_param,
+                  2 * np.pi * 2 * n_periods / model.omega_per_param,
                   counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls})

@@ -12,13 +12,23 @@ so they neither overflow nor underflow for hundreds of multipliers:
 Every Floquet multiplier in the package comes from :func:`floquet_multipliers` (and the
 flip eigenvector at a period doubling from :func:`flip_vector`); :func:`liouville_error`
 checks a set of multipliers against Liouville's formula det M = exp(integral of tr J).
+
+Neutral directions.  A DOF without restoring force (a free gear floating in its backlash
+for the whole period, a shaft in its bearing clearance) makes the orbit one of a family:
+shifting that coordinate maps an orbit onto an orbit, so M v = v exactly and the
+multiplier 1 is *trivial*.  :func:`neutral_directions` finds them (right vectors v, the
+family's directions, and left vectors b spanning what M - I cannot reach) for the
+shooting solver's phase condition; :func:`split_trivial` removes the trivial multipliers
+before stability and the test functions are evaluated, so LP / PD / NS detection sees
+only the multipliers that can cross the unit circle.
 """
 from __future__ import annotations
 
 import numpy as np
 
 __all__ = ["floquet_multipliers", "flip_vector", "liouville_error", "test_functions",
-           "stability", "NEUTRAL_MARGIN"]
+           "stability", "NEUTRAL_MARGIN", "neutral_directions", "split_trivial",
+           "NEUTRAL_RTOL"]
 
 _IMAG_TOL = 1e-9
 
@@ -56,13 +66,69 @@ def liouville_error(model, param: float, period: float, multipliers) -> float | 
 NEUTRAL_MARGIN = 1e-9
 
 
-def stability(multipliers: np.ndarray, margin: float = NEUTRAL_MARGIN) -> bool:
-    """Asymptotically stable: every multiplier inside the unit circle by ``margin``."""
-    return bool(np.all(np.abs(multipliers) < 1.0 - margin))
+#: a direction v with |(M - I) v| <= NEUTRAL_RTOL max(1, |M - I|) is neutral: the
+#: variational equations map it onto itself up to round-off (a genuine fold or a multiplier
+#: that merely passes near 1 is many orders of magnitude above this)
+NEUTRAL_RTOL = 1e-9
 
 
-def test_functions(monodromy: np.ndarray, tangent: np.ndarray) -> dict:
-    mu = floquet_multipliers(monodromy)
+def neutral_directions(monodromy: np.ndarray, omega2: np.ndarray | None = None,
+                       rtol: float = NEUTRAL_RTOL) -> tuple[np.ndarray, np.ndarray]:
+    """(V, B): orthonormal right null vectors V (n x k) of M - I that are neutral
+    directions of the orbit family, and left null vectors B (n x k) of M - I (bordering
+    columns: B is not in the range of M - I, V is the phase condition's normal).
+
+    Structurally a neutral direction is a rigid shift: positions of modes without
+    stiffness (``omega2`` = 0), velocities zero.  With ``omega2`` given, only that
+    subspace is searched (a model without zero-frequency modes has none, at no cost);
+    without it, any singular value of M - I at round-off relative to the largest counts.
+    k = 0 gives empty (n x 0) arrays."""
+    A = monodromy - np.eye(monodromy.shape[0])
+    n = A.shape[0]
+    empty = np.zeros((n, 0))
+    scale = max(1.0, float(np.linalg.norm(A, 2)))
+    if omega2 is not None:
+        w2 = np.asarray(omega2, dtype=float)
+        rigid = np.flatnonzero(np.abs(w2) <= 1e-10 * max(float(np.max(np.abs(w2),
+                                                                    initial=0.0)), 1e-300))
+        if rigid.size == 0:
+            return empty, empty
+        E = np.zeros((n, rigid.size))
+        E[rigid, np.arange(rigid.size)] = 1.0
+        _, s, vt = np.linalg.svd(A @ E)
+        V = E @ vt[s <= rtol * scale].T if s.size else empty
+    else:
+        _, s, vt = np.linalg.svd(A)
+        V = vt[s <= rtol * scale].T
+    k = V.shape[1]
+    if k == 0:
+        return empty, empty
+    u, _, _ = np.linalg.svd(A)
+    return V, u[:, n - k:]
+
+
+def split_trivial(multipliers: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(nontrivial, trivial): the ``k`` multipliers nearest 1 are the trivial ones of a
+    ``k``-parameter orbit family (see :func:`neutral_directions`)."""
+    mu = np.asarray(multipliers)
+    if k <= 0:
+        return mu, mu[:0]
+    order = np.argsort(np.abs(mu - 1.0), kind="stable")
+    keep = np.sort(order[k:])
+    return mu[keep], mu[np.sort(order[:k])]
+
+
+def stability(multipliers: np.ndarray, margin: float = NEUTRAL_MARGIN, trivial: int = 0) -> bool:
+    """Asymptotically stable: every multiplier inside the unit circle by ``margin``, except
+    the ``trivial`` multipliers 1 of an orbit family (orbital stability of the family)."""
+    mu, _ = split_trivial(multipliers, trivial)
+    return bool(np.all(np.abs(mu) < 1.0 - margin))
+
+
+def test_functions(monodromy: np.ndarray, tangent: np.ndarray, trivial: int = 0) -> dict:
+    """LP / PD / NS test values (see the module docstring); the ``trivial`` multipliers 1
+    of an orbit family are left out (they would flip the NS product at round-off)."""
+    mu, _ = split_trivial(floquet_multipliers(monodromy), trivial)
     scale = max(1.0, float(np.max(np.abs(mu))))
     is_real = np.abs(mu.imag) <= _IMAG_TOL * scale
     real = mu.real[is_real]

@@ -5,6 +5,30 @@ solves G(u0) = u(T; u0) - u0 = 0.  The monodromy d u(T)/d u0 comes from the
 variational equations integrated with the orbit (saltation at switches), so Newton
 uses the exact Jacobian of the discretised flow; its eigenvalues are the Floquet
 multipliers.
+
+Free gears (orbit families).  A DOF without restoring force that touches nothing during
+the period (a free gear floating in its backlash) makes the orbit one of a family: its
+rigid shift v is mapped onto itself, M v = v, and M - I is singular.  The solver borders
+it out (``neutral`` below): where :func:`~.floquet.neutral_directions` finds k such
+directions (positions of zero-frequency modes, found from M itself, so every model is
+covered and a model without them pays nothing), Newton solves
+
+    [[M - I, B], [V^T, 0]] [du; lam] = [-G; 0]
+
+(V: the neutral right null vectors, the phase condition V^T du = 0 keeps the free
+coordinate where it is; B: left null vectors, which the multiplier lam absorbs; the
+matrix is nonsingular when the family is k-dimensional).  A genuine orbit has lam = 0 up
+to the residual; a drift along the free coordinate (no orbit at all) leaves lam and the
+residual finite and Newton reports it.  The k trivial multipliers 1 are reported
+(``neutral``) and left out of the stability verdict.
+
+Why a phase condition rather than only shooting over the rattle period: where the free
+gear does touch a flank during n mesh periods the orbit is isolated and n-period shooting
+alone works, but where it floats (the gear held off both flanks, or a long rattle cycle
+not yet resolved) the family exists for every n, so n-period shooting cannot remove the
+singularity.  The bordering costs one SVD of M - I restricted to the rigid modes per
+Newton step.  The continuation analysis also picks n from the impacts of the settled
+trajectory (:func:`vibrogear.solvers.sweep.classify_period`), so the two work together.
 """
 from __future__ import annotations
 
@@ -14,11 +38,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models.reduced import ReducedModel
-from .floquet import floquet_multipliers, liouville_error, stability
+from .floquet import (floquet_multipliers, liouville_error, neutral_directions, split_trivial,
+                      stability)
 from .integrate import IntegrationOptions, Trajectory, integrate
 from .status import Status
 
-__all__ = ["PeriodicFlow", "periodic_flow", "ShootingResult", "shoot", "residual_norm"]
+__all__ = ["PeriodicFlow", "periodic_flow", "ShootingResult", "shoot", "residual_norm",
+           "newton_step"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,6 +60,30 @@ class PeriodicFlow:
     @property
     def ok(self) -> bool:
         return self.trajectory.ok
+
+    def neutral(self, model: ReducedModel) -> tuple[np.ndarray, np.ndarray]:
+        """(V, B) of :func:`~.floquet.neutral_directions` for this orbit (cached)."""
+        got = self.__dict__.get("_neutral")
+        if got is None:
+            got = neutral_directions(self.monodromy, model.omega2) if self.ok else (
+                np.zeros((self.G.size, 0)),) * 2
+            self.__dict__["_neutral"] = got
+        return got
+
+
+def newton_step(flow: PeriodicFlow, model: ReducedModel) -> np.ndarray:
+    """The Newton step du on G(u0) = 0, bordered by the orbit family's neutral directions
+    (phase condition V^T du = 0) where there are any; raises LinAlgError if singular."""
+    V, B = flow.neutral(model)
+    k = V.shape[1]
+    if k == 0:
+        return np.linalg.solve(flow.dG_du0, -flow.G)
+    n = flow.G.size
+    A = np.zeros((n + k, n + k))
+    A[:n, :n] = flow.dG_du0
+    A[:n, n:] = B
+    A[n:, :n] = V.T
+    return np.linalg.solve(A, -np.concatenate([flow.G, np.zeros(k)]))[:n]
 
 
 def residual_norm(G: np.ndarray, u0: np.ndarray) -> float:
@@ -74,6 +124,8 @@ class ShootingResult:
     flows: int = 0               # orbits integrated (with the variational equations)
     integration_error: float = 0.0       # the last orbit's integrator error estimate
     liouville_det_error: float | None = None   # det M against Liouville's formula
+    neutral: int = 0             # trivial multipliers 1: dimension of the orbit family
+    #                              (a free gear touching nothing), bordered out by Newton
 
     @property
     def converged(self) -> bool:
@@ -81,7 +133,12 @@ class ShootingResult:
 
     @property
     def stable(self) -> bool:
-        return stability(self.floquet)
+        """Orbitally stable: the nontrivial multipliers inside the unit circle."""
+        return stability(self.floquet, trivial=self.neutral)
+
+    @property
+    def trivial_multipliers(self) -> np.ndarray:
+        return split_trivial(self.floquet, self.neutral)[1]
 
     @property
     def counters(self) -> dict:
@@ -99,7 +156,8 @@ class ShootingResult:
 def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
           options: IntegrationOptions = IntegrationOptions(), tol: float = 1e-10,
           max_iter: int = 25) -> ShootingResult:
-    """Newton on u(T; u0) - u0 with backtracking; bounded iterations."""
+    """Newton on u(T; u0) - u0 with backtracking, bordered by the neutral directions of
+    an orbit family (see the module docstring); bounded iterations."""
     wall = time.perf_counter()
     u = np.array(u0_guess, dtype=float)
     n = u.size
@@ -121,10 +179,10 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
             break
         it += 1
         try:
-            du = np.linalg.solve(flow.dG_du0, -flow.G)
+            du = newton_step(flow, model)
         except np.linalg.LinAlgError:
             status = Status.SINGULAR
-            message = "singular shooting Jacobian (monodromy has a multiplier 1)"
+            message = "singular shooting Jacobian (a multiplier 1 that is not a rigid shift)"
             break
         lam = 1.0
         accepted = False
@@ -151,4 +209,5 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
         monitor_min=tr.monitor_min, monitor_max=tr.monitor_max, impacts=tr.monitor_losses,
         rhs_calls=calls, flows=flows, integration_error=tr.error_estimate,
         liouville_det_error=liouville_error(model, param, flow.period, floq) if flow.ok else None,
+        neutral=flow.neutral(model)[0].shape[1] if flow.ok else 0,
     )
