@@ -7,6 +7,11 @@
 2. Reduction levels (master-mode counts per shaft / housing): frequency error against the
    full model, response error of the nonlinear time response (gear-mesh deformation of
    ``meshes[0]`` over the record window) against the largest level, and integrator time.
+3. With ``frequency_level``: the same for the level of the paper's frequency criterion, with
+   and without the static correction (:mod:`vibrogear.models.master_level`).
+
+The full model's modes (the costly part: all housing DOF) are cached like the housing
+(:func:`_full_reference`).
 """
 from __future__ import annotations
 
@@ -133,7 +138,63 @@ def _warm_up(gm, scene, cfg) -> None:
               options=integration_options(scene))
 
 
+def _full_reference(gm, scene, x0, f_max_hz):
+    """(f_full, observed vectors, full DOF, wall seconds, from_cache) of the full linearised
+    model, cached (vibrogear.cache) under the gearbox and housing configs, f_max and the
+    contact tangent stiffnesses of the linearisation (to 12 digits), as the housing is."""
+    import dataclasses
+
+    from ..cache import cache_key, discard_entry, new_workspace, open_entry, publish_entry
+    from ..models.full_linear import lowest_modes_full
+    from ..solvers.linear import contact_slopes
+
+    t0 = time.perf_counter()
+    k_contacts, _ = contact_slopes(gm.reduced, x0)
+    key = cache_key("reduction-full", {
+        "gearbox": dataclasses.asdict(scene.gearbox),
+        "housing": None if scene.housing is None else scene.housing.key_data(),
+        "f_max_hz": float(f_max_hz), "contact_slopes": [f"{k:.12g}" for k in k_contacts]})
+    folder = open_entry(key)
+    if folder is not None:
+        try:
+            with np.load(folder / "full_reference.npz") as z:
+                return (z["f_full"], z["v_full"], int(z["dofs"]), time.perf_counter() - t0,
+                        True)
+        except Exception as exc:                 # valid checksums, unreadable: another layout
+            discard_entry(key, f"cannot be read: {exc}")
+    full, obs = full_linear_model(gm, scene, x0)
+    f_full, vec = lowest_modes_full(full, f_max_hz)
+    v_full = obs @ vec
+    work = new_workspace(key)
+    np.savez(work / "full_reference.npz", f_full=f_full, v_full=v_full, dofs=full.n_dofs)
+    publish_entry(work, key)
+    return f_full, v_full, int(full.n_dofs), time.perf_counter() - t0, False
+
+
+def _level_row(gm, scene, cfg, f_full, v_full, row):
+    """Frequency error and MAC against the full model, and the nonlinear response."""
+    x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
+    row["m"] = gm.reduced.n_modes
+    row["f_top_hz"] = float(max(s.freqs_hz.max() for s in gm.subsystems))
+    if f_full is not None and gm.reduced.n_modes:
+        f_red, v_red = reduced_linear_modes(gm, x0)
+        cmp = _compare(f_full, v_full, f_red, v_red, cfg.f_max_hz)
+        row["modes_compared"] = len(cmp)
+        row["max_freq_error"] = max((abs(c["rel_error"]) for c in cmp), default=np.nan)
+        row["min_mac"] = min((c["mac"] for c in cmp), default=np.nan)
+        row["pairs"] = cmp
+    delta, tr = _response(gm, scene, cfg)
+    row["sim_wall_s"] = tr.wall_time
+    row["steps"] = tr.steps
+    row["status"] = tr.message
+    return row, delta
+
+
 def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
+    """The count levels of [reduction_accuracy], then (``frequency_level``) the level of
+    the frequency criterion with and without the static correction
+    (:mod:`vibrogear.models.master_level`), each against the full model and, for the
+    response, against the largest count level."""
     from ..models.gearbox import build_gearbox
     from ..report.reduction_plots import plot_reduction_study, write_reduction_tables
 
@@ -144,37 +205,34 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
         levels = [(s, 0) for s, _ in levels]
     models = [build_gearbox(scene, master_counts=(s,) * len(scene.gearbox.shafts),
                             housing_count=h or None) for s, h in levels]
-    full = v_full = f_full = None
+    full = f_full = v_full = None
     if cfg.full_model:
-        from ..models.full_linear import lowest_modes_full
-
         gm = models[-1]
         x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
-        t1 = time.perf_counter()
-        full, obs = full_linear_model(gm, scene, x0)
-        f_full, vec = lowest_modes_full(full, cfg.f_max_hz)
-        v_full = obs @ vec
-        full_wall = time.perf_counter() - t1
+        f_full, v_full, dofs, full_wall, cached = _full_reference(gm, scene, x0, cfg.f_max_hz)
+        full = {"dofs": dofs, "modes_below_f_max": int(np.sum(f_full <= cfg.f_max_hz)),
+                "wall_s": full_wall, "from_cache": cached}
     rows, responses = [], []
     _warm_up(models[0], scene, cfg)           # compile first: the times compare solvers, not JIT
     for (s, h), gm in zip(levels, models):
-        x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
-        row = {"shaft_modes": s, "housing_modes": h, "m": gm.reduced.n_modes}
-        if f_full is not None and gm.reduced.n_modes:
-            f_red, v_red = reduced_linear_modes(gm, x0)
-            cmp = _compare(f_full, v_full, f_red, v_red, cfg.f_max_hz)
-            row["modes_compared"] = len(cmp)
-            row["max_freq_error"] = max((abs(c["rel_error"]) for c in cmp), default=np.nan)
-            row["min_mac"] = min((c["mac"] for c in cmp), default=np.nan)
-            row["pairs"] = cmp
-        delta, tr = _response(gm, scene, cfg)
-        row["sim_wall_s"] = tr.wall_time
-        row["steps"] = tr.steps
-        row["status"] = tr.message
+        row, delta = _level_row(gm, scene, cfg, f_full, v_full,
+                                {"level": "count", "shaft_modes": s, "housing_modes": h})
         responses.append(delta)
         rows.append(row)
-    ref = responses[-1]
-    for row, delta in zip(rows, responses):
+    extra = []
+    if getattr(cfg, "frequency_level", False):
+        h = levels[-1][1]
+        for corr, name in ((True, "frequency"), (False, "frequency_no_static")):
+            gm = build_gearbox(scene, housing_count=h or None, master_level="frequency",
+                               static_correction=corr)
+            row, delta = _level_row(gm, scene, cfg, f_full, v_full, {
+                "level": name, "housing_modes": h,
+                "shaft_modes": "+".join(str(sub.n_modes) for sub in gm.subsystems
+                                        if sub.kind == "shaft")})
+            extra.append(row)
+            responses.append(delta)
+    ref = responses[len(rows) - 1]
+    for row, delta in zip(rows + extra, responses):
         if delta is None or ref is None:
             row["response_error"] = np.nan
             continue
@@ -184,15 +242,15 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
                                          abs(delta.min() - ref.min())) / scale)
     if all(r_["response_error"] != r_["response_error"] for r_ in rows):
         raise NumericalFailure("reduction study: no level integrated successfully")
-    write_reduction_tables(ctx.out, rows)
-    plot_reduction_study(ctx.out / "reduction_accuracy", rows,
+    write_reduction_tables(ctx.out, rows, extra)
+    plot_reduction_study(ctx.out / "reduction_accuracy", rows + extra,
                          title=f"{scene.scene.name}: reduction levels at {cfg.rpm:g} rpm")
     largest = rows[-1]
+    strip = lambda r_: {k: v for k, v in r_.items() if k != "pairs"}  # noqa: E731
     return {"status": "ok", "rpm": cfg.rpm, "f_max_hz": cfg.f_max_hz,
-            "levels": [{k: v for k, v in r_.items() if k != "pairs"} for r_ in rows],
-            "full_model": None if full is None else
-            {"dofs": int(full.n_dofs), "modes_below_f_max": int(np.sum(f_full <= cfg.f_max_hz)),
-             "wall_s": full_wall},
+            "levels": [strip(r_) for r_ in rows],
+            "frequency_levels": [strip(r_) for r_ in extra],
+            "full_model": full,
             "wall_s": time.perf_counter() - t0,
             "error_estimate": {"max_freq_error_largest_level": largest.get("max_freq_error"),
                                "min_mac_largest_level": largest.get("min_mac"),

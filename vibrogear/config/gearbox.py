@@ -279,6 +279,17 @@ class GearboxConfig:
     gravity: tuple[float, float, float] = spec((0.0, 0.0, 0.0), doc="gravitational "
                                                "acceleration in the housing frame [m/s^2], "
                                                "e.g. [0, 0, -9.81]; a static load")
+    master_modes: str = spec("count", choices=("count", "frequency"), doc="shaft master "
+                             "modes: each shaft's master_count / master_cutoff_hz, or by the "
+                             "frequency criterion: all modes up to frequency_factor x the "
+                             "highest excitation frequency the shaft carries at the scene's "
+                             "highest speed (mesh frequency x harmonics)")
+    frequency_factor: float = spec(2.0, ge=1.0, le=100.0, doc="master_modes = \"frequency\": "
+                                   "cutoff / highest excitation frequency")
+    static_correction: bool | None = spec(None, doc="add the static deflection shapes under "
+                                          "the shaft's coupling forces (residual "
+                                          "flexibility; default: on with master_modes = "
+                                          "\"frequency\", off with \"count\")")
 
     def shaft_index(self, name: str, path: str) -> int:
         for i, s in enumerate(self.shafts):
@@ -403,6 +414,8 @@ class ReductionAccuracyConfig:
     f_max_hz: float = spec(5000.0, gt=0.0, doc="modes compared up to this frequency")
     full_model: bool = spec(True, doc="also compare with the full linearised model "
                                       "(assembles the housing's K and M)")
+    frequency_level: bool = spec(True, doc="also the level of gearbox.master_modes = "
+                                 "\"frequency\" (with and without the static correction)")
 
     def validate(self, path: str) -> None:
         if len(self.shaft_counts) != len(self.housing_counts):

@@ -40,7 +40,9 @@ from ..config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
 from .gearbox_supports import bearings as _bearings, gravity_load, housing_to_rotor
 from .iso6336 import MeshStiffness, involute, inverse_involute, mesh_stiffness
-from .rotor import build_rotor_model, master_modes
+from .master_level import (coupling_loads, excitation_frequencies_hz, highest_speed,
+                           shaft_master_modes)
+from .rotor import build_rotor_model
 from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
 
 __all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
@@ -118,9 +120,7 @@ def _rotor_config(sh, gears, gear_p, shaft_p) -> tuple[RotorConfig, list[int]]:
                        free_gears=tuple(free), name=sh.name), free_ids
 
 
-def _shaft_subsystem(sh, rotor, count, p) -> Subsystem:
-    mm = master_modes(rotor, count=count if sh.master_cutoff_hz is None else None,
-                      cutoff_hz=sh.master_cutoff_hz)
+def _shaft_subsystem(sh, rotor, mm, p) -> Subsystem:
     V = mm.vectors
     proj = lambda A: V.T @ (A @ V)  # noqa: E731
     B, G, C = proj(rotor.B), proj(rotor.G), proj(rotor.C)
@@ -128,7 +128,8 @@ def _shaft_subsystem(sh, rotor, count, p) -> Subsystem:
     return Subsystem(name=sh.name, kind="shaft", n_dofs=rotor.n_dofs, freqs_hz=mm.frequencies_hz,
                      vectors=V, damping_ratio=zeta, spin_ratio=p,
                      B=B if np.any(B) else None, G=G if np.any(G) else None,
-                     C=C if np.any(C) else None, labels={"n_rigid": mm.n_rigid})
+                     C=C if np.any(C) else None,
+                     labels={"n_rigid": mm.n_rigid, "n_static": mm.n_static})
 
 
 def _housing_subsystem(scene, count):
@@ -161,9 +162,13 @@ def _shaft_axis(scene, sh, i) -> tuple[float, float]:
     return sh.x, sh.z
 
 
-def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxModel:
+def build_gearbox(scene, *, master_counts=None, housing_count=None,
+                  master_level: str | None = None,
+                  static_correction: bool | None = None) -> GearboxModel:
     """Build the reduced gearbox model of ``scene``; ``master_counts`` (one per shaft) and
-    ``housing_count`` override the scene's reduction level (the reduction study)."""
+    ``housing_count`` override the scene's reduction level (the reduction study), as do
+    ``master_level`` ("count" | "frequency", :mod:`vibrogear.models.master_level`) and
+    ``static_correction``."""
     cfg = scene.gearbox
     t0 = time.perf_counter()
     shaft_p, gear_p = cfg.speed_ratios()
@@ -174,14 +179,11 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
         rcfg, free_ids = _rotor_config(sh, gears, gear_p, shaft_p[i])
         rotor = build_rotor_model(rcfg)
         free_dof.update({k: rotor.free_gear_dofs[j] for j, k in enumerate(free_ids)})
-        count = sh.master_count if master_counts is None else int(master_counts[i])
-        subsystems.append(_shaft_subsystem(sh, rotor, count, shaft_p[i]))
         rotors.append(rotor)
     t_shafts = time.perf_counter()
-    hm = None
+    hm = housing_sub = None
     if scene.housing is not None:
-        sub, hm = _housing_subsystem(scene, housing_count)
-        subsystems.append(sub)
+        housing_sub, hm = _housing_subsystem(scene, housing_count)
     t_housing = time.perf_counter()
     contacts, links, forces = [], [], []
     mc, records = _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
@@ -198,6 +200,25 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
             sense = -np.sign(gear_p[k] - shaft_p[s])      # opposes the relative spin
             forces.append((s, [free_dof[k]], [sense * g.drag_torque]))
     static_force = PhysicalVector.of(*forces)
+    t_couple = time.perf_counter()
+    level = master_level or ("count" if master_counts is not None else cfg.master_modes)
+    correct = next((c for c in (static_correction, cfg.static_correction) if c is not None),
+                   level == "frequency")
+    f_exc = excitation_frequencies_hz(cfg, highest_speed(scene)) \
+        if level == "frequency" else None
+    for i, (sh, rotor) in enumerate(zip(cfg.shafts, rotors)):
+        cutoff = None if f_exc is None else cfg.frequency_factor * max(f_exc[i], 1e-3)
+        loads = coupling_loads(i, rotor.n_dofs, [c.vector for c in contacts]
+                               + [l_.vector for l_ in links]
+                               + [v for b in blocks for v in b.vectors]
+                               + [static_force]) if correct else None
+        count = sh.master_count if master_counts is None else int(master_counts[i])
+        mm = shaft_master_modes(sh, rotor, count=count, cutoff_hz=cutoff, loads=loads,
+                                cap_hz=cutoff)
+        subsystems.append(_shaft_subsystem(sh, rotor, mm, shaft_p[i]))
+    if housing_sub is not None:
+        subsystems.append(housing_sub)
+    t_modes = time.perf_counter() - t_couple
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
@@ -206,9 +227,9 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None) -> GearboxMo
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
                         shaft_ratios=tuple(shaft_p), rotors=tuple(rotors), mesh_teeth=teeth,
-                        housing=hm, timings={"shafts_s": t_shafts - t0,
+                        housing=hm, timings={"shafts_s": t_shafts - t0 + t_modes,
                                              "housing_s": t_housing - t_shafts,
-                                             "synthesis_s": t_end - t_housing},
+                                             "synthesis_s": t_end - t_housing - t_modes},
                         blocks=tuple(blocks), mesh_stiffness=tuple(records))
 
 

@@ -27,7 +27,7 @@ from .rotor_elements import (DOF_NAMES, PHI, PSI, THETA, U, V, W, disc_inertia_f
                              shaft_element_matrices)
 
 __all__ = ["RotorModel", "build_rotor_model", "assemble_rotor", "master_modes",
-           "MasterModes", "DOF_NAMES", "dof_groups", "lowest_modes"]
+           "MasterModes", "DOF_NAMES", "dof_groups", "lowest_modes", "static_correction"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -186,6 +186,9 @@ class MasterModes:
     frequencies_hz: np.ndarray
     vectors: np.ndarray           # (n_dofs, m)
     n_rigid: int                  # rigid-body modes (frequency set to exactly 0)
+    n_static: int = 0             # static-correction vectors (the last ones, see
+                                  # :func:`static_correction`); mass-scaled ones have
+                                  # V.T M V < 1 there
 
 
 #: dense generalized eigensolver below this many DOFs, shift-invert Lanczos above
@@ -286,3 +289,63 @@ def master_modes(model: RotorModel, count: int | None = None,
             keep, bounds = count, [(a, min(b, count)) for a, b in bounds if a < count]
         freqs, vec = freqs[:keep], vec[:, :keep]
     return MasterModes(freqs, _canonical_basis(vec, model.M, bounds), int(np.sum(freqs == 0.0)))
+
+
+#: Gram eigenvalue (shapes of unit M-norm) below which a static-correction shape counts as
+#: dependent on the others
+STATIC_RANK_TOL = 1e-10
+
+
+def static_correction(model: RotorModel, modes: MasterModes, loads,
+                      cap_hz: float | None = None) -> MasterModes:
+    """``modes`` augmented with the static contribution of the truncated modes under
+    ``loads`` (a (n_dofs, k) array of force patterns: unit forces at the coupling DOF).
+
+    Craig-Chang / MacNeal residual flexibility for a free structure: the elastic static
+    deflection under the inertia-relieved load, u = G_e P f (P = I - M R R^T removes the
+    rigid-body resultant, R the rigid-body modes; solved as (K + M R R^T M) u = P f, whose
+    solution is M-orthogonal to R), minus the kept modes' part, gives residual shapes that
+    are M- and K-orthogonal to every kept mode.  They are M-orthonormalised (dependent
+    shapes dropped) and re-diagonalised on their own, so the kept modes are unchanged and
+    the added vectors are pseudo-modes with the Rayleigh frequencies of the residual
+    flexibility.  With them the basis spans the exact static response of the shaft (free,
+    or on any supports at these DOF) to forces at these DOF: the coupling stiffness of the
+    reduced model is the full model's.
+
+    ``cap_hz``: the quasi-static treatment.  A pseudo-mode above ``cap_hz`` (the residual
+    shapes of nearby loads combine into local, stiff shapes: tens of kHz) gets its modal
+    mass raised so that its frequency is ``cap_hz``: vector scaled by cap / f, frequency
+    cap.  Its stiffness, hence every static deflection, is unchanged; its inertia (that of
+    modes far above the excitation, which respond quasi-statically) is overstated, which
+    amplifies the residual part by 1 / (1 - (f_exc / cap)^2) at an excitation f_exc.
+    """
+    V, f = modes.vectors, modes.frequencies_hz
+    R = V[:, f == 0.0]
+    M, K = model.M.tocsc(), model.K.tocsc()
+    F = np.asarray(loads, dtype=float).reshape(model.n_dofs, -1)
+    MR = M @ R
+    PF = F - MR @ (R.T @ F)
+    Kreg = K.toarray() + MR @ MR.T
+    U = sla.solve(Kreg, PF, assume_a="sym")
+    U -= V @ (V.T @ (M @ U))                          # the kept modes' part (incl. rigid)
+    U -= V @ (V.T @ (M @ U))                          # twice: round-off
+    norms = np.sqrt(np.einsum("ij,ij->j", U, M @ U))
+    big = norms > 1e-12 * max(norms.max(initial=0.0), 1e-300)   # else: carried by kept modes
+    W = U[:, big] / norms[big]                        # scale-free: forces and moments alike
+    for _ in range(2):                                # M-orthonormal shapes; twice: round-off
+        G = W.T @ (M @ W)
+        lam, Q = np.linalg.eigh(0.5 * (G + G.T))
+        keep = lam > STATIC_RANK_TOL * max(lam.max(initial=0.0), 1e-300)
+        if not np.any(keep):
+            return modes
+        W = W @ (Q[:, keep] / np.sqrt(lam[keep]))
+    KW = W.T @ (K @ W)
+    mu, Z = np.linalg.eigh(0.5 * (KW + KW.T))
+    W = W @ Z
+    fr = np.sqrt(np.clip(mu, 0.0, None)) / (2 * np.pi)
+    W = _canonical_basis(W, M, _cluster_bounds(fr))
+    if cap_hz is not None:
+        scale = np.minimum(1.0, cap_hz / np.maximum(fr, 1e-300))
+        W, fr = W * scale[None, :], fr * scale
+    return MasterModes(np.concatenate([f, fr]), np.hstack([V, W]), modes.n_rigid,
+                       n_static=int(fr.size))

@@ -11,16 +11,18 @@ from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_reduction_tables", "plot_reduction_study"]
 
-_COLS = ("shaft_modes", "housing_modes", "m", "modes_compared", "max_freq_error", "min_mac",
-         "response_error", "extrema_error", "sim_wall_s", "steps", "status")
+_COLS = ("level", "shaft_modes", "housing_modes", "m", "modes_compared", "max_freq_error", "min_mac",
+         "response_error", "extrema_error", "f_top_hz", "sim_wall_s", "steps", "status")
 
 
-def write_reduction_tables(out_dir, rows) -> dict:
-    """reduction_levels.csv (a row per level) and reduction_modes.csv (full vs reduced
-    frequency and MAC per mode at the largest level)."""
+def write_reduction_tables(out_dir, rows, extra=()) -> dict:
+    """reduction_levels.csv (a row per level: ``rows``, the count levels, then ``extra``,
+    the frequency-criterion levels) and reduction_modes.csv (full vs reduced frequency and
+    MAC per mode at the largest count level; reduction_modes_frequency.csv: at the first
+    extra level)."""
     out = Path(out_dir)
     lines = [",".join(_COLS)]
-    for r in rows:
+    for r in list(rows) + list(extra):
         lines.append(",".join("" if r.get(c) is None else
                               (f"{r[c]:.6g}" if isinstance(r.get(c), float) else str(r.get(c, "")))
                               for c in _COLS))
@@ -31,8 +33,16 @@ def write_reduction_tables(out_dir, rows) -> dict:
               f"{p['mac']:.5f}" for i, p in enumerate(pairs)]
     p2 = atomic_write_bytes(out / "reduction_modes.csv", ("\n".join(lines) + "\n").encode())
     p3 = atomic_write_bytes(out / "reduction_levels.json",
-                            json.dumps(rows, indent=1, default=float).encode())
-    return {"levels": p1, "modes": p2, "json": p3}
+                            json.dumps(list(rows) + list(extra), indent=1,
+                                       default=float).encode())
+    paths = {"levels": p1, "modes": p2, "json": p3}
+    if extra and extra[0].get("pairs"):
+        lines = ["index,f_full_hz,f_reduced_hz,rel_error,mac"]
+        lines += [f"{i},{p['f_full_hz']:.6g},{p['f_reduced_hz']:.6g},{p['rel_error']:.4g},"
+                  f"{p['mac']:.5f}" for i, p in enumerate(extra[0]["pairs"])]
+        paths["modes_frequency"] = atomic_write_bytes(out / "reduction_modes_frequency.csv",
+                                                      ("\n".join(lines) + "\n").encode())
+    return paths
 
 
 def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
