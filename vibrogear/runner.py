@@ -105,7 +105,18 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
     after each; return the summary.  The reduced-model study is built once, before the
     first analysis that takes it, and handed to each explicitly."""
     plan = resolve(scene)
+    created = not ctx.out.exists()
     ctx.out.mkdir(parents=True, exist_ok=True)
+    try:
+        return _run_plan(scene, ctx, source, plan)
+    except Exception:
+        # an input error found while building the model: leave no empty output folder
+        if created and ctx.out.is_dir() and not any(ctx.out.iterdir()):
+            ctx.out.rmdir()
+        raise
+
+
+def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
     summary: dict[str, Any] = {
         "scene": scene.scene.name, "source": source, "model": scene.model_kind,
         "analyses": list(scene.scene.analyses),
