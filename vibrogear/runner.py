@@ -152,7 +152,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             previous[name] = outcome
         except (NumericalFailure, ArithmeticError) as exc:
             # ArithmeticError: overflow, a singular or non-finite matrix (e.g. the housing's
-            # HousingSolveError), raised below the analyses; reported with the analysis name
+            # HousingNumericalError), raised below the analyses; reported with the analysis name
             if not isinstance(exc, NumericalFailure):
                 exc = NumericalFailure(f"{name}: {exc}")
             summary["results"][name] = {"status": "failed", "message": str(exc)}

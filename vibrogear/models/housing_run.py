@@ -29,18 +29,18 @@ from ..cache import cache_key, discard_entry, entry_dir, new_workspace, open_ent
 from .housing_result import HousingModes, load_modes, save_modes
 
 __all__ = ["HousingModes", "HousingMatrices", "housing_modes", "housing_matrices", "housing_matrices_key",
-           "housing_cache_key", "housing_cache_keys", "HousingSolveError",
+           "housing_cache_key", "housing_cache_keys", "HousingNumericalError",
            "under_mpi"]
 
 log = logging.getLogger(__name__)
 
 
-class HousingSolveError(ArithmeticError):
+class HousingNumericalError(ArithmeticError):
     """The housing FE assembly or eigensolve failed numerically; the message says which
     stage and the likely cause (the runner reports it as a numerical failure, exit 1)."""
 
 
-def _solve_failure(cfg: HousingConfig, stage: str, exc: BaseException) -> HousingSolveError:
+def _solve_failure(cfg: HousingConfig, stage: str, exc: BaseException) -> HousingNumericalError:
     hints = []
     if not 1e6 <= cfg.material.E <= 1e13:
         hints.append(f"housing.material.E = {cfg.material.E:g} Pa is far outside the range of "
@@ -50,7 +50,7 @@ def _solve_failure(cfg: HousingConfig, stage: str, exc: BaseException) -> Housin
                      "soft that the housing is nearly free (singular stiffness matrix); use "
                      "support = 'fixed' or a stiffer foundation (1e8..1e12 N/m^3)")
     text = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-    return HousingSolveError(f"housing FE {stage} failed ({type(exc).__name__}: {text})"
+    return HousingNumericalError(f"housing FE {stage} failed ({type(exc).__name__}: {text})"
                              + (f"; likely cause: {'; '.join(hints)}" if hints else
                                 "; the stiffness matrix is probably singular or not finite"))
 
