@@ -18,12 +18,13 @@ import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
+from ..solvers.motion import CHAOTIC, MOTION_LEGEND
 from ..solvers.status import Status
 from ..solvers.sweep import PointRecord, SweepResult, sweep
 from .study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
-           "record_to_json", "record_from_json"]
+           "record_to_json", "record_from_json", "motion_summary"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 #: sweep settings that do not change the results (left out of the resume signature)
@@ -120,6 +121,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "jumps_down": jumps(res.param[~up], res.qmax[~up]),
         "error_estimate": res.error_estimate,
     }
+    summary.update(motion_summary(res, cfg.transient_periods + cfg.extra_transient_periods))
     if store is not None and store.note:
         summary["resume"] = store.note
     # stopped: keep the partial file
@@ -127,6 +129,40 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
                            partial_files=() if keep else (store.path,),
                            warnings=tuple(warnings))
+
+
+def motion_summary(res: SweepResult, budget: int) -> dict:
+    """Motion classes, the chaotic points with their exponents, transient lengths and,
+    per contact metric, its largest value over the points (where, and its error)."""
+    if res.motion_class is None:
+        return {}
+    ok = res.status == 0
+    names = [MOTION_LEGEND[int(c)] for c in res.motion_class]
+    chaotic = [{"param": float(res.param[k]), "direction": str(res.direction[k]),
+                "lyapunov": float(res.lyapunov[k]),
+                "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]]}
+               for k in np.flatnonzero(res.motion_class == CHAOTIC)]
+    used = res.transient_used[ok]
+    metrics = {}
+    for key, v in res.metrics.items():
+        if key.endswith("_err") or key.startswith(("period_n_", "motion_class_")):
+            continue
+        v = np.where(ok, np.asarray(v, float), np.nan)
+        if not np.any(np.isfinite(v)):
+            continue
+        k = int(np.nanargmax(v))
+        err = res.metrics.get(f"{key}_err")
+        metrics[key] = {"max": float(v[k]), "at": float(res.param[k]),
+                        "direction": str(res.direction[k]),
+                        "err": _num(err[k]) if err is not None else None}
+    return {"motion_classes": {n: names.count(n) for n in MOTION_LEGEND if n in names},
+            "chaotic_points": chaotic,
+            "transient": {"budget": int(budget), "mean_used": _num(np.mean(used))
+                          if used.size else None,
+                          "max_used": int(used.max()) if used.size else None,
+                          "settled_by": {s: int(np.sum(res.settled_by[ok] == s))
+                                         for s in ("map", "statistics", "budget")}},
+            "contact_metrics_max": metrics}
 
 
 # ---------------------------------------------------------------- partial-file records

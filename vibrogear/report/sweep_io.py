@@ -3,7 +3,15 @@
 * ``sweep.npz`` (DESIGN.md): ``param``, ``direction`` ("up"/"down"), ``qmin``, ``qmax``,
   ``poincare`` (points x samples), ``period_n`` (0 = not periodic), ``impacts`` (contact
   losses per excitation period), plus ``index``, ``status``, ``ok``, ``defect``,
-  ``clusters``, ``u_end`` and the scalar error estimates.  No NaN/inf is ever written:
+  ``clusters``, ``u_end`` and the scalar error estimates; the motion class with its
+  evidence: ``motion_class`` (int code) and ``motion_class_legend`` (its names, see
+  :mod:`vibrogear.solvers.motion`), ``lyapunov`` (largest exponent, per model time unit;
+  0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2, its 95 %
+  interval), ``transient_used`` (periods), ``settled_by``; per contact group
+  ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics
+  (``impacts_drive_<mesh>``, ``impacts_back_<mesh>``, ``impact_velocity_rms_<mesh>``,
+  ``impact_velocity_max_<mesh>``, ``contact_fraction_<mesh>``, ``rattle_<mesh>``,
+  ``unloaded_<bearing>``), each with an ``_err`` companion.  No NaN/inf is ever written:
   failed points carry 0 placeholders and ``ok = False`` / ``status < 0``.
 * ``sweep.csv`` repeats the per-point scalars; missing values are empty cells.
 
@@ -22,11 +30,13 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
+from ..solvers.motion import MOTION_LEGEND
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
 
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
-               "clusters", "defect", "status", "message", "wall_time")
+               "clusters", "defect", "status", "message", "wall_time", "motion_class",
+               "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by")
 
 
 def _finite(a, fill=0.0) -> np.ndarray:
@@ -40,10 +50,27 @@ def _cell(x) -> str:
     return str(x)
 
 
+def _extra(result) -> dict:
+    """Motion class, evidence and metrics (absent on results made before them)."""
+    N = result.param.size
+    if result.motion_class is None:
+        return {}
+    out = dict(motion_class=np.asarray(result.motion_class, np.int64),
+               motion_class_legend=np.asarray(MOTION_LEGEND),
+               lyapunov=_finite(result.lyapunov), lyapunov_ok=np.isfinite(result.lyapunov),
+               lyapunov_ci=_finite(np.asarray(result.lyapunov_ci).reshape(N, 2)),
+               transient_used=np.asarray(result.transient_used, np.int64),
+               settled_by=np.asarray(result.settled_by, dtype="<U10"))
+    for k, v in result.metrics.items():
+        v = np.asarray(v)
+        out[k] = v if v.dtype.kind == "i" else _finite(v)
+    return out
+
+
 def sweep_arrays(result) -> dict:
     """The arrays that ``sweep.npz`` holds (NaN/inf replaced), as a plain dict."""
     ok = result.status == 0
-    return dict(
+    return dict(**_extra(result),
         param=_finite(result.param), direction=np.asarray(result.direction, dtype="<U4"),
         qmin=_finite(result.qmin), qmax=_finite(result.qmax),
         poincare=_finite(result.poincare), period_n=np.asarray(result.period_n, np.int64),
@@ -67,13 +94,21 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
     npz = atomic_write_bytes(out_dir / f"{stem}.npz", buf.getvalue())
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
-    w.writerow(CSV_COLUMNS)
+    metrics = sorted(result.metrics)
+    extra = result.motion_class is not None
+    w.writerow(CSV_COLUMNS + tuple(metrics) if extra else CSV_COLUMNS[:12])
     for k in range(result.param.size):
-        w.writerow([_cell(v) for v in (
-            str(result.direction[k]), int(result.index[k]), float(result.param[k]),
-            float(result.qmin[k]), float(result.qmax[k]), int(result.period_n[k]),
-            float(result.impacts[k]), int(result.clusters[k]), float(result.defect[k]),
-            int(result.status[k]), result.message[k], float(result.point_wall[k]))])
+        row = [str(result.direction[k]), int(result.index[k]), float(result.param[k]),
+               float(result.qmin[k]), float(result.qmax[k]), int(result.period_n[k]),
+               float(result.impacts[k]), int(result.clusters[k]), float(result.defect[k]),
+               int(result.status[k]), result.message[k], float(result.point_wall[k])]
+        if extra:
+            ci = np.asarray(result.lyapunov_ci[k], dtype=float)
+            row += [MOTION_LEGEND[int(result.motion_class[k])], float(result.lyapunov[k]),
+                    float(ci[0]), float(ci[1]), int(result.transient_used[k]),
+                    str(result.settled_by[k])]
+            row += [result.metrics[n][k].item() for n in metrics]
+        w.writerow([_cell(v) for v in row])
     csv_path = atomic_write_bytes(out_dir / f"{stem}.csv", text.getvalue().encode())
     return {"npz": npz, "csv": csv_path}
 

@@ -32,7 +32,7 @@ from .integrate import IntegrationOptions, integrate
 from .status import Status
 
 __all__ = ["LyapunovResult", "largest_lyapunov", "tangent_chunk", "block_estimate",
-           "state_scale", "D0", "CHUNK"]
+           "state_scale", "initial_direction", "D0", "CHUNK"]
 
 #: relative size of the perturbation (scaled state units)
 D0 = 1e-6
@@ -99,6 +99,18 @@ def tangent_chunk(model: ReducedModel, param: float, u_start, reference, directi
     return g, last / nl, tr.rhs_calls, Status.OK
 
 
+def initial_direction(direction, scale, n: int, seed: int = 0) -> np.ndarray:
+    """Unit tangent in scaled units: ``direction`` (state units) when given and nonzero,
+    else a random one."""
+    if direction is not None:
+        v = np.asarray(direction, dtype=float) / scale
+        nv = float(np.linalg.norm(v))
+        if math.isfinite(nv) and nv > 0:
+            return v / nv
+    v = np.random.default_rng(seed).standard_normal(n)
+    return v / np.linalg.norm(v)
+
+
 def block_estimate(log_growth, period: float, chunk: int = CHUNK, burn: int = 1):
     """(exponent, (lo, hi), block estimates) from per-period log growths: blocks of
     ``chunk`` periods after ``burn`` blocks, Student-t 95 % interval of their mean."""
@@ -124,9 +136,13 @@ def block_estimate(log_growth, period: float, chunk: int = CHUNK, burn: int = 1)
 
 def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
                      options: IntegrationOptions = IntegrationOptions(), chunk: int = CHUNK,
-                     d0: float = D0, burn: int = 1, seed: int = 0) -> LyapunovResult:
+                     d0: float = D0, burn: int = 1, seed: int = 0,
+                     direction=None) -> LyapunovResult:
     """The largest Lyapunov exponent over ``periods`` excitation periods from ``u0`` (at
-    phase 0, on or near the attractor); see the module docstring."""
+    phase 0, on or near the attractor); see the module docstring.  ``direction``: the
+    starting tangent (state units; e.g. the difference of two successive stroboscopic
+    samples of a trajectory converging to u0: it is already along the slowest decaying
+    direction), default random (``seed``)."""
     wall = time.perf_counter()
     u = np.array(u0, dtype=float)
     T = model.excitation_period(param)
@@ -134,9 +150,8 @@ def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
     if periods < chunk or chunk < 1:
         raise ValueError("largest_lyapunov: periods must be >= chunk >= 1")
     m = model.n_modes
-    v = np.random.default_rng(seed).standard_normal(u.size)
-    v /= np.linalg.norm(v)
     scale = None
+    v = None
     logs, calls = [], 0
     status, message = Status.OK, "ok"
     for _ in range(int(periods) // chunk):
@@ -148,6 +163,7 @@ def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
             break
         if scale is None:
             scale = state_scale(np.vstack([u, ref.u]), m)
+            v = initial_direction(direction, scale, u.size, seed)
         g, v, c, st = tangent_chunk(model, param, u, ref.u, v, scale, options=options, d0=d0)
         calls += c
         if st != Status.OK:

@@ -47,8 +47,7 @@ from ..models.reduced import ReducedModel
 from .contact_eval import contact_kinematics
 
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
-           "MOTION_LEGEND", "motion_class", "contact_groups", "mode_timeline",
-           "window_metrics", "metrics_with_errors", "METRIC_KINDS", "classify_period",
+           "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics", "metrics_with_errors", "METRIC_KINDS", "classify_period",
            "count_clusters", "monitored_deformation", "best_defect"]
 
 FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
@@ -100,17 +99,6 @@ def contact_groups(model: ReducedModel) -> dict:
             kind, idx = out.get(key, ("bearing", np.zeros(0, int)))
             out[key] = (kind, np.append(idx, j).astype(int))
     return out
-
-
-def mode_timeline(model: ReducedModel, param: float, u_start, events, t0: float, t1: float):
-    """Per contact: (initial mode at t0 from the sign of its deformation, the events
-    (t, new mode) inside [t0, t1]).  ``events``: (times, contacts, modes) arrays."""
-    ct = model.contacts
-    delta = contact_kinematics(model, param, [t0], np.atleast_2d(u_start))[0][:, 0]
-    mode0 = flank(delta, ct.gap_hi, ct.gap_lo)
-    t, j, md = (np.asarray(a) for a in events)
-    sel = (t >= t0) & (t <= t1)
-    return mode0, (t[sel], j[sel].astype(int), md[sel].astype(int))
 
 
 def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:

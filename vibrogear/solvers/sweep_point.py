@@ -43,7 +43,7 @@ import numpy as np
 from ..models.contact_law import flank
 from .contact_eval import contact_kinematics
 from .integrate import integrate
-from .lyapunov import CHUNK, block_estimate, state_scale, tangent_chunk
+from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .motion import (FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from .status import Status
@@ -54,7 +54,7 @@ __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRAC
 #: settled statistics: mean and std of two windows within this fraction of the range
 SETTLE_TOL = 0.1
 #: ... and the distance from the nearest period not below this fraction of the last one
-NO_CONTRACTION = 0.8
+NO_CONTRACTION = 0.95
 #: shortest window of the statistics test (periods)
 SETTLE_WINDOW = 32
 _S_TRANSIENT = 8      # dense samples per period for the transient's statistics
@@ -234,8 +234,9 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
     msg = "ok"
     if n == 0 and lyapunov and len(chunks) >= 2:
         scale = state_scale(np.vstack([u_rec, states]), m)
-        v = np.random.default_rng(index).standard_normal(u_rec.size)
-        v /= np.linalg.norm(v)
+        # start along the last step of the stroboscopic map: the slowest direction
+        v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
+                              u_rec.size, index)
         logs = []
         for start, ends, _ in chunks:
             g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
