@@ -1,19 +1,24 @@
 """The issue's gearbox performance targets, side by side in one run (``make bench-gearbox``).
 
-1. Baseline (``--points`` speeds of the sweep, each 200 mesh periods from the static state):
-   ours and scipy solve_ivp(RK45) with a dense numpy right-hand side
-   (benchmarks/scipy_baseline.py) at the same rtol -> CPU time ratio, and the error of both
-   in the G1 extrema of the last 20 periods against our rtol = 1e-10 run.  (On two_stage the
-   free gear rattles chaotically, so these extrema do not converge below a few 1e-3 at any
-   tolerance: the equal-accuracy ladder of bench_gearbox_integrator.py finds no rung.)
-2. The two_stage sequential sweep: ``--speeds`` (700) speeds x 200 mesh periods (168
-   transient + 32 recorded) from 1500 to 3000 rpm at that rtol, up, in 2 segments on 2
-   local processes -> wall time (target <= 90 s).
-3. One periodic orbit + monodromy (variational equations, 320 x 321) of the 160-DOF model
-   over one mesh period -> wall time (target <= 1 s).
+Four configurations of configs/two_stage.toml: reduction level ``count`` (the scene's
+master counts, m = 162) or ``frequency`` (gearbox.master_modes = "frequency": shaft modes up
+to 2x the highest excitation frequency, static correction; vibrogear.models.master_level)
+x tolerance ``rtol 1e-6`` (the scene's) or ``accuracy 1e-3`` (the rule of
+vibrogear.analyses.study.tolerances_for: the rtol calibrated to deliver an error of 1e-3 of
+the mesh deformation's range).  For each:
 
-Writes benchmarks/results/bench_gearbox.json.  Needs the two_stage housing (built and cached
-on first use, ~1 min).
+1. Equal accuracy against scipy (``--points`` speeds): ours and scipy solve_ivp(RK45) with a
+   dense numpy right-hand side (benchmarks/scipy_baseline.py) at the same rtol/atol, each
+   200 mesh periods from the static state (CPU time, ratio printed), and the error of both
+   in the G1 mesh deformation, max |delta - delta_ref| / range(delta_ref), over the first
+   ``--window`` periods (before the chaotic rattle lets runs diverge) against our rtol =
+   1e-10 run of the same model.  Steps per mesh period, us per right-hand side and per step.
+2. The sequential sweep, ``--speeds`` speeds x 200 mesh periods (168 transient + 32 recorded)
+   from 1500 to 3000 rpm, up, in 2 segments on 2 local processes -> wall time; the target
+   (700 speeds <= 60 s) is compared after scaling by 700 / speeds.
+3. One periodic orbit + monodromy (variational equations) at the top speed -> wall time.
+
+Writes benchmarks/results/bench_gearbox.json.  Needs the two_stage housing (cached).
 """
 from __future__ import annotations
 
@@ -32,104 +37,146 @@ ROOT = HERE.parent
 sys.path[:0] = [str(ROOT), str(HERE)]
 
 SCENE = ROOT / "configs" / "two_stage.toml"
+PERIODS, RECORD = 200, 32
 
 
-def two_stage_case(n: int = 700):
+def two_stage_case(n: int = 700, level: str = "count"):
     """(ReducedModel, static state at the first speed, speeds) of configs/two_stage.toml."""
     from vibrogear.config import load_scene
     from vibrogear.models.gearbox import build_gearbox
     from vibrogear.solvers.static import static_equilibrium
 
     scene = load_scene(SCENE)
-    gm = build_gearbox(scene)
+    gm = build_gearbox(scene, master_level=level)
     params = np.linspace(scene.sweep.param_min, scene.sweep.param_max, n)
     st = static_equilibrium(gm.reduced, params[0])
-    return gm.reduced, st.u0, params
+    return gm, st.u0, params
+
+
+def _opts(rtol):
+    from vibrogear.analyses.study import ATOL_PER_RTOL
+    from vibrogear.solvers.integrate import IntegrationOptions
+    return IntegrationOptions(rtol=rtol, atol=ATOL_PER_RTOL * rtol, max_steps=50_000_000)
+
+
+def _point(model, p, u0, rtol, window, ref_delta):
+    """ours and scipy at one speed: CPU, steps, RHS calls, window error."""
+    from scipy.integrate import solve_ivp
+    from scipy_baseline import dense_rhs, monitored_deformation
+
+    from vibrogear.solvers.contact_eval import contact_history
+    from vibrogear.solvers.integrate import integrate
+
+    T = model.excitation_period(p)
+    te = np.linspace(0.0, window * T, 32 * window + 1)
+    o = _opts(rtol)
+    c = time.process_time()
+    tr = integrate(model, p, u0, 0.0, PERIODS * T, t_eval=te, options=o)
+    cpu = time.process_time() - c
+    d = contact_history(model, p, tr.t, tr.u)[0][model.monitor]
+    span = np.ptp(ref_delta)
+    ours = {"cpu_s": cpu, "steps": tr.steps, "rhs_calls": tr.rhs_calls,
+            "steps_per_period": tr.steps / PERIODS, "us_per_step": 1e6 * cpu / tr.steps,
+            "us_per_rhs": 1e6 * cpu / tr.rhs_calls,
+            "err": float(np.max(np.abs(d - ref_delta)) / span)}
+    c = time.process_time()
+    sol = solve_ivp(dense_rhs(model, p), (0.0, PERIODS * T), u0, method="RK45", rtol=o.rtol,
+                    atol=o.atol, t_eval=te)
+    cpu = time.process_time() - c
+    steps = int(sol.nfev // 6)
+    ds = monitored_deformation(model, p, sol.t, sol.y[:model.n_modes].T)
+    scipy = {"cpu_s": cpu, "steps": steps, "rhs_calls": int(sol.nfev),
+             "steps_per_period": steps / PERIODS, "us_per_step": 1e6 * cpu / max(steps, 1),
+             "us_per_rhs": 1e6 * cpu / max(sol.nfev, 1),
+             "err": float(np.max(np.abs(ds - ref_delta)) / span) if sol.status == 0 else np.nan}
+    return {"rpm": float(p), "ours": ours, "scipy": scipy, "ratio_cpu": scipy["cpu_s"] / ours["cpu_s"]}
+
+
+def _reference(model, p, u0, window):
+    from vibrogear.solvers.contact_eval import contact_history
+    from vibrogear.solvers.integrate import integrate
+
+    T = model.excitation_period(p)
+    te = np.linspace(0.0, window * T, 32 * window + 1)
+    tr = integrate(model, p, u0, 0.0, window * T, t_eval=te, options=_opts(1e-10))
+    return contact_history(model, p, tr.t, tr.u)[0][model.monitor]
 
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speeds", type=int, default=700)
     ap.add_argument("--points", type=int, default=3, help="speeds timed against scipy")
-    ap.add_argument("--rtol", type=float, default=1e-6, help="tolerance of every run")
+    ap.add_argument("--window", type=int, default=10, help="periods of the error window")
+    ap.add_argument("--accuracy", type=float, default=1e-3)
+    ap.add_argument("--levels", nargs="*", default=["count", "frequency"])
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/bench_gearbox.json"))
     a = ap.parse_args(argv)
+    from vibrogear.analyses.study import tolerances_for
     from vibrogear.solvers.integrate import IntegrationOptions, integrate
     from vibrogear.solvers.shooting import periodic_flow
     from vibrogear.solvers.sweep import sweep
 
-    res: dict = {}
-    rtol = a.rtol
-    model, u0, params = two_stage_case(a.speeds)
-    res["baseline"] = _baseline(model, u0, params, rtol, a.points)
-    opts = IntegrationOptions(rtol=rtol, atol=rtol * 1e-6, max_steps=50_000_000)
-    integrate(model, params[0], u0, 0.0, model.excitation_period(params[0]), options=opts)
-    t = time.perf_counter()
-    sw = sweep(model, params, directions=("up",), transient_periods=168, record_periods=32,
-               extra_transient_periods=0, options=opts, u0=u0, segments=2, workers=2)
-    sweep_wall = time.perf_counter() - t
-    res["sweep"] = {"speeds": int(params.size), "mesh_periods_per_speed": 200, "rtol": rtol,
-                    "wall_s": sweep_wall, "target_s": 90.0, "steps": sw.steps,
-                    "rhs_calls": sw.rhs_calls, "failed": int(np.sum(sw.status != 0)),
-                    "us_per_rhs_per_core": 2e6 * sweep_wall / max(sw.rhs_calls, 1)}
-    # orbit + monodromy at the top speed, from a settled state
-    p = params[-1]
-    T = model.excitation_period(p)
-    warm = integrate(model, p, u0, 0.0, 100 * T, options=opts)
-    best = np.inf
-    for _ in range(3):
-        t = time.perf_counter()
-        fl = periodic_flow(model, p, warm.u_end, options=IntegrationOptions(rtol=1e-8, atol=1e-14))
-        best = min(best, time.perf_counter() - t)
-    res["orbit_monodromy"] = {"rpm": float(p), "states": model.n_states, "wall_s": best,
-                              "target_s": 1.0, "monodromy_shape": list(fl.monodromy.shape)}
-    print(f"sweep: {params.size} speeds x 200 mesh periods at rtol {rtol:g}: {sweep_wall:.1f} s "
-          f"(target 90 s), {res['sweep']['us_per_rhs_per_core']:.1f} us per RHS per core")
-    b = res["baseline"]
-    print(f"per point (CPU): ours {b['mean_cpu_ours']:.3f} s, scipy RK45 + dense RHS "
-          f"{b['mean_cpu_scipy']:.3f} s: ratio {b['ratio_cpu']:.1f} (target 30); extrema errors "
-          f"vs rtol 1e-10: ours {b['max_err_ours']:.2e}, scipy {b['max_err_scipy']:.2e}")
-    print(f"orbit + monodromy ({model.n_states} states): {best:.3f} s (target 1 s)")
+    rule = tolerances_for(a.accuracy)[0]
+    res = {"speeds": a.speeds, "periods_per_speed": PERIODS, "accuracy": a.accuracy,
+           "rule_rtol": rule, "configs": []}
+    for level in a.levels:
+        gm, u0, params = two_stage_case(a.speeds, level)
+        model = gm.reduced
+        top = float(max(s.freqs_hz.max() for s in gm.subsystems))
+        idx = np.unique(np.round(np.linspace(0, params.size - 1, a.points + 2)[1:-1]).astype(int))
+        pts = params[idx]
+        refs = {float(p): _reference(model, p, u0, a.window) for p in pts}
+        for tol_name, rtol in (("rtol 1e-6", 1e-6), (f"accuracy {a.accuracy:g}", rule)):
+            opts = _opts(rtol)
+            integrate(model, params[0], u0, 0.0, model.excitation_period(params[0]), options=opts)
+            rows = [_point(model, p, u0, rtol, a.window, refs[float(p)]) for p in pts]
+            t = time.perf_counter()
+            sw = sweep(model, params, directions=("up",), transient_periods=PERIODS - RECORD,
+                       record_periods=RECORD, extra_transient_periods=0, options=opts, u0=u0,
+                       segments=2, workers=2)
+            wall = time.perf_counter() - t
+            cfg = {"level": level, "m": model.n_modes, "top_master_hz": top, "tolerance": tol_name,
+                   "rtol": rtol, "points": rows,
+                   "ratio_cpu_vs_scipy": float(np.mean([r["scipy"]["cpu_s"] for r in rows])
+                                               / np.mean([r["ours"]["cpu_s"] for r in rows])),
+                   "max_err_ours": max(r["ours"]["err"] for r in rows),
+                   "max_err_scipy": max(r["scipy"]["err"] for r in rows),
+                   "sweep": {"wall_s": wall, "wall_s_scaled_to_700": wall * 700 / params.size,
+                             "target_700_s": 60.0, "steps": int(sw.steps),
+                             "rhs_calls": int(sw.rhs_calls),
+                             "failed": int(np.sum(sw.status != 0)),
+                             "steps_per_period": sw.steps / (params.size * PERIODS),
+                             "us_per_step_per_core": 2e6 * wall / max(sw.steps, 1),
+                             "us_per_rhs_per_core": 2e6 * wall / max(sw.rhs_calls, 1)}}
+            res["configs"].append(cfg)
+            o = rows[0]["ours"]
+            print(f"[{level}, m = {model.n_modes}, top master {top:.0f} Hz, {tol_name}: rtol "
+                  f"{rtol:.2g}] sweep {params.size} speeds: {wall:.1f} s (x{700 / params.size:.1f}"
+                  f" -> {cfg['sweep']['wall_s_scaled_to_700']:.0f} s for 700, target 60 s), "
+                  f"{cfg['sweep']['steps_per_period']:.0f} steps/period; per point ours "
+                  f"{o['steps_per_period']:.0f} steps/period, {o['us_per_step']:.1f} us/step, "
+                  f"{o['us_per_rhs']:.2f} us/RHS; scipy {rows[0]['scipy']['us_per_rhs']:.1f} "
+                  f"us/RHS; CPU ratio scipy/ours {cfg['ratio_cpu_vs_scipy']:.1f} (target 45); "
+                  f"window errors ours {cfg['max_err_ours']:.1e}, scipy "
+                  f"{cfg['max_err_scipy']:.1e}", flush=True)
+        p = params[-1]
+        T = model.excitation_period(p)
+        warm = integrate(model, p, u0, 0.0, 100 * T, options=_opts(1e-6))
+        best = np.inf
+        for _ in range(3):
+            t = time.perf_counter()
+            fl = periodic_flow(model, p, warm.u_end, options=IntegrationOptions(rtol=1e-8,
+                                                                               atol=1e-14))
+            best = min(best, time.perf_counter() - t)
+        res.setdefault("orbit_monodromy", []).append(
+            {"level": level, "rpm": float(p), "states": model.n_states, "wall_s": best,
+             "target_s": 0.5, "monodromy_shape": list(fl.monodromy.shape)})
+        print(f"[{level}] orbit + monodromy ({model.n_states} states, rtol 1e-8): {best:.3f} s "
+              "(target 0.5 s)", flush=True)
     out = Path(a.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(res, indent=1))
+    out.write_text(json.dumps(res, indent=1, default=float))
     return res
-
-
-def _baseline(model, u0, params, rtol, n) -> dict:
-    from scipy_baseline import solve_points_scipy
-
-    from vibrogear.solvers.integrate import IntegrationOptions, integrate
-
-    pts = params[np.unique(np.round(np.linspace(0, params.size - 1, n + 2)[1:-1]).astype(int))]
-    rows = []
-    for p in pts:
-        T = model.excitation_period(p)
-        out = {"rpm": float(p)}
-        for name, tol in (("ref", 1e-10), ("ours", rtol)):
-            o = IntegrationOptions(rtol=tol, atol=tol * 1e-6, max_steps=50_000_000)
-            integrate(model, p, u0, 0.0, T, options=o)
-            c = time.process_time()
-            tr = integrate(model, p, u0, 0.0, 200 * T, options=o, record_from=180 * T)
-            out[name] = {"cpu_s": time.process_time() - c, "steps": tr.steps,
-                         "qmin": tr.monitor_min, "qmax": tr.monitor_max}
-        sp = solve_points_scipy(model, [p], u0, periods=200, rtol=rtol, atol=rtol * 1e-6,
-                                record_from=180)[0]
-        out["scipy"] = {"cpu_s": sp.cpu_time, "steps": sp.steps, "qmin": sp.monitor_min,
-                        "qmax": sp.monitor_max}
-        span = out["ref"]["qmax"] - out["ref"]["qmin"]
-        for name in ("ours", "scipy"):
-            out[name]["err"] = max(abs(out[name]["qmin"] - out["ref"]["qmin"]),
-                                   abs(out[name]["qmax"] - out["ref"]["qmax"])) / span
-        print(f"  {p:.0f} rpm: ours {out['ours']['cpu_s']:.2f} s ({out['ours']['steps']} steps, "
-              f"err {out['ours']['err']:.1e}), scipy {out['scipy']['cpu_s']:.2f} s "
-              f"({out['scipy']['steps']} steps, err {out['scipy']['err']:.1e})", flush=True)
-        rows.append(out)
-    co = float(np.mean([r["ours"]["cpu_s"] for r in rows]))
-    cs = float(np.mean([r["scipy"]["cpu_s"] for r in rows]))
-    return {"rtol": rtol, "points": rows, "mean_cpu_ours": co, "mean_cpu_scipy": cs,
-            "ratio_cpu": cs / co, "max_err_ours": max(r["ours"]["err"] for r in rows),
-            "max_err_scipy": max(r["scipy"]["err"] for r in rows)}
 
 
 if __name__ == "__main__":

@@ -10,7 +10,8 @@ run and reported but are chaotic (the free gear G2 rattles over the whole speed 
 error stays 0.3-0.7 at every rtol), so no tolerance rule applies to them; single_stage
 (the housing scene) stands in as the second model.  Fits log10(err) = a + p log10(rtol) over all points (least squares) and
 prints the fit, the worst ratio err / (10^a rtol^p) and the rtol the rule picks; writes
-benchmarks/results/calibrate_tolerance.json.
+benchmarks/results/calibrate_tolerance.json and the work-precision view of the rule,
+calibrate_tolerance.png (vibrogear.report.precision_plots.plot_accuracy_rule).
 """
 from __future__ import annotations
 
@@ -100,6 +101,13 @@ def main(argv=None) -> dict:
           f"measured / fitted = {ratio.max():.2f}; rule in code: {ACCURACY_RULE}")
     for acc in (1e-2, 1e-3, 1e-4, 1e-5):
         print(f"  accuracy {acc:g} -> rtol, atol = {tolerances_for(acc)}")
+    from vibrogear.report.precision_plots import plot_accuracy_rule
+
+    pts = [{"label": f"{r['case']} {r['rpm']:.0f} rpm", "rtols": RTOLS, "errors": r["errors"],
+            "steps_per_period": r["steps_per_period"]} for r in use]
+    plot_accuracy_rule(pts, ACCURACY_RULE, 1e-3, tolerances_for(1e-3)[0],
+                       Path(a.out).with_suffix(""), formats=("png",),
+                       title="gearbox work-precision: the accuracy -> rtol rule at accuracy 1e-3")
     out = {"rtols": RTOLS, "atol_per_rtol": ATOL_PER_RTOL, "transient_periods": a.transient,
            "record_periods": a.record, "points": rows, "fit": fit}
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)

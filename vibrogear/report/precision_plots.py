@@ -4,6 +4,9 @@
 annotated with its tolerance, the fitted slopes in the legend.
 ``plot_shooting_precision``: shooting residual, u0 error and Floquet-multiplier error
 against wall time and against the shooting tolerance.
+``plot_accuracy_rule``: a gearbox's mesh-deformation error against steps per mesh period and
+against rtol, per calibration point, with the fitted rule and the rtol it picks for the
+accuracy asked for (vibrogear.analyses.study.tolerances_for).
 Matplotlib ``Figure`` objects with the Agg canvas: no pyplot state.
 """
 from __future__ import annotations
@@ -15,7 +18,8 @@ import numpy as np
 
 from .figure import new_figure, save_figure
 
-__all__ = ["write_table", "plot_work_precision", "plot_shooting_precision"]
+__all__ = ["write_table", "plot_work_precision", "plot_shooting_precision",
+           "plot_accuracy_rule"]
 
 
 def write_table(path, table: dict, columns) -> Path:
@@ -121,4 +125,33 @@ def plot_shooting_precision(table: dict, path, *, title: str = "",
     a1.set_title("shooting: accuracy vs work", fontsize=9)
     a2.set_xlabel("shooting tol (integrator rtol = tol)")
     a2.set_title("shooting: accuracy vs tolerance", fontsize=9)
+    return _finish(fig, (a1, a2), title, path, formats, dpi)
+
+
+def plot_accuracy_rule(points, rule: dict, accuracy: float, chosen_rtol: float, path, *,
+                       title: str = "", formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+    """``points``: dicts with ``label``, ``rtols``, ``errors``, ``steps_per_period``; ``rule``:
+    coefficient, exponent, safety (err = c rtol^p; the rtol picked meets accuracy / safety).
+    Left: error vs steps per mesh period (work); right: error vs rtol with the fit."""
+    fig, (a1, a2) = _figure(2)
+    for k, pt in enumerate(points):
+        col = f"C{k % 10}"
+        r, e = np.asarray(pt["rtols"], float), np.asarray(pt["errors"], float)
+        a1.loglog(np.asarray(pt["steps_per_period"], float), e, "o-", ms=3, color=col,
+                  label=pt["label"])
+        a2.loglog(r, e, "o", ms=3, color=col)
+        j = int(np.argmin(np.abs(np.log(r / chosen_rtol))))
+        a1.plot(pt["steps_per_period"][j], e[j], "*", ms=9, color=col)
+    xs = np.logspace(-10, -3, 50)
+    c, p, sf = rule["coefficient"], rule["exponent"], rule["safety"]
+    a2.loglog(xs, c * xs ** p, "--", color="0.3", lw=1, label=f"fit: {c:.3g} rtol^{p:.3f}")
+    a2.loglog(xs, sf * c * xs ** p, ":", color="0.3", lw=1, label=f"fit x safety {sf:g}")
+    for ax in (a1, a2):
+        ax.axhline(accuracy, color="tab:red", lw=1, label=f"accuracy asked {accuracy:g}")
+    a2.axvline(chosen_rtol, color="tab:green", lw=1, label=f"rtol chosen {chosen_rtol:.2g}")
+    a1.set_xlabel("steps per mesh period (star: the rtol chosen)")
+    a1.set_ylabel("max |delta - delta_ref| / range(delta_ref)")
+    a1.set_title("mesh-deformation error vs work", fontsize=9)
+    a2.set_xlabel("rtol (atol = 1e-6 rtol)")
+    a2.set_title("error vs tolerance: the rule", fontsize=9)
     return _finish(fig, (a1, a2), title, path, formats, dpi)
