@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.models.reduced import ContactSet, ReducedModel
+from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
@@ -216,8 +216,12 @@ def test_resume_gives_identical_results(tmp_path, hyst_result):
                                           callback=new.append, **SWEEP_KW)
     assert resumed == half and len(new) == 2 * HYST_GRID.size - half
     for name in ("param", "direction", "index", "qmin", "qmax", "poincare", "period_n",
-                 "impacts", "defect", "clusters", "status", "u_end"):
+                 "impacts", "defect", "clusters", "status", "u_end", "motion_class",
+                 "lyapunov", "lyapunov_ci", "transient_used", "settled_by"):
         assert _eq(getattr(res, name), getattr(hyst_result, name)), name
+    assert sorted(res.metrics) == sorted(hyst_result.metrics)
+    for name, v in res.metrics.items():
+        assert _eq(v, hyst_result.metrics[name]), name
     assert len(read_items(part)) == 2 * HYST_GRID.size
 
 
@@ -281,3 +285,60 @@ def test_resumable_sweep_helper(tmp_path):
     r2, st2, resumed = resumable_sweep(model, grid, tmp_path, root=True, **kw)
     full = sweep(model, grid, **kw)
     assert resumed == 2 and _eq(r2.qmax, full.qmax) and _eq(r2.u_end, full.u_end)
+
+
+# ---------------------------------------------------------------- classes and metrics
+
+def test_motion_class_rules():
+    from vibrogear.solvers.motion import (APERIODIC, CHAOTIC, FAILED, NOT_SETTLED, PERIODIC,
+                                          QUASI_PERIODIC, motion_class)
+    nan = math.nan
+    assert motion_class(2, (0.1, 0.2)) == PERIODIC          # a period is the evidence
+    assert motion_class(0, (0.01, 0.2)) == CHAOTIC
+    assert motion_class(0, (0.01, 0.2), budget_used=True) == CHAOTIC
+    assert motion_class(0, (-0.01, 0.2)) == QUASI_PERIODIC
+    assert motion_class(0, (-0.01, 0.2), budget_used=True) == NOT_SETTLED
+    assert motion_class(0, (-0.2, -0.01)) == NOT_SETTLED    # still converging
+    assert motion_class(0, (nan, nan)) == APERIODIC
+    assert motion_class(0, (nan, nan), budget_used=True) == NOT_SETTLED
+    assert motion_class(1, failed=True) == FAILED
+
+
+def test_contact_groups_and_window_metrics_by_hand():
+    """Two meshes and a two-element bearing; switch times chosen so every metric is
+    known by hand."""
+    from vibrogear.solvers.motion import contact_groups, metrics_with_errors
+    inf = math.inf
+    ct = ContactSet(directions=np.array([[1.0, 0, 0], [0, 2.0, 0], [0, 0, 1.0], [0, 0, -1.0]]),
+                    k_hi=np.ones(4), k_lo=np.ones(4), gap_hi=np.zeros(4),
+                    gap_lo=np.array([-1.0, -1.0, -inf, -inf]), exponent=np.ones(4),
+                    damping=np.zeros(4), stiffness_cos=np.zeros((4, 1)),
+                    stiffness_sin=np.zeros((4, 1)), error_cos=np.zeros((4, 1)),
+                    error_sin=np.zeros((4, 1)), names=("G1", "G 2", "B1:0", "B1:1"))
+    model = ReducedModel(omega2=np.ones(3), damping=np.zeros(3),
+                         coupling=LinearCoupling.none(3),
+                         forcing=Forcing(np.zeros(3), np.zeros((1, 3)), np.zeros((1, 3))),
+                         contacts=ct)
+    groups = contact_groups(model)
+    assert {k: (kind, list(i)) for k, (kind, i) in groups.items()} == {
+        "G1": ("mesh", [0]), "G_2": ("mesh", [1]), "bearing_B1": ("bearing", [2, 3])}
+    T = 1.0
+    # window [0, 2]: G1 in contact at start, loses it at 0.25, drive impact at 0.5 (v 2),
+    # back impact at 1.5 (v 4) after a loss at 1.25, loses it at 1.75; G 2 never touches;
+    # bearing element 0 loaded throughout, element 1 unloaded on [0.5, 2]
+    ev = (np.array([0.25, 0.5, 0.5, 1.25, 1.5, 1.75]), np.array([0, 0, 3, 0, 0, 0]),
+          np.array([0, 1, 0, 0, -1, 0]))
+    speed = np.array([np.nan, 2.0, np.nan, np.nan, 4.0, np.nan])
+    mode0 = np.array([1, 0, 1, 1])
+    g = metrics_with_errors(model, groups, mode0, ev, speed, 0.0, 2 * T, T)
+    assert g["impacts_drive_G1"] == 0.5 and g["impacts_back_G1"] == 0.5
+    assert g["impact_velocity_max_G1"] == 4.0
+    assert g["impact_velocity_rms_G1"] == pytest.approx(math.sqrt(10.0))
+    assert g["contact_fraction_G1"] == pytest.approx((0.25 + 0.75 + 0.25) / 2)
+    assert g["rattle_G1"] == pytest.approx((0.5 * 4 + 0.5 * 16) / 2)    # m_eff = 1
+    assert g["impacts_drive_G_2"] == 0 and g["contact_fraction_G_2"] == 0
+    assert g["unloaded_bearing_B1"] == pytest.approx(1.5 / 2)
+    # halves: [0, 1] one drive impact, [1, 2] one back impact
+    assert g["impacts_drive_G1_err"] == pytest.approx(0.5)
+    assert g["contact_fraction_G1_err"] == pytest.approx(0.5 * abs(0.75 - 0.5))
+    assert g["unloaded_bearing_B1_err"] == pytest.approx(0.5 * abs(0.5 - 1.0))
