@@ -16,7 +16,8 @@ import numpy as np
 
 from ..models.rotor import build_rotor_model, master_modes
 from ..pipeline.outcome import NumericalFailure
-from ..solvers.rotor_modes import MODE_TYPES, campbell_diagram, modal_energy_share, rotor_modes
+from ..solvers.rotor_campbell import campbell_diagram
+from ..solvers.rotor_modes import MODE_TYPES, modal_energy_share, rotor_modes
 
 __all__ = ["run_modes", "run_campbell"]
 
