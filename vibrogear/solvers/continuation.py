@@ -83,20 +83,23 @@ class _Problem:
         return J
 
 
-def _tangent(J: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
-    """Unit null vector (its z = (u0, p) part) of the bordered Jacobian, oriented along
-    ``prev``."""
+def _tangent(J: np.ndarray, prev: np.ndarray | None, nz: int | None = None) -> np.ndarray:
+    """Unit null vector of the bordered Jacobian, its z = (u0, p) part (the leading ``nz``
+    entries, default ``prev.size``; the k multipliers' entries are zero on a family),
+    oriented along ``prev``."""
     _, _, vt = np.linalg.svd(J)
-    k = J.shape[1] - J.shape[0] - 1
-    t = vt[-1][:J.shape[1] - k]
+    t = vt[-1][:prev.size if nz is None else nz]
     if prev is not None and t @ prev < 0:
         t = -t
     return t / np.linalg.norm(t)
 
 
-def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int):
+def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int,
+             k_ref: int | None = None):
     """Newton on [H(z) + B lam; V^T dz = 0; t.(z - z_pred)] = 0. Returns (z, flow,
-    iterations, residual) or None (the last integrator failure in ``prob.last_failure``)."""
+    iterations, residual) or None (why in ``prob.last_failure``: the integrator's failure,
+    or GRAZING_END where an iterate's number of neutral directions differs from ``k_ref``:
+    a contact of the free coordinate opens or closes, the flow is not smooth there)."""
     tol = prob.method.tol
     z = z_pred.copy()
     for it in range(max_iter + 1):
@@ -105,6 +108,9 @@ def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int):
         f = prob.flow(z)
         if not f.ok:
             prob.last_failure = f.trajectory.status
+            return None
+        if k_ref is not None and prob.neutral(f) != k_ref:
+            prob.last_failure = Status.GRAZING_END
             return None
         res = residual_norm(f.G, z[:-1])
         if res < tol:
@@ -137,7 +143,7 @@ def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPo
                        neutral=prob.neutral(f))
 
 
-def _locate(prob, za, ta, ds_total, fa, fb, which, options):
+def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None):
     """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
     and the next point (``fb``, s = ds_total) for the zero of test function ``which``."""
     lo, hi = 0.0, ds_total
@@ -151,12 +157,12 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options):
             mid = 0.5 * (lo + hi)
         if not lo < mid < hi:
             mid = 0.5 * (lo + hi)
-        got = _correct(prob, za + mid * ta, ta, options.max_corrector_iter)
+        got = _correct(prob, za + mid * ta, ta, options.max_corrector_iter, k_ref)
         if got is None:
             break
         z, f, it, res = got
         t = _tangent(prob.jac(f), ta)
-        val = test_functions(f.monodromy, t, prob.neutral(f))[which]
+        val = test_functions(f.monodromy, t, k_ref or 0)[which]
         best = (z, f, t, it, res)
         if np.sign(val) == np.sign(f_lo):
             lo, f_lo = mid, val
@@ -287,7 +293,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
             if np.linalg.norm(bend) < 0.25 * ds:
                 pred = pred + bend
-        got = _correct(prob, pred, t, options.max_corrector_iter)
+        prob.last_failure = None
+        got = _correct(prob, pred, t, options.max_corrector_iter, k_prev)
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
@@ -298,10 +305,11 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         if got is None:
             ds *= 0.5
             if ds < ds_min:
-                if prob.last_failure == Status.GRAZING:
-                    return Status.GRAZING_END, (f"{Status.GRAZING_END.message}: integration "
-                                                f"fails on a grazing switch beyond "
-                                                f"{model.param_name} = {p:.6g}")
+                if prob.last_failure in (Status.GRAZING, Status.GRAZING_END):
+                    why = ("integration fails on a grazing switch" if prob.last_failure
+                           == Status.GRAZING else "a contact of the free coordinate closes")
+                    return Status.GRAZING_END, (f"{Status.GRAZING_END.message}: {why} "
+                                                f"beyond {model.param_name} = {p:.6g}")
                 return Status.DS_TOO_SMALL, f"{Status.DS_TOO_SMALL.message} at param = {p:.6g}"
             continue
         k_new = prob.neutral(f_new)
@@ -324,7 +332,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                 labels.append(which)
         if labels:
             which = labels[0]
-            loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options)
+            loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
+                          k_prev)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
                 if not (which == "NS" and not test_functions(fl.monodromy, tl,
@@ -383,7 +392,7 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
         half = integrate(model, z[-1] * scale, z[:-1], 0.0, f.period / 2,
                          options=method.integration)
         if np.linalg.norm(half.u_end - z[:-1]) > 1e-6 * (1 + np.linalg.norm(z[:-1])):
-            t = _tangent(prob.jac(f), None)
+            t = _tangent(prob.jac(f), None, z.size)
             # continue away from the PD point
             if t @ (z - z_pd) < 0:
                 t = -t
