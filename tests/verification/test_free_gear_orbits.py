@@ -195,3 +195,18 @@ def test_rattle_cascade_agrees_with_settled_integration(rattle):
     assert sh.converged and sh.stable and sh.neutral == 0
     assert np.max(np.abs(sh.u0 - rec1.u[-1])) < 1e-6
     assert q.stable
+
+
+def test_starting_orbit_uses_the_settled_period():
+    """The continuation analysis starts from the period the sweep's detector finds in the
+    settled motion: period 2 between the two PDs of the rattle cascade."""
+    from vibrogear.analyses.continuation import starting_orbit
+
+    model = loose_gear_model(1.0, d=0.1)
+    u0, n, _, how = starting_orbit(model, 1.11, np.array([0.0, -1.0, 0.0, 0.0]),
+                                   transient_periods=600, options=OPT, tol=1e-9, max_iter=20,
+                                   period_tol=1e-6)
+    assert n == 2 and "settled" in how
+    half = integrate(model, 1.11, u0, 0.0, model.excitation_period(1.11), options=OPT)
+    full = integrate(model, 1.11, u0, 0.0, 2 * model.excitation_period(1.11), options=OPT)
+    assert np.linalg.norm(full.u_end - u0) < 1e-7 < np.linalg.norm(half.u_end - u0)

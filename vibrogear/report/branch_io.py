@@ -1,4 +1,8 @@
-"""Write continuation branches as ``branch.npz`` / ``branch.csv`` (DESIGN.md)."""
+"""Write continuation branches as ``branch.npz`` / ``branch.csv`` (DESIGN.md).
+
+``neutral`` is the number of trivial multipliers 1 of a point (an orbit family: a free gear
+touching nothing); ``max_abs_multiplier`` is over the other, nontrivial multipliers (the
+ones that decide stability); ``floquet`` in the npz holds all of them."""
 from __future__ import annotations
 
 import csv
@@ -9,11 +13,12 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
+from ..solvers.floquet import split_trivial
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("branch", "n_periods", "param", "period", "stable", "label", "qmin", "qmax",
-               "impacts", "max_abs_multiplier", "residual")
+               "impacts", "max_abs_multiplier", "residual", "neutral")
 
 
 def branch_arrays(branches, omega_per_param: float) -> dict:
@@ -35,6 +40,7 @@ def branch_arrays(branches, omega_per_param: float) -> dict:
         "qmax": np.array([p.qmax for _, _, p in rows], dtype=float),
         "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
         "residual": np.array([p.residual for _, _, p in rows], dtype=float),
+        "neutral": np.array([p.neutral for _, _, p in rows], dtype=np.int64),
     }
 
 
@@ -57,11 +63,12 @@ def write_branches(branches, omega_per_param: float, out_dir) -> dict:
     w = csv.writer(text, lineterminator="\n")
     w.writerow(CSV_COLUMNS)
     for k in range(arrays["param"].size):
-        mu = np.abs(arrays["floquet"][k])
+        mu = np.abs(split_trivial(arrays["floquet"][k], int(arrays["neutral"][k]))[0])
         w.writerow([_cell(v) for v in (
             int(arrays["branch"][k]), int(arrays["n_periods"][k]), float(arrays["param"][k]),
             float(arrays["period"][k]), bool(arrays["stable"][k]), str(arrays["label"][k]),
             float(arrays["qmin"][k]), float(arrays["qmax"][k]), int(arrays["impacts"][k]),
-            float(mu.max()) if mu.size else 0.0, float(arrays["residual"][k]))])
+            float(mu.max()) if mu.size else 0.0, float(arrays["residual"][k]),
+            int(arrays["neutral"][k]))])
     csv_path = atomic_write_bytes(out_dir / "branch.csv", text.getvalue().encode())
     return {"npz": npz, "csv": csv_path}

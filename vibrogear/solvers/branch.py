@@ -16,7 +16,7 @@ from .floquet import stability
 from .status import Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "BranchPoint", "Branch", "SpecialPoint",
-           "ContinuationResult"]
+           "ContinuationResult", "stability_notes"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,3 +123,15 @@ class ContinuationResult:
         return {"max_periodicity_residual": max((p.residual for p in pts), default=None),
                 "max_integration_error": max((p.integration_error for p in pts), default=None),
                 "liouville_det_error": max(dets) if dets else None}
+
+
+def stability_notes(pts, name: str) -> str:
+    """Where the branch loses stability at an NS point: the motion there leaves the
+    periodic orbit for a torus (quasi-periodic), stated in the branch's message."""
+    notes = []
+    for k, p in enumerate(pts):
+        if p.label == "NS" and 0 < k < len(pts) - 1:
+            a, b = pts[k - 1].stable, pts[k + 1].stable
+            if a != b:
+                notes.append(f"stable orbit ends at NS {name} = {p.param:.6g} (onto a torus)")
+    return "".join(f"; {n}" for n in notes)

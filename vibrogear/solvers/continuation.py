@@ -6,10 +6,11 @@ corrector on [H; t.(z - z_pred)] (Keller), adaptive step.  Floquet multipliers a
 every point; test functions locate folds (LP: the parameter component of the
 tangent changes sign), period doublings (PD: det(M + I) changes sign) and
 Neimark-Sacker points (NS: prod_{i<j}(mu_i mu_j - 1) changes sign with a complex
-pair on the unit circle), each located by bisection in arclength.  At the first PD
-the solver switches onto the period-2 branch (the shooting problem over 2T, started
-along the flip eigenvector, orthogonal to the period-1 tangent) and continues it; a PD on
-that branch ends it as a cascade (CASCADE).
+pair on the unit circle), each located by bisection in arclength; where the stable orbit
+ends at an NS (onto a torus) the branch's message says so.  At the first PD the solver
+switches onto the period-2n branch (the shooting problem over 2nT, started along the flip
+eigenvector, orthogonal to the period-n tangent) and continues it; a PD on that branch
+ends it as a cascade (CASCADE).
 
 Orbit families (a free gear that touches nothing): the k neutral directions V of the
 orbit (:meth:`.shooting.PeriodicFlow.neutral`) are bordered out of the augmented system,
@@ -35,7 +36,7 @@ import numpy as np
 
 from ..config.options import ContinuationOptions
 from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProblem,
-                     PseudoArclength, SpecialPoint)
+                     PseudoArclength, SpecialPoint, stability_notes)
 from .floquet import flip_vector, floquet_multipliers, liouville_error, test_functions
 from .integrate import integrate
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
@@ -249,23 +250,11 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
     except _Stop:
         status = Status.STOPPED_BY_CALLBACK
         message = f"{status.message} after {len(pts)} points"
-    message += _stability_notes(pts, model.param_name)
+    message += stability_notes(pts, model.param_name)
     return Branch(tuple(pts), n_periods, status, message,
                   2 * np.pi * n_periods / model.omega_per_param,
                   counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls},
                   wall_time=time.perf_counter() - wall)
-
-
-def _stability_notes(pts, name: str) -> str:
-    """Where the branch loses stability at an NS point: the motion there leaves the
-    periodic orbit for a torus (quasi-periodic), stated in the branch's message."""
-    notes = []
-    for k, p in enumerate(pts):
-        if p.label == "NS" and 0 < k < len(pts) - 1:
-            a, b = pts[k - 1].stable, pts[k + 1].stable
-            if a != b:
-                notes.append(f"stable orbit ends at NS {name} = {p.param:.6g} (onto a torus)")
-    return "".join(f"; {n}" for n in notes)
 
 
 def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Status, str]:

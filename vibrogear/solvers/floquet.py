@@ -83,16 +83,16 @@ def neutral_directions(monodromy: np.ndarray, omega2: np.ndarray | None = None,
     subspace is searched (a model without zero-frequency modes has none, at no cost);
     without it, any singular value of M - I at round-off relative to the largest counts.
     k = 0 gives empty (n x 0) arrays."""
-    A = monodromy - np.eye(monodromy.shape[0])
-    n = A.shape[0]
+    n = monodromy.shape[0]
     empty = np.zeros((n, 0))
-    scale = max(1.0, float(np.linalg.norm(A, 2)))
     if omega2 is not None:
-        w2 = np.asarray(omega2, dtype=float)
-        rigid = np.flatnonzero(np.abs(w2) <= 1e-10 * max(float(np.max(np.abs(w2),
-                                                                    initial=0.0)), 1e-300))
+        w2 = np.abs(np.asarray(omega2, dtype=float))
+        rigid = np.flatnonzero(w2 <= 1e-10 * max(float(np.max(w2, initial=0.0)), 1e-300))
         if rigid.size == 0:
             return empty, empty
+    A = monodromy - np.eye(n)
+    scale = max(1.0, float(np.linalg.norm(A)))      # Frobenius: >= the largest singular value
+    if omega2 is not None:
         E = np.zeros((n, rigid.size))
         E[rigid, np.arange(rigid.size)] = 1.0
         _, s, vt = np.linalg.svd(A @ E)
