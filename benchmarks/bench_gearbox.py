@@ -19,6 +19,8 @@ the mesh deformation's range).  For each:
 3. One periodic orbit + monodromy (variational equations) at the top speed -> wall time.
 
 Writes benchmarks/results/bench_gearbox.json.  Needs the two_stage housing (cached).
+Equal accuracy on a periodic scene (the rattle of two_stage is chaotic): run
+``bench_gearbox_integrator.py --model bench_gearbox:gear_pair_case --atol-scale 1e-6``.
 """
 from __future__ import annotations
 
@@ -51,6 +53,20 @@ def two_stage_case(n: int = 700, level: str = "count"):
     params = np.linspace(scene.sweep.param_min, scene.sweep.param_max, n)
     st = static_equilibrium(gm.reduced, params[0])
     return gm, st.u0, params
+
+
+def gear_pair_case(n: int = 3):
+    """(ReducedModel, static state, speeds) of configs/gear_pair.toml (periodic, regular
+    points: the equal-accuracy ladder of bench_gearbox_integrator.py --model
+    bench_gearbox:gear_pair_case)."""
+    from vibrogear.config import load_scene
+    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.solvers.static import static_equilibrium
+
+    scene = load_scene(ROOT / "configs" / "gear_pair.toml")
+    gm = build_gearbox(scene)
+    params = np.linspace(scene.sweep.param_min, scene.sweep.param_max, n)
+    return gm.reduced, static_equilibrium(gm.reduced, params[0]).u0, params
 
 
 def _opts(rtol):

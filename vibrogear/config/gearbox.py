@@ -18,6 +18,8 @@ excitation frequency of every analysis.
 name = "two-stage gearbox"
 
 gravity = [0.0, 0.0, -9.81]  # [m/s^2], housing frame (default 0): a static load
+master_modes = "count"      # or "frequency": shaft modes up to frequency_factor (2) x the
+                            # highest mesh harmonic at the top speed + static correction
 
 [[gearbox.shafts]]
 name = "driving"
