@@ -19,8 +19,9 @@ periods T, so its end state is again at phase 0.
 
   ``transient_used`` is the number of periods integrated; ``settled_by`` says why it
   stopped ("map", "statistics" or "budget").
-* **Record** of ``record_periods`` periods in chunks of :data:`~.lyapunov.CHUNK` periods
-  (one integrator call each), 16 dense samples per period: stroboscopic samples, extrema
+* **Record** of ``record_periods`` periods in chunks of min(:data:`~.lyapunov.CHUNK`,
+  record_periods // 8) periods (at least 1; one integrator call each, the blocks of the
+  exponent's interval), 16 dense samples per period: stroboscopic samples, extrema
   of the monitored deformation, located contact events.
 * **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
   is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
@@ -191,8 +192,9 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
     groups = contact_groups(model)
     mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
     t0 = 0.0
+    chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
     while t0 < R * T * (1 - 1e-12):
-        k = min(CHUNK, R - int(round(t0 / T)))
+        k = min(chunk, R - int(round(t0 / T)))
         t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
@@ -248,7 +250,7 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
                 break
             logs.append(g)
         if logs:
-            lam, ci, _ = block_estimate(np.concatenate(logs), T, CHUNK, burn=1)
+            lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
     cls = motion_class(n, ci, budget_used=settled_by == "budget")
     mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
                   model.contacts.gap_hi, model.contacts.gap_lo) if has_monitor else ()
