@@ -23,7 +23,9 @@ Contact metrics over a record window of P excitation periods, from the integrato
 located contact events (exact switch times) and the contact law's modes:
 
 * ``impacts_drive_<g>`` / ``impacts_back_<g>``: contact onsets on the upper (drive,
-  delta > gap_hi) / lower (back, delta < gap_lo) flank per excitation period;
+  delta > gap_hi) / lower (back, delta < gap_lo) flank per excitation period (a
+  gearbox's: the mesh period of its first mesh; other meshes are counted per that
+  period too);
 * ``impact_velocity_rms_<g>`` / ``impact_velocity_max_<g>``: RMS and largest normal
   approach speed |delta'| at those onsets (model units: deformation per model time);
 * ``contact_fraction_<g>``: fraction of the time in contact (mode != 0);
