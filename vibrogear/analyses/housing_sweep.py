@@ -1,15 +1,16 @@
 """Housing geometry sweep (``housing_sweep``): first N frequencies against one parameter.
 
 Points run in parallel worker processes (spawned, OPENBLAS_NUM_THREADS=1), each through the
-housing cache.  Every finished point is appended to ``housing_sweep_points.jsonl`` at once, so
-a killed sweep resumes where it stopped; ``housing_sweep.csv`` and ``housing_sweep.png`` are
-written at the end.
+housing cache.  Every finished point is appended to ``housing_sweep_points.jsonl`` at once
+(a :class:`~vibrogear.pipeline.resume.PartialStore`), so a killed sweep resumes where it
+stopped, and only a run of the same housing, parameter, values, frequency count and version
+does (:func:`sweep_signature`); otherwise the file is set aside.  ``housing_sweep.csv`` and
+``housing_sweep.png`` are written at the end.
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
 import csv
-import json
 import multiprocessing as mp
 import os
 import time
@@ -17,9 +18,10 @@ import time
 import numpy as np
 
 from ..pipeline.outcome import NumericalFailure
+from ..pipeline.resume import PartialStore
 from .housing import is_root
 
-__all__ = ["run_sweep", "sweep_point"]
+__all__ = ["run_sweep", "sweep_point", "sweep_signature"]
 
 POINTS_FILE = "housing_sweep_points.jsonl"
 
@@ -42,16 +44,15 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
             "cached": res.cached, "seconds": time.perf_counter() - t0}
 
 
-def _done(path) -> dict[float, dict]:
-    out = {}
-    if path.is_file():
-        for line in path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-                out[float(row["value"])] = row
-            except (ValueError, KeyError):
-                continue  # a line cut by a kill: recompute that point
-    return out
+def sweep_signature(scene) -> dict:
+    """What the points depend on: the base housing (its cache key: config, data files and
+    version), the swept parameter and its values, and the number of frequencies."""
+    from ..models.housing_run import housing_cache_key
+
+    opts = scene.housing_sweep
+    return {"analysis": "housing_sweep", "physics": housing_cache_key(scene.housing, "modes"),
+            "grid": [repr(float(v)) for v in opts.points()],
+            "settings": {"parameter": opts.parameter, "n_freqs": opts.n_freqs}}
 
 
 def run_sweep(scene, ctx) -> dict:
@@ -63,14 +64,14 @@ def run_sweep(scene, ctx) -> dict:
     if not is_root():
         raise NumericalFailure("housing_sweep runs its points in worker processes: start it without mpirun")
     ctx.out.mkdir(parents=True, exist_ok=True)
-    pfile = ctx.out / POINTS_FILE
-    done = _done(pfile)
+    store = PartialStore(ctx.out / POINTS_FILE, sweep_signature(scene))
+    done = {float(row["value"]): row for row in store.items}
     todo = [(v, c) for v, c in zip(values, cfgs) if float(v) not in done]
     n = opts.n_freqs
     t0 = time.perf_counter()
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     failures = []
-    with ctx.progress(len(todo), "housing sweep") as bar, pfile.open("a") as fh:
+    with ctx.progress(len(todo), "housing sweep") as bar:
         with cf.ProcessPoolExecutor(max_workers=min(opts.processes, max(len(todo), 1)),
                                     mp_context=mp.get_context("spawn")) as pool:
             futs = {}
@@ -84,8 +85,7 @@ def run_sweep(scene, ctx) -> dict:
                 if row["status"] != "ok":
                     failures.append(row)
                     continue
-                fh.write(json.dumps(row) + "\n")
-                fh.flush()
+                store.append(row)
                 done[float(v)] = row
                 bar.update(1, f"{opts.parameter}={v:g}")
     rows = [done[float(v)] for v in values if float(v) in done]
@@ -105,4 +105,4 @@ def run_sweep(scene, ctx) -> dict:
     return {"status": "ok", "parameter": opts.parameter, "values": [r["value"] for r in rows],
             "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
             "points_computed": len(todo), "points_resumed": len(values) - len(todo),
-            "seconds": time.perf_counter() - t0}
+            "resume": store.note, "seconds": time.perf_counter() - t0}
