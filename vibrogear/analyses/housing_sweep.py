@@ -32,13 +32,13 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
     from ..config.housing import HousingConfig
     from ..geometry.housing import MeshingError
     from ..models.housing import HousingSolveError
-    from ..models.housing_run import housing_modes
+    from ..models.housing_run import HousingNumericalError, housing_modes
 
     cfg = build(HousingConfig, housing, "housing")
     t0 = time.perf_counter()
     try:
         res = housing_modes(cfg, cache=True)
-    except (MeshingError, HousingSolveError) as exc:
+    except (MeshingError, HousingSolveError, HousingNumericalError) as exc:
         return {"status": "failed", "message": str(exc)}
     return {"status": "ok", "freqs_hz": [float(f) for f in res.freqs_hz[:n_freqs]], "n_dofs": res.n_dofs,
             "cached": res.cached, "seconds": time.perf_counter() - t0}
