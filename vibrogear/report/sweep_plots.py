@@ -6,7 +6,8 @@ interruption below it) or the clearance lines +-b_r.  Below it, the motion class
 point as a categorical colour band (one row per direction, and one per contact group and
 direction where the group's own class differs: a loaded mesh can be period-1 while a free
 gear rattles), with a legend.  Then one axis per mesh (two-sided contact): drive-flank
-(filled) and back-flank (open) impacts per excitation period.
+(filled) and back-flank (open) impacts per excitation period; last, where any mesh
+rattles, the impact energy per period of each mesh (log scale; see solvers/motion.py).
 """
 from __future__ import annotations
 
@@ -112,10 +113,25 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
         if np.any(gc != cats):
             rows += [(f"{g} {d}", direction == d, gc) for d in dirs]
 
-    fig = new_figure((9.0, 6.4 + 1.1 * len(meshes) + 0.15 * len(rows)))
-    ratios = [3.0, 0.3 + 0.22 * len(rows)] + [1.0] * len(meshes)
+    rattle = {g: _get(data, f"rattle_{g}").astype(float) for g in meshes
+              if _get(data, f"rattle_{g}") is not None}
+    rattle = {g: v for g, v in rattle.items() if np.any(v[ok] > 0)}
+    fig = new_figure((9.0, 6.4 + 1.1 * (len(meshes) + bool(rattle)) + 0.15 * len(rows)))
+    ratios = [3.0, 0.3 + 0.22 * len(rows)] + [1.0] * (len(meshes) + bool(rattle))
     axes = fig.subplots(len(ratios), 1, sharex=True, gridspec_kw={"height_ratios": ratios})
-    ax, axc, axm = axes[0], axes[1], axes[2:]
+    ax, axc, axm = axes[0], axes[1], axes[2:2 + len(meshes)]
+    if rattle:
+        axr = axes[-1]
+        for i, (g, v) in enumerate(rattle.items()):
+            for d in dirs:
+                sel = ok & (direction == d) & (v > 0)
+                axr.semilogy(param[sel], v[sel], _STYLE[d]["marker"], ms=3.5,
+                             color=f"C{(2 * i + (d == 'down')) % 10}", lw=0,
+                             label=f"{g} {d}")
+        axr.set_ylabel("rattle energy\nper period", fontsize=8)
+        axr.grid(alpha=0.3, which="both")
+        axr.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
+                   borderaxespad=0.0)
     for d in dirs:
         sel = ok & (direction == d)
         st = _STYLE[d]
