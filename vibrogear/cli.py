@@ -83,7 +83,9 @@ def _main(argv: list[str] | None) -> int:
             scene = build(type(scene), data)
         out = (check_output_dir(args.out) if args.out is not None else
                check_output_dir(Path("out") / scene.scene.name, "scene.name"))
+        from .pipeline.validate import validate_scene
         from .runner import resolve
+        validate_scene(scene)
         resolve(scene)
     except (ConfigError, NotImplementedError) as exc:
         _error("invalid input", exc)

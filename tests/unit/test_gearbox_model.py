@@ -16,6 +16,7 @@ import scipy.linalg as sla
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.scene import read_toml, scene_from_dict
+from vibrogear.pipeline.validate import validate_scene
 from vibrogear.models.contact_law import evaluate, harmonic_series
 from vibrogear.models.couplings import gear_mesh_geometry, mesh_contact_parameters
 from vibrogear.models.gearbox import RPM, build_gearbox, housing_to_rotor
@@ -349,7 +350,7 @@ BAD_FREE = [
 
 def _check_bad(path, overrides, field, words, capsys, tmp_path):
     with pytest.raises(ConfigError) as info:
-        load_scene(path, tuple(overrides))
+        validate_scene(load_scene(path, tuple(overrides)))
     assert info.value.path.startswith(field) and words in str(info.value)
     args = [a for o in overrides for a in ("--set", o)]
     assert main(["check", str(path), *args]) == 2
@@ -375,4 +376,4 @@ def test_scene_dict_without_axis_is_rejected():
     data = read_toml(GEAR_PAIR)
     del data["gearbox"]["shafts"][1]["x"]
     with pytest.raises(ConfigError, match="gearbox.shafts\\[1\\].x"):
-        scene_from_dict(data)
+        validate_scene(scene_from_dict(data))

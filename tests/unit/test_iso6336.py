@@ -13,6 +13,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError
 from vibrogear.config.scene import read_toml, scene_from_dict
+from vibrogear.pipeline.validate import validate_scene
 from vibrogear.models.gearbox import build_gearbox
 from vibrogear.models.iso6336 import (basic_rack_factor, blank_factor, contact_harmonics,
                                       inverse_involute, involute, mesh_stiffness,
@@ -130,7 +131,7 @@ def test_out_of_range_gear_data_fail_at_check_time():
     """addendum 0.2 m_n: eps_alpha < 1, ISO's method does not apply; the scene check (no
     model built) reports the mesh's stiffness field."""
     with pytest.raises(ConfigError) as exc:
-        _scene(stiffness="iso6336", addendum=0.2)
+        validate_scene(_scene(stiffness="iso6336", addendum=0.2))
     assert exc.value.path == "gearbox.meshes[0].stiffness" and "eps_alpha" in str(exc.value)
     build_gearbox(_scene(addendum=0.2))           # a user value still builds (no ISO record)
 
@@ -180,7 +181,7 @@ def test_profile_shifted_pair_meshes_on_its_working_pitch_circles():
     data["scene"]["analyses"] = ["modes"]
     data["gearbox"]["meshes"][0].update(profile_shift_a=0.3, profile_shift_b=0.2)
     with pytest.raises(ConfigError) as exc:
-        scene_from_dict(data)
+        validate_scene(scene_from_dict(data))
     assert exc.value.path == "gearbox.meshes[0]" and "working pitch" in str(exc.value)
     data["gearbox"]["shafts"][1]["x"] = 0.12 + a_w
     gm = build_gearbox(scene_from_dict(data))

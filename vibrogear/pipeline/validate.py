@@ -1,0 +1,16 @@
+"""The scene checks that need the model layer but no solve (gear-mesh geometry: shaft axes,
+mesh planes, centre distances; ISO 6336 gear data).  The config layer checks every field
+and every cross-section rule it can state alone (:mod:`vibrogear.config.layout`); this runs
+after it, still before anything is written (``vibrogear check`` and ``run`` call it; so does
+:func:`vibrogear.runner.run_scene`)."""
+from __future__ import annotations
+
+__all__ = ["validate_scene"]
+
+
+def validate_scene(scene):
+    """Raise :class:`~vibrogear.config.base.ConfigError` naming the field; return the scene."""
+    if getattr(scene, "gearbox", None) is not None:
+        from ..models.gearbox import check_layout
+        check_layout(scene)
+    return scene
