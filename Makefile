@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
-.PHONY: two-stage two-stage-helical single-stage gear-pair gearboxes housing-dynamics bench-gearbox
+.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
@@ -39,6 +39,13 @@ two-stage: $(STAMP)
 
 two-stage-helical: $(STAMP)
 	$(VG) run configs/two_stage_helical.toml --out $(OUT)/two_stage_helical
+
+two-stage-iso6336: $(STAMP)
+	$(VG) run configs/two_stage_iso6336.toml --out $(OUT)/two_stage_iso6336
+
+## housing from a shipped millimetre STEP file: modes at the bores
+housing-step: $(STAMP)
+	$(VG) run configs/housing_step.toml --out $(OUT)/housing_step
 
 single-stage: $(STAMP)
 	$(VG) run configs/single_stage.toml --out $(OUT)/single_stage
