@@ -176,6 +176,7 @@ def _level_row(gm, scene, cfg, f_full, v_full, row):
     x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
     row["m"] = gm.reduced.n_modes
     row["f_top_hz"] = float(max(s.freqs_hz.max() for s in gm.subsystems))
+    row["build_s"] = float(sum(gm.timings.values()))
     if f_full is not None and gm.reduced.n_modes:
         f_red, v_red = reduced_linear_modes(gm, x0)
         cmp = _compare(f_full, v_full, f_red, v_red, cfg.f_max_hz)

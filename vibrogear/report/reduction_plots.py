@@ -12,7 +12,8 @@ from ..pipeline.files import atomic_write_bytes
 __all__ = ["write_reduction_tables", "plot_reduction_study"]
 
 _COLS = ("level", "shaft_modes", "housing_modes", "m", "modes_compared", "max_freq_error", "min_mac",
-         "response_error", "extrema_error", "f_top_hz", "sim_wall_s", "steps", "status")
+         "response_error", "extrema_error", "f_top_hz", "build_s", "sim_wall_s", "steps",
+         "status")
 
 
 def write_reduction_tables(out_dir, rows, extra=()) -> dict:
@@ -53,25 +54,32 @@ def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
     wall = np.array([r["sim_wall_s"] for r in rows], float)
     ferr = np.array([r.get("max_freq_error", np.nan) for r in rows], float)
     rerr = np.array([r.get("response_error", np.nan) for r in rows], float)
+    cnt = np.array([r.get("level", "count") == "count" for r in rows])
     if np.any(np.isfinite(ferr)):
-        a1.semilogy(m, np.abs(ferr), "o-")
+        a1.semilogy(m[cnt], np.abs(ferr[cnt]), "o-", label="master counts")
+        for r, mm, fe in zip(rows, m, ferr):
+            if r.get("level", "count") != "count" and np.isfinite(fe):
+                a1.semilogy([mm], [abs(fe)], "*", ms=9, label=r["level"])
+        a1.legend(fontsize=7)
     a1.set_xlabel("master modes m")
     a1.set_ylabel("max rel. frequency error vs full model")
     a1.set_title("linearised: reduced vs full", fontsize=8)
     ok = np.isfinite(rerr) & (rerr > 0)
-    a2.loglog(wall[ok], rerr[ok], "s-")
+    a2.loglog(wall[ok & cnt], rerr[ok & cnt], "s-")
+    a2.loglog(wall[ok & ~cnt], rerr[ok & ~cnt], "*", ms=9)
     for x, y, mm in zip(wall[ok], rerr[ok], m[ok]):
         a2.annotate(f"m={mm:.0f}", (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
     a2.set_xlabel("simulation wall time [s]")
     a2.set_ylabel("mesh-deformation error vs largest level")
     a2.set_title("nonlinear response: error against run time", fontsize=8)
-    pairs = rows[-1].get("pairs", [])
+    last = [r for r in rows if r.get("level", "count") == "count"][-1]
+    pairs = last.get("pairs", [])
     if pairs:
         f = [p["f_full_hz"] for p in pairs]
         a3.plot(f, [p["mac"] for p in pairs], "o", ms=3)
         a3.set_ylim(0.0, 1.05)
         a3.set_xlabel("full-model frequency [Hz]")
         a3.set_ylabel("MAC (shaft DOF + bore points)")
-        a3.set_title(f"largest level, m = {rows[-1]['m']}", fontsize=8)
+        a3.set_title(f"largest level, m = {last['m']}", fontsize=8)
     fig.suptitle(title, fontsize=9)
     return save_figure(fig, path, formats, dpi)
