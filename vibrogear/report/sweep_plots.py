@@ -128,7 +128,7 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
                 axr.semilogy(param[sel], v[sel], _STYLE[d]["marker"], ms=3.5,
                              color=f"C{(2 * i + (d == 'down')) % 10}", lw=0,
                              label=f"{g} {d}")
-        axr.set_ylabel("rattle energy\nper period", fontsize=8)
+        axr.set_ylabel("rattle energy per\nperiod [model units]", fontsize=8)
         axr.grid(alpha=0.3, which="both")
         axr.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
                    borderaxespad=0.0)
@@ -166,7 +166,8 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
     axc.set_ylabel("motion", fontsize=8)
     for a, g in zip(axm, meshes):
         a.set_ylabel(f"{g}: impacts\nper period", fontsize=8)
-        a.set_ylim(bottom=-0.05 * max(1.0, a.get_ylim()[1]))
+        top = max(1.0, a.get_ylim()[1])
+        a.set_ylim(-0.05 * top, 1.05 * top)
         a.grid(alpha=0.3)
         a.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
                  borderaxespad=0.0)
