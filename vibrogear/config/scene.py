@@ -8,7 +8,8 @@ from typing import Any
 
 from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig, ReductionAccuracyConfig
-from .housing import HousingConfig, HousingConvergenceConfig, HousingSweepConfig, resolve_file
+from .housing import HousingConfig, resolve_file
+from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,

@@ -1,7 +1,6 @@
 """Gearbox figures and tables: modes, resonance map, time response with contact forces."""
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
