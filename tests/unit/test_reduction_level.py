@@ -15,6 +15,7 @@ from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
 from vibrogear.models.gearbox import build_gearbox
 from vibrogear.models.master_level import excitation_frequencies_hz, highest_speed
+from vibrogear.pipeline.validate import validate_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -35,6 +36,12 @@ def test_excitation_frequency_by_hand(scene):
                                reduction_accuracy=None)
     with pytest.raises(ConfigError, match="gearbox.master_modes"):
         highest_speed(bare)
+    # and `vibrogear check` says so before anything runs (frequency level, no speed range)
+    bare = dataclasses.replace(bare, gearbox=dataclasses.replace(scene.gearbox,
+                                                                 master_modes="frequency"))
+    with pytest.raises(ConfigError, match="gearbox.master_modes.*speed range"):
+        validate_scene(bare)
+    validate_scene(dataclasses.replace(bare, gearbox=scene.gearbox))     # count: no need
 
 
 def test_frequency_level_is_closer_to_the_full_model_than_the_default_count(scene,

@@ -292,11 +292,13 @@ def iso_mesh_stiffness(cfg, i: int) -> MeshStiffness:
 
 def check_layout(scene) -> None:
     """The gearbox checks that need no FE model (shaft axes, mesh planes and centre
-    distances, ISO 6336 mesh stiffness), run by the scene's validation so that
-    ``vibrogear check`` reports them."""
+    distances, ISO 6336 mesh stiffness, the speed range of master_modes = "frequency"),
+    run by the scene's validation so that ``vibrogear check`` reports them."""
     cfg = scene.gearbox
     _, gear_p = cfg.speed_ratios()
     axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    if cfg.master_modes == "frequency":
+        highest_speed(scene)                 # the criterion needs the scene's speed range
     for i, m in enumerate(cfg.meshes):
         _mesh_geometry(cfg, i, axes, gear_p)
         if m.iso6336:
