@@ -34,8 +34,10 @@ located contact events (exact switch times) and the contact law's modes:
   model's mass-normalised modal coordinates (model units);
 * ``unloaded_<bearing>``: mean number of its rolling elements out of contact.
 
-Each metric has an ``_err`` companion: half the difference of its values on the two
-halves of the record window (for independent halves, the standard error of their mean).
+Each metric has an ``_err`` companion: the standard error of its mean over up to 8
+consecutive blocks of the record window (batch means, s / sqrt(B); blocks of whole
+multiples of the period for a periodic point, where it is ~0), so that chaotic points
+report statistics with an error that shrinks as the record grows.
 """
 from __future__ import annotations
 
@@ -111,10 +113,11 @@ def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:
 
 
 def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed,
-                   t0: float, t1: float, period: float) -> dict:
+                   t0: float, t1: float, period: float, *, empty: float = 0.0) -> dict:
     """The metrics (module docstring) over [t0, t1]: ``mode0`` (nc,) the modes at t0,
     ``events`` (t, contact, new mode) of the window in time order, ``onset_speed`` (len
-    events,) |delta'| at each event (NaN where not needed)."""
+    events,) |delta'| at each event (NaN where not needed); ``empty``: the approach
+    speeds of a mesh without impacts."""
     t, j, md = events
     speed = np.asarray(onset_speed, dtype=float)
     P = (t1 - t0) / period
@@ -131,8 +134,8 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
             out[f"impacts_drive_{key}"] = float(np.sum(drive) / P)
             out[f"impacts_back_{key}"] = float(np.sum(back) / P)
             out[f"impact_velocity_rms_{key}"] = float(np.sqrt(np.mean(v ** 2))) if v.size \
-                else 0.0
-            out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else 0.0
+                else empty
+            out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else empty
             out[f"contact_fraction_{key}"] = _fraction(int(mode0[c]), t[mine], md[mine], t0, t1)
             out[f"rattle_{key}"] = float(np.sum(0.5 * v ** 2 / c2[c]) / P)
         else:
@@ -142,26 +145,41 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
 
 
 def metrics_with_errors(model: ReducedModel, groups: dict, mode0, events, onset_speed,
-                        t0: float, t1: float, period: float) -> dict:
-    """:func:`window_metrics` over [t0, t1] and the ``_err`` companions from its two
-    halves (the split falls on a period end when the window has an even count)."""
+                        t0: float, t1: float, period: float, *, period_n: int = 0,
+                        blocks: int = 8) -> dict:
+    """:func:`window_metrics` over [t0, t1] and the ``_err`` companions: the standard
+    error of the mean of the metric over at most ``blocks`` consecutive blocks of whole
+    periods (multiples of ``period_n`` for a periodic point), s / sqrt(B) (batch means;
+    two blocks: half their difference).  Speeds use the blocks that have impacts."""
     t, j, md = (np.asarray(a) for a in events)
     speed = np.asarray(onset_speed, dtype=float)
     full = window_metrics(model, groups, mode0, (t, j, md), speed, t0, t1, period)
     P = int(round((t1 - t0) / period))
-    if P < 2:
+    n = max(1, int(period_n))
+    L = n * max(1, (P // n) // int(blocks))
+    B = P // L
+    if B < 2:
         return {**full, **{f"{k}_err": math.nan for k in full}}
-    tm = t0 + (P // 2) * period
-    first = t < tm
-    a = window_metrics(model, groups, mode0, (t[first], j[first], md[first]), speed[first],
-                       t0, tm, period)
-    # modes at the split: the last switch of each contact before it, else its start mode
-    mode_mid = np.array(mode0, dtype=int).copy()
-    for k in np.nonzero(first)[0]:
-        mode_mid[j[k]] = md[k]
-    b = window_metrics(model, groups, mode_mid, (t[~first], j[~first], md[~first]),
-                       speed[~first], tm, t1, period)
-    return {**full, **{f"{k}_err": 0.5 * abs(a[k] - b[k]) for k in full}}
+    mode = np.array(mode0, dtype=int).copy()
+    vals = {k: [] for k in full}
+    for b in range(B):
+        a, e = t0 + b * L * period, t0 + (b + 1) * L * period
+        sel = (t >= a) & (t < e)
+        w = window_metrics(model, groups, mode, (t[sel], j[sel], md[sel]), speed[sel], a, e,
+                           period, empty=math.nan)
+        for k, v in w.items():
+            vals[k].append(v)
+        for i in np.nonzero(sel)[0]:            # modes at the next block's start
+            mode[j[i]] = md[i]
+    err = {}
+    for k, v in vals.items():
+        v = np.asarray(v, dtype=float)
+        v = v[np.isfinite(v)]
+        if v.size >= 2:
+            err[f"{k}_err"] = float(np.std(v, ddof=1) / math.sqrt(v.size))
+        else:                                   # no impacts in any block: exactly 0
+            err[f"{k}_err"] = 0.0 if v.size == 0 and full[k] == 0.0 else math.nan
+    return {**full, **err}
 
 
 # ---------------------------------------------------------------- periodicity

@@ -30,8 +30,8 @@ periods T, so its end state is again at phase 0.
   group, the period again on the group's deformations alone.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
   (the state at each onset by a short integration from the dense sample before it),
-  contact fractions, rattle energy, unloaded rolling elements, each with a two-window
-  error.
+  contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
+  error over blocks of the record window.
 """
 from __future__ import annotations
 
@@ -264,7 +264,7 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
         metrics.update(metrics_with_errors(model, groups, mode0,
                                            (np.array(ev_t), np.array(ev_j, int),
                                             np.array(ev_m, int)),
-                                           np.array(speeds), 0.0, R * T, T))
+                                           np.array(speeds), 0.0, R * T, T, period_n=n))
         if lost_events:
             msg = "event log full: raise [integration] event_log for the contact metrics"
             metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
