@@ -46,21 +46,17 @@ import re
 
 import numpy as np
 
-from ..models.contact_law import flank
 from ..models.reduced import ReducedModel
 from .contact_eval import contact_kinematics
 
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
-           "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics", "metrics_with_errors", "METRIC_KINDS", "classify_period",
-           "count_clusters", "monitored_deformation", "best_defect"]
+           "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics",
+           "metrics_with_errors", "classify_period", "count_clusters",
+           "monitored_deformation", "best_defect"]
 
 FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
 MOTION_LEGEND = ("failed", "periodic", "quasi-periodic", "chaotic", "not settled",
                  "not periodic (no exponent)")
-#: metric name stems of a mesh (two-sided contact) and of a bearing
-METRIC_KINDS = {"mesh": ("impacts_drive", "impacts_back", "impact_velocity_rms",
-                         "impact_velocity_max", "contact_fraction", "rattle"),
-                "bearing": ("unloaded",)}
 
 
 def motion_class(period_n: int, ci=(math.nan, math.nan), *, budget_used: bool = False,
