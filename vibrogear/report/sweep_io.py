@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
-from ..solvers.motion import MOTION_LEGEND
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
 
@@ -56,7 +55,7 @@ def _extra(result) -> dict:
     if result.motion_class is None:
         return {}
     out = dict(motion_class=np.asarray(result.motion_class, np.int64),
-               motion_class_legend=np.asarray(MOTION_LEGEND),
+               motion_class_legend=np.asarray(result.motion_legend),
                lyapunov=_finite(result.lyapunov), lyapunov_ok=np.isfinite(result.lyapunov),
                lyapunov_ci=_finite(np.asarray(result.lyapunov_ci).reshape(N, 2)),
                transient_used=np.asarray(result.transient_used, np.int64),
@@ -104,7 +103,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
                int(result.status[k]), result.message[k], float(result.point_wall[k])]
         if extra:
             ci = np.asarray(result.lyapunov_ci[k], dtype=float)
-            row += [MOTION_LEGEND[int(result.motion_class[k])], float(result.lyapunov[k]),
+            row += [result.motion_legend[int(result.motion_class[k])], float(result.lyapunov[k]),
                     float(ci[0]), float(ci[1]), int(result.transient_used[k]),
                     str(result.settled_by[k])]
             row += [result.metrics[n][k].item() for n in metrics]

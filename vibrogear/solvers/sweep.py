@@ -88,6 +88,11 @@ class SweepResult:
         return self.status == 0
 
     @property
+    def motion_legend(self) -> tuple[str, ...]:
+        """Names of the ``motion_class`` codes."""
+        return MOTION_LEGEND
+
+    @property
     def error_estimate(self) -> dict:
         """Integrator tolerances and the worst periodicity defect of the periodic points."""
         d = self.defect[np.isfinite(self.defect)]
