@@ -61,6 +61,7 @@ class _Problem:
         self.flows = 0
         self.rhs_calls = 0
         self.last_failure = None        # Status of the last failed integration
+        self.rejected = {"angle": 0, "corrector": 0}    # rejected steps by reason
 
     def flow(self, z: np.ndarray) -> PeriodicFlow:
         self.flows += 1
@@ -253,7 +254,9 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
     message += stability_notes(pts, model.param_name)
     return Branch(tuple(pts), n_periods, status, message,
                   2 * np.pi * n_periods / model.omega_per_param,
-                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls},
+                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls,
+                            "rejected_angle": prob.rejected["angle"],
+                            "rejected_corrector": prob.rejected["corrector"]},
                   wall_time=time.perf_counter() - wall)
 
 
@@ -291,6 +294,9 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             angle = np.arccos(np.clip(t_new @ t, -1, 1))
             if angle > method.max_angle and ds > ds_min:
                 got = None
+                prob.rejected["angle"] += 1
+        else:
+            prob.rejected["corrector"] += 1
         if got is None:
             ds *= 0.5
             if ds < ds_min:
