@@ -49,6 +49,8 @@ def test_branch_reaches_range_and_finds_main_folds(branches):
     assert b1.status == Status.LEFT_RANGE and b1.points[-1].param < 0.45 + 0.05
     lps = sorted(p.param for p in _labelled(b1, "LP") if p.param > 0.8)
     assert len(lps) == 2 and lps[0] < lps[1]
+    # the impact pair has a restoring force: no orbit family, no trivial multiplier
+    assert all(p.neutral == 0 for b in branches for p in b.points)
 
 
 def test_special_points_have_their_multiplier(branches):
