@@ -3,12 +3,12 @@ with Floquet stability and LP / PD / NS points (paper Figs 4-8), for any study.
 
 The starting orbit at the range's start end (:func:`starting_orbit`): ``transient_periods``
 excitation periods from the static equilibrium settle the motion; the sweep's period
-detection (:func:`~vibrogear.solvers.sweep.classify_period` on the stroboscopic states of
-``record`` periods) gives its period n (a rattle cycle spans n mesh periods, found from the
-free gear's impacts), and shooting over n periods converges onto it.  Where the settled
-motion is not periodic (chaotic rattle) or that shooting fails, the period-1 orbit that
-continues the static equilibrium is shot from the equilibrium itself: it exists, unstable,
-inside the rattle windows, and its branch shows where stability is lost (PD / NS / LP).  For a dimensional
+detection (:func:`~vibrogear.solvers.sweep.classify_period` on ``RECORD_PERIODS``
+stroboscopic states) gives its period n (a rattle cycle of a free gear spans n mesh
+periods), and shooting over n periods converges onto it.  Where the settled motion is not
+periodic (chaotic rattle) or that shooting fails, the period-1 orbit that continues the
+static equilibrium is shot from the equilibrium itself: it exists, unstable, inside the
+rattle windows, and its branch shows where stability is lost (PD / NS / LP).  For a dimensional
 model (gearbox: states ~1e-5 m, speeds ~1e3 rpm) the arclength is measured in parameter
 units: the parameter is scaled by range / |u|, so ``ds``, ``ds_min``, ``ds_max`` are given in
 the scene's parameter unit (:class:`~vibrogear.config.options.ContinuationSteps`).
@@ -66,14 +66,15 @@ def starting_orbit(model, p0: float, u_static, *, transient_periods: int, option
                 sh = shoot(model, p0, warm.u_end, n_periods=k, options=options, tol=tol,
                            max_iter=max_iter)
                 if sh.converged:
-                    return sh.u0, k, warm.u_end, f"period-{k} orbit from the settled motion" + (
-                        f" ({'; '.join(tried)})" if tried else "")
+                    note = f" ({'; '.join(tried)})" if tried else ""
+                    return sh.u0, k, warm.u_end, f"period-{k} orbit from the settled motion{note}"
                 tried.append(f"period-{k} from the settled motion: {sh.message}")
     else:
         tried.append(f"transient: {warm.message}")
     sh = shoot(model, p0, u_static, options=options, tol=tol, max_iter=max_iter)
     if sh.converged:
-        return sh.u0, 1, u_static, "period-1 orbit from the static equilibrium (" + "; ".join(tried) + ")"
+        note = "; ".join(tried)
+        return sh.u0, 1, u_static, f"period-1 orbit from the static equilibrium ({note})"
     tried.append(f"from the static equilibrium: {sh.message}")
     return None, 1, u_static, "; ".join(tried)
 

@@ -10,8 +10,9 @@ Free gears (orbit families).  A DOF without restoring force that touches nothing
 the period (a free gear floating in its backlash) makes the orbit one of a family: its
 rigid shift v is mapped onto itself, M v = v, and M - I is singular.  The solver borders
 it out (``neutral`` below): where :func:`~.floquet.neutral_directions` finds k such
-directions (positions of zero-frequency modes, found from M itself, so every model is
-covered and a model without them pays nothing), Newton solves
+directions (in modal coordinates a DOF without restoring force is a zero-frequency mode,
+so the search runs over the positions of those modes, tested on M itself: every model is
+covered, and one without zero-frequency modes pays nothing), Newton solves
 
     [[M - I, B], [V^T, 0]] [du; lam] = [-G; 0]
 
@@ -27,8 +28,11 @@ gear does touch a flank during n mesh periods the orbit is isolated and n-period
 alone works, but where it floats (the gear held off both flanks, or a long rattle cycle
 not yet resolved) the family exists for every n, so n-period shooting cannot remove the
 singularity.  The bordering costs one SVD of M - I restricted to the rigid modes per
-Newton step.  The continuation analysis also picks n from the impacts of the settled
-trajectory (:func:`vibrogear.solvers.sweep.classify_period`), so the two work together.
+Newton step (and one full SVD where a neutral direction exists).  The continuation analysis
+also picks n from the settled trajectory's stroboscopic states
+(:func:`vibrogear.solvers.sweep.classify_period`, the sweep's period detection), so the
+two work together.  A family ends where the free coordinate starts touching (a grazing):
+the continuation stops there with GRAZING_END.
 """
 from __future__ import annotations
 
