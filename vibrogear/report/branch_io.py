@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
-from ..solvers.floquet import split_trivial
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 
@@ -41,6 +40,7 @@ def branch_arrays(branches, omega_per_param: float) -> dict:
         "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
         "residual": np.array([p.residual for _, _, p in rows], dtype=float),
         "neutral": np.array([p.neutral for _, _, p in rows], dtype=np.int64),
+        "max_abs_multiplier": np.array([p.max_abs_multiplier for _, _, p in rows], dtype=float),
     }
 
 
@@ -63,12 +63,11 @@ def write_branches(branches, omega_per_param: float, out_dir) -> dict:
     w = csv.writer(text, lineterminator="\n")
     w.writerow(CSV_COLUMNS)
     for k in range(arrays["param"].size):
-        mu = np.abs(split_trivial(arrays["floquet"][k], int(arrays["neutral"][k]))[0])
         w.writerow([_cell(v) for v in (
             int(arrays["branch"][k]), int(arrays["n_periods"][k]), float(arrays["param"][k]),
             float(arrays["period"][k]), bool(arrays["stable"][k]), str(arrays["label"][k]),
             float(arrays["qmin"][k]), float(arrays["qmax"][k]), int(arrays["impacts"][k]),
-            float(mu.max()) if mu.size else 0.0, float(arrays["residual"][k]),
+            float(arrays["max_abs_multiplier"][k]), float(arrays["residual"][k]),
             int(arrays["neutral"][k]))])
     csv_path = atomic_write_bytes(out_dir / "branch.csv", text.getvalue().encode())
     return {"npz": npz, "csv": csv_path}

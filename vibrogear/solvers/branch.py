@@ -12,7 +12,7 @@ import numpy as np
 
 from ..config.options import IntegrationOptions
 from ..models.reduced import ReducedModel
-from .floquet import stability
+from .floquet import split_trivial, stability
 from .status import Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "BranchPoint", "Branch", "SpecialPoint",
@@ -80,6 +80,12 @@ class BranchPoint:
     def stable(self) -> bool:
         """Orbitally stable: the nontrivial multipliers inside the unit circle."""
         return stability(self.floquet, trivial=self.neutral)
+
+    @property
+    def max_abs_multiplier(self) -> float:
+        """Largest |multiplier| among the nontrivial ones (those that decide stability)."""
+        mu = np.abs(split_trivial(self.floquet, self.neutral)[0])
+        return float(mu.max()) if mu.size else 0.0
 
 
 @dataclass(frozen=True, eq=False)
