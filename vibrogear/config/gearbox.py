@@ -83,7 +83,7 @@ from .options import RPM, Parameter
 from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
-           "ExternalCouplingConfig", "ReductionAccuracyConfig", "BEARING_EXPONENTS"]
+           "ExternalCouplingConfig", "BEARING_EXPONENTS"]
 
 #: contact-law exponent of each bearing type ("spring" has no contacts)
 BEARING_EXPONENTS = {"ball": 1.5, "roller": 10.0 / 9.0, "linear": 1.0}
@@ -399,28 +399,3 @@ class GearboxConfig:
             elif gb.free:
                 gear_p[b] = -gear_p[a] * ga.teeth / gb.teeth
         return [float(p) for p in shaft_p], [float(p) for p in gear_p]
-
-
-@dataclass(frozen=True, kw_only=True)
-class ReductionAccuracyConfig:
-    """Reduction-level study: master-mode counts -> frequency error, response error against
-    the largest level, and run time; plus the linearised reduced model against the full
-    (non-reduced) linearised model (all housing DOF) below ``f_max_hz``."""
-    shaft_counts: tuple[int, ...] = spec((10, 20, 30), min_len=1, max_len=20, ge=7, le=10_000,
-                                         doc="master modes per shaft, one entry per level")
-    housing_counts: tuple[int, ...] = spec((20, 50, 100), min_len=1, max_len=20, ge=1,
-                                           le=10_000, doc="housing master modes per level")
-    rpm: float = spec(gt=0.0, le=1e6, doc="speed of the response comparison")
-    transient_periods: int = spec(50, ge=0, le=100_000, doc="mesh periods dropped")
-    record_periods: int = spec(20, ge=1, le=100_000, doc="mesh periods compared")
-    f_max_hz: float = spec(5000.0, gt=0.0, doc="modes compared up to this frequency")
-    full_model: bool = spec(True, doc="also compare with the full linearised model "
-                                      "(assembles the housing's K and M)")
-    frequency_level: bool = spec(True, doc="also the level of gearbox.master_modes = "
-                                 "\"frequency\" (with and without the static correction)")
-
-    def validate(self, path: str) -> None:
-        if len(self.shaft_counts) != len(self.housing_counts):
-            raise ConfigError(f"{path}.housing_counts", f"needs one entry per level: "
-                              f"{len(self.shaft_counts)} (as shaft_counts), got "
-                              f"{len(self.housing_counts)}")

@@ -230,7 +230,7 @@ class HousingConfig:
         for k in ("file", "fixed_region"):
             if getattr(self, k) is not None:
                 raise ConfigError(f"{p}.{k}", "only for an imported housing (source = 'step', 'mesh' or "
-                                  f"'modal'); the parametric housing is clamped at its base")
+                                  "'modal'); the parametric housing is clamped at its base")
         if not self.bores:
             raise ConfigError(f"{p}.bores", "needs at least 1 entries, got 0 (the parametric housing is "
                               "built around its bores)")

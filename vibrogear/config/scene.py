@@ -7,13 +7,14 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
-from .gearbox import GearboxConfig, ReductionAccuracyConfig
+from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
-                       IntegrationOptions, ReportConfig, RpmContinuationConfig, RpmSweepConfig,
+                       IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
+                       RpmContinuationConfig, RpmSweepConfig,
                        RpmTimeResponseConfig, SceneInfo, ShootingOptions, SweepConfig,
                        TimeResponseConfig)
 

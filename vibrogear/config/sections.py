@@ -20,7 +20,7 @@ from .base import ConfigError, check_name, spec
 from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
                       Parameter, ShootingOptions, SweepOptions, check_range)
 
-__all__ = ["SceneInfo", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
+__all__ = ["SceneInfo", "ReductionAccuracyConfig", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
            "SweepSettings", "ContinuationSettings", "TimeResponseSettings", "with_parameter",
            "SweepConfig", "ContinuationConfig", "TimeResponseConfig", "RpmSweepConfig",
            "RpmContinuationConfig", "RpmTimeResponseConfig", "ReportConfig",
@@ -182,3 +182,28 @@ class CriticalDampingConfig:
         return ContinuationOptions(param_min=self.omega_min, param_max=self.omega_max,
                                    ds=self.ds, ds_max=self.ds_max, max_points=self.max_points,
                                    period_doubling_branch=False)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReductionAccuracyConfig:
+    """Reduction-level study: master-mode counts -> frequency error, response error against
+    the largest level, and run time; plus the linearised reduced model against the full
+    (non-reduced) linearised model (all housing DOF) below ``f_max_hz``."""
+    shaft_counts: tuple[int, ...] = spec((10, 20, 30), min_len=1, max_len=20, ge=7, le=10_000,
+                                         doc="master modes per shaft, one entry per level")
+    housing_counts: tuple[int, ...] = spec((20, 50, 100), min_len=1, max_len=20, ge=1,
+                                           le=10_000, doc="housing master modes per level")
+    rpm: float = spec(gt=0.0, le=1e6, doc="speed of the response comparison")
+    transient_periods: int = spec(50, ge=0, le=100_000, doc="mesh periods dropped")
+    record_periods: int = spec(20, ge=1, le=100_000, doc="mesh periods compared")
+    f_max_hz: float = spec(5000.0, gt=0.0, doc="modes compared up to this frequency")
+    full_model: bool = spec(True, doc="also compare with the full linearised model "
+                                      "(assembles the housing's K and M)")
+    frequency_level: bool = spec(True, doc="also the level of gearbox.master_modes = "
+                                 "\"frequency\" (with and without the static correction)")
+
+    def validate(self, path: str) -> None:
+        if len(self.shaft_counts) != len(self.housing_counts):
+            raise ConfigError(f"{path}.housing_counts", f"needs one entry per level: "
+                              f"{len(self.shaft_counts)} (as shaft_counts), got "
+                              f"{len(self.housing_counts)}")
