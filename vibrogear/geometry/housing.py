@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
+from ..config.base import ConfigError
 from ..config.housing import HousingConfig
 
 __all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",
@@ -133,6 +135,30 @@ def _fail(gmsh, exc: Exception) -> MeshingError:
     return MeshingError(f"gmsh failed: {msg}")
 
 
+@contextmanager
+def gmsh_session(verbose: bool = False):
+    """An initialised gmsh, finalised on exit whatever happens.  gmsh's own failures (plain
+    Exceptions) become a MeshingError carrying gmsh's last error lines; MeshingError and
+    ConfigError raised by the caller pass through unchanged."""
+    gmsh = _start(verbose)
+    try:
+        yield gmsh
+    except (MeshingError, ConfigError):
+        raise
+    except Exception as exc:
+        raise _fail(gmsh, exc) from None
+    finally:
+        gmsh.logger.stop()
+        gmsh.finalize()
+
+
+def write_msh(gmsh, path: Path) -> None:
+    """Write the current mesh as gmsh .msh 4.1 (creating the folder)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.write(str(path))
+
+
 def _surfaces_in_box(gmsh, lo, hi) -> list[int]:
     ents = gmsh.model.getEntitiesInBoundingBox(lo[0] - _TOL, lo[1] - _TOL, lo[2] - _TOL,
                                                hi[0] + _TOL, hi[1] + _TOL, hi[2] + _TOL, 2)
@@ -179,19 +205,13 @@ def write_housing_step(cfg: HousingConfig, path: str | Path) -> Path:
     """The parametric housing's solid as a STEP file in millimetres (what a CAD system exports):
     gmsh writes its model coordinates with a millimetre unit label, so the model is built in mm."""
     path = Path(path)
-    gmsh = _start(False)
-    try:
+    with gmsh_session(False) as gmsh:
         # OCC's STEP unit is process-wide: after an import in metres the writer would convert
         gmsh.option.setString("Geometry.OCCTargetUnit", "MM")
         gmsh.model.add("housing")
         _housing_solid(gmsh, cfg, scale=1000.0)  # in mm: OCC's dilation approximates cylinders
         path.parent.mkdir(parents=True, exist_ok=True)
         gmsh.write(str(path))
-    except Exception as exc:
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
     return path
 
 
@@ -199,8 +219,7 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
     """Build, mesh and write the housing to ``path`` (.msh).  Raises MeshingError."""
     path = Path(path)
     t0 = time.perf_counter()
-    gmsh = _start(verbose)
-    try:
+    with gmsh_session(verbose) as gmsh:
         gmsh.model.add("housing")
         _housing_solid(gmsh, cfg)
         L, W = cfg.length, cfg.width
@@ -238,16 +257,7 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
         n_tets = sum(len(x) for x in tags)
         if n_tets == 0:
             raise MeshingError("gmsh produced no tetrahedra")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    except MeshingError:
-        raise
-    except Exception as exc:  # gmsh raises plain Exception carrying its last error
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
+        write_msh(gmsh, path)
     return HousingMesh(path, BASE_TAG, tuple(bore_tags), VOLUME_TAG, n_nodes, n_tets,
                        time.perf_counter() - t0)
 
@@ -286,8 +296,7 @@ def build_beam_mesh(length: float, width: float, height: float, path: str | Path
     """A solid cantilever along x, clamped at x = 0 (group BASE_TAG); no bores."""
     path = Path(path)
     t0 = time.perf_counter()
-    gmsh = _start(verbose)
-    try:
+    with gmsh_session(verbose) as gmsh:
         gmsh.model.add("beam")
         vol = gmsh.model.occ.addBox(0, 0, 0, length, width, height)
         gmsh.model.occ.synchronize()
@@ -299,14 +308,7 @@ def build_beam_mesh(length: float, width: float, height: float, path: str | Path
         gmsh.model.mesh.generate(3)
         n_nodes = len(gmsh.model.mesh.getNodes()[0])
         n_tets = sum(len(x) for x in gmsh.model.mesh.getElements(3)[1])
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    except Exception as exc:
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
+        write_msh(gmsh, path)
     return HousingMesh(path, BASE_TAG, (), VOLUME_TAG, n_nodes, n_tets, time.perf_counter() - t0)
 
 
@@ -316,8 +318,7 @@ def read_msh_arrays(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarra
     Node indices are 0-based rows of ``x``; the vertex order is gmsh's, which for linear
     tetrahedra and triangles is also dolfinx's.
     """
-    gmsh = _start(False)
-    try:
+    with gmsh_session(False) as gmsh:
         gmsh.merge(str(path))
         tags, coords, _ = gmsh.model.mesh.getNodes()
         index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
@@ -336,10 +337,5 @@ def read_msh_arrays(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarra
                     f = index[nodes.astype(np.int64)].reshape(-1, 3)
                     facets.append(f)
                     values.append(np.full(len(f), ptag, dtype=np.int32))
-    except Exception as exc:
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
     return (x, np.vstack(tets), np.vstack(facets) if facets else np.zeros((0, 3), np.int64),
             np.concatenate(values) if values else np.zeros(0, np.int32))

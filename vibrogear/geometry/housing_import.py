@@ -31,8 +31,8 @@ import numpy as np
 
 from ..config.base import ConfigError
 from ..config.housing import LENGTH_UNITS, HousingConfig
-from .housing import (BASE_TAG, BORE_TAG0, VOLUME_TAG, BoreGeometry, HousingMesh, MeshingError, _fail,
-                      _start, size_field)
+from .housing import (BASE_TAG, BORE_TAG0, VOLUME_TAG, BoreGeometry, HousingMesh, MeshingError,
+                      gmsh_session, size_field, write_msh)
 
 __all__ = ["ImportedHousing", "build_mesh", "mesh_bores", "mesh_info", "save_layout", "build_step_mesh",
            "build_imported_mesh", "read_tet_mesh", "bore_segments", "segment_bores",
@@ -158,8 +158,7 @@ def build_step_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = Fal
     """Import ``cfg.file`` (STEP) with OCC in metres, tag, mesh (P2 rules) and write ``path`` (.msh)."""
     path, file = Path(path), str(cfg.file)
     t0 = time.perf_counter()
-    gmsh = _start(verbose)
-    try:
+    with gmsh_session(verbose) as gmsh:
         gmsh.option.setString("Geometry.OCCTargetUnit", "M")
         occ = gmsh.model.occ
         try:
@@ -204,16 +203,7 @@ def build_step_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = Fal
         n_tets = sum(len(x) for x in gmsh.model.mesh.getElements(3)[1])
         if n_tets == 0:
             raise MeshingError(f"{file}: gmsh produced no tetrahedra")
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    except (ConfigError, MeshingError):
-        raise
-    except Exception as exc:
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
+        write_msh(gmsh, path)
     info = {"source": "step", "file": file, "unit": "STEP file's own, converted to m", "solids": n_solids,
             "volume_m3": volume, "bbox_m": [list(bbox[:3]), list(bbox[3:])], "boundary_faces": len(faces),
             "fixed_faces": len(fixed), "bore_faces": [len(g) for g in groups]}
@@ -317,8 +307,7 @@ def write_tagged_msh(path: str | Path, x: np.ndarray, tets: np.ndarray,
     """Write linear tetrahedra (group VOLUME_TAG) and tagged triangles (one physical group per
     (tag, facets) pair) as gmsh .msh 4.1 through gmsh's discrete entities."""
     path = Path(path)
-    gmsh = _start(False)
-    try:
+    with gmsh_session(False) as gmsh:
         gmsh.model.add("imported")
         gmsh.model.addDiscreteEntity(3, 1)
         gmsh.model.mesh.addNodes(3, 1, np.arange(1, len(x) + 1), np.ascontiguousarray(x).ravel())
@@ -330,14 +319,7 @@ def write_tagged_msh(path: str | Path, x: np.ndarray, tets: np.ndarray,
             gmsh.model.mesh.addElementsByType(ent, 2, np.arange(next_el, next_el + len(f)), (f + 1).ravel())
             next_el += len(f)
             gmsh.model.addPhysicalGroup(2, [ent], tag)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-        gmsh.write(str(path))
-    except Exception as exc:
-        raise _fail(gmsh, exc) from None
-    finally:
-        gmsh.logger.stop()
-        gmsh.finalize()
+        write_msh(gmsh, path)
     return path
 
 
