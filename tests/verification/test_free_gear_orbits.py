@@ -174,9 +174,11 @@ def test_rattle_cascade_agrees_with_settled_integration(rattle):
     b1, b2 = res.branches[0], res.branches[1]
     pd1 = [p.param for p in b1.points if p.label == "PD"]
     assert len(pd1) == 1 and b2.n_periods == 2
-    assert b2.status == Status.CASCADE, b2.message
+    # the period-2 branch goes on through its own PD (the cascade's next step) to its end
+    assert b2.status in (Status.REJOINED, Status.LEFT_RANGE), b2.message
     pd2 = [p.param for p in b2.points if p.label == "PD"]
-    assert len(pd2) == 1 and pd2[0] < pd1[0]
+    assert len(pd2) >= 1 and pd2[0] < pd1[0]
+    assert b2.points[-1].label != "PD"                       # not ended at the PD
     # a multiplier at -1 at each PD (finite differences of the flow, 1 and 2 periods)
     p1 = next(p for p in b1.points if p.label == "PD")
     p2 = next(p for p in b2.points if p.label == "PD")

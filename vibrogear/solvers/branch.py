@@ -92,7 +92,7 @@ class BranchPoint:
 class Branch:
     points: tuple           # BranchPoint, in order of continuation
     n_periods: int          # 1: period-1 branch, 2: period-2 branch
-    status: Status          # LEFT_RANGE / REJOINED / GRAZING_END / CASCADE when done, else
+    status: Status          # LEFT_RANGE / REJOINED / GRAZING_END when done, else
     #                         why it stopped
     message: str
     period_scale: float     # period of the orbit = n_periods * 2 pi / (omega_per_param * param)

@@ -9,8 +9,9 @@ Neimark-Sacker points (NS: prod_{i<j}(mu_i mu_j - 1) changes sign with a complex
 pair on the unit circle), each located by bisection in arclength; where the stable orbit
 ends at an NS (onto a torus) the branch's message says so.  At the first PD the solver
 switches onto the period-2n branch (the shooting problem over 2nT, started along the flip
-eigenvector, orthogonal to the period-n tangent) and continues it; a PD on that branch
-ends it as a cascade (CASCADE).
+eigenvector, orthogonal to the period-n tangent) and continues it until it rejoins the
+period-n branch (or leaves the range); a PD on that branch (the next step of a cascade) is
+labelled and the branch goes on through it: the period-2n orbits beyond it exist, unstable.
 
 Orbit families (a free gear that touches nothing): the k neutral directions V of the
 orbit (:meth:`.shooting.PeriodicFlow.neutral`) are bordered out of the augmented system,
@@ -335,9 +336,6 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                                                              k_new)["NS_valid"]):
                     n_points += 1
                     emit(_point(prob, zl, fl, tl, itl, resl, label=which))
-                    if which == "PD" and doubled:
-                        return Status.CASCADE, (f"{Status.CASCADE.message}: PD at "
-                                                f"{model.param_name} = {zl[-1] * scale:.6g}")
         ds_used = ds
         ds = min(ds * 1.5, ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
         ds = max(ds, ds_min)

@@ -37,7 +37,6 @@ class Status(IntEnum):
     NO_START = 10               # continuation: no starting orbit
     SWITCH_FAILED = 11          # continuation: could not switch onto the period-2 branch
     GRAZING_END = 12            # continuation: the branch ends at a grazing contact
-    CASCADE = 13                # continuation: the period-2n branch doubles again (cascade)
 
     @property
     def message(self) -> str:
@@ -76,12 +75,9 @@ MESSAGES = {
     Status.SWITCH_FAILED: "could not switch onto the period-2 branch",
     Status.GRAZING_END: "the branch ends at a grazing contact (a contact starts or stops "
                         "touching: the flow is not differentiable there)",
-    Status.CASCADE: "period doubling again on the period-doubled branch (a cascade towards "
-                    "chaos)",
 }
 
-SUCCESS = frozenset({Status.OK, Status.LEFT_RANGE, Status.REJOINED, Status.GRAZING_END,
-                     Status.CASCADE})
+SUCCESS = frozenset({Status.OK, Status.LEFT_RANGE, Status.REJOINED, Status.GRAZING_END})
 
 
 def from_code(code: int) -> Status:
