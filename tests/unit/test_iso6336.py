@@ -199,7 +199,12 @@ def test_low_contact_ratio_is_flagged():
     """ISO states c_gamma_alpha = c'(0.75 eps_alpha + 0.25) for eps_alpha >= 1.2; below it
     the summary carries a note (h_aP = 0.6 m_n: eps_alpha = 1.10 for 40 / 80 teeth)."""
     rec = build_gearbox(_scene(stiffness="iso6336", addendum=0.6)).mesh_stiffness_summary()[0]
-    assert rec["eps_alpha"] == pytest.approx(1.1045, abs=1e-3) and "1.2" in rec["note"]
+    # the involute closed form, written out: (g_a1 + g_a2 - a sin alpha) / (pi m cos alpha)
+    m, alpha, r1, r2 = 0.002, math.radians(20.0), 0.04, 0.08
+    g = sum(math.sqrt((r + 0.6 * m) ** 2 - (r * math.cos(alpha)) ** 2) for r in (r1, r2))
+    eps = (g - (r1 + r2) * math.sin(alpha)) / (math.pi * m * math.cos(alpha))
+    assert eps == pytest.approx(1.1045, abs=1e-4)
+    assert rec["eps_alpha"] == pytest.approx(eps, rel=1e-9) and "1.2" in rec["note"]
     assert build_gearbox(_scene()).mesh_stiffness_summary()[0]["note"] == ""
 
 
