@@ -41,7 +41,19 @@ def test_analysis_order_changes_no_result(tmp_path):
     assert s1["results"]["continuation"]["folds"] == s2["results"]["continuation"]["folds"]
     for out in (a, b):
         assert (out / "branch_max.png").stat().st_size > 1000
+        assert (out / "bifurcation_branches.png").stat().st_size > 1000
         assert not (out / "sweep.partial.jsonl").exists()     # removed once sweep.npz exists
+
+
+def test_continuation_alone_overlays_the_sweep_already_in_the_folder(tmp_path):
+    """``continue`` after ``sweep`` into the same folder: the combined figure is drawn from
+    the sweep.npz there; into an empty folder there is none."""
+    assert _run(tmp_path, "a", "--set", 'scene.analyses=["sweep"]')[0] == 0
+    code, out, s = _run(tmp_path, "a", "--set", 'scene.analyses=["continuation"]')
+    assert code == 0 and "branches_png" in s["results"]["continuation"]["files"]
+    assert (out / "bifurcation_branches.png").stat().st_size > 1000
+    code, out, s = _run(tmp_path, "b", "--set", 'scene.analyses=["continuation"]')
+    assert code == 0 and not (out / "bifurcation_branches.png").exists()
 
 
 def test_continuation_liouville_identity(tmp_path):

@@ -11,11 +11,12 @@ import numpy as np
 
 from .figure import new_figure, save_figure
 
-__all__ = ["plot_branches"]
+__all__ = ["plot_branches", "draw_branches", "branch_legend"]
 
 _MARK = {"LP": ("^", "black"), "PD": ("s", "tab:purple"), "NS": ("D", "tab:orange"),
          "BP": ("o", "tab:brown")}
-_COLOR = {1: "tab:blue", 2: "tab:green"}
+_COLOR = {1: "tab:blue", 2: "tab:green", 3: "tab:olive", 4: "tab:pink", 5: "tab:cyan",
+          6: "tab:brown", 8: "tab:gray"}
 
 
 def _segments(x, y, stable):
@@ -26,6 +27,37 @@ def _segments(x, y, stable):
             lo = max(start - 1, 0) if start > 0 else 0
             yield x[lo:k], y[lo:k], bool(stable[start])
             start = k
+
+
+def draw_branches(ax, arrays, quantity, *, label_points: bool = False, lw_scale=1.0):
+    """Every branch of ``arrays`` (branch.npz's) on ``ax``: ``quantity`` against param,
+    stable solid, unstable dashed, special points marked (and named: ``label_points``)."""
+    _draw(ax, arrays, quantity, lw_scale)
+    if label_points:
+        label = np.asarray(arrays["label"]).astype(str)
+        for lab, (_, col) in _MARK.items():
+            for xv, yv in zip(np.asarray(arrays["param"])[label == lab],
+                              np.asarray(arrays[quantity])[label == lab]):
+                ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4),
+                            fontsize=7, color=col)
+
+
+def branch_legend(arrays) -> list:
+    """Legend handles: each period's stable / unstable line style, the special points."""
+    from matplotlib.lines import Line2D
+    nper = np.asarray(arrays["n_periods"])
+    stable = np.asarray(arrays["stable"], dtype=bool)
+    label = np.asarray(arrays["label"]).astype(str)
+    handles = []
+    for n in np.unique(nper):
+        col = _COLOR.get(int(n), "tab:gray")
+        for s, ls, word in ((True, "-", "stable"), (False, "--", "unstable")):
+            if np.any((nper == n) & (stable == s)):
+                handles.append(Line2D([], [], color=col, ls=ls,
+                                      label=f"period-{int(n)} branch {word}"))
+    handles += [Line2D([], [], marker=mk, color=col, ls="none", mfc="none", label=lab)
+                for lab, (mk, col) in _MARK.items() if np.any(label == lab)]
+    return handles
 
 
 def _draw(ax, arrays, quantity, lw_scale=1.0):

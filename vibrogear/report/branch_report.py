@@ -1,7 +1,11 @@
 """Files and figures of a continuation (any study): ``branch.npz``, ``branch.csv`` and the
 branch figures ``branch_max.png`` / ``branch_min.png`` (maxima and minima of the monitored
 quantity along the branches, stable solid, unstable dashed, LP/PD/NS marked) in its display
-unit, with the sweep points overlaid when the scene ran ``sweep`` before."""
+unit, with the sweep points overlaid when the scene ran ``sweep`` before; with a sweep (run
+before in the same scene, or its ``sweep.npz`` already in the output folder) also
+``bifurcation_branches.png/.svg``: the sweep's bifurcation diagram (points up and down,
+motion-class band, impacts per period of each mesh, rattle intensity) with the branches
+overlaid (stable solid, unstable dashed, LP / PD / NS marked)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -10,19 +14,20 @@ import numpy as np
 
 from .branch_io import branch_arrays, write_branches
 from .branch_plots import plot_branches
-from .sweep_io import sweep_arrays
-from .sweep_report import display_arrays
+from .sweep_io import read_sweep_npz, sweep_arrays
+from .sweep_report import display_arrays, draw_bifurcation
 
-__all__ = ["write", "plot_branch_figures"]
+__all__ = ["write", "plot_branch_figures", "plot_combined"]
 
 
-def plot_branch_figures(result, out, sweep=None) -> list[Path]:
-    """Both branch figures; ``sweep``: a sweep analysis' result to overlay."""
+def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
+    """Both branch figures; ``sweep``: a sweep analysis' result to overlay (or
+    ``sweep_data``: its arrays in display units)."""
     study = result.study
     mon = study.monitor
     arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
                             mon.scale, ("qmin", "qmax"))
-    sw = None if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
+    sw = sweep_data if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
     lines = tuple(mon.lines)
     if mon.zero_line:
         near = bool(lines) and np.nanmin(arrays["qmin"], initial=0.0) < 0.5 * min(lines)
@@ -35,11 +40,37 @@ def plot_branch_figures(result, out, sweep=None) -> list[Path]:
     return paths
 
 
+def plot_combined(result, out, sweep_data: dict) -> list[Path]:
+    """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
+    branches of ``result`` overlaid."""
+    study = result.study
+    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+                            study.monitor.scale, ("qmin", "qmax"))
+    return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
+                            branches=arrays)
+
+
+def _sweep_of(previous, out, study):
+    """Display arrays of the sweep run before in this scene, else of a ``sweep.npz`` in
+    ``out`` over the same parameter, else None."""
+    sweep = (previous or {}).get("sweep")
+    if sweep is not None:
+        return display_arrays(sweep_arrays(sweep.result.sweep), study.monitor.scale)
+    path = Path(out) / "sweep.npz"
+    if path.is_file():
+        data = read_sweep_npz(path)
+        if str(data.get("param_name", study.model.param_name)) == study.model.param_name:
+            return display_arrays(data, study.monitor.scale)
+    return None
+
+
 def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
     paths = write_branches(r.branches, r.study.model.omega_per_param, out)
-    sweep = (previous or {}).get("sweep")
-    plot_branch_figures(r, out, sweep=None if sweep is None else sweep.result)
+    data = _sweep_of(previous, out, r.study)
+    plot_branch_figures(r, out, sweep_data=data)
     files = {k: str(v) for k, v in paths.items()}
     files["png"] = [str(Path(out) / "branch_max.png"), str(Path(out) / "branch_min.png")]
+    if data is not None:
+        files["branches_png"] = str(plot_combined(r, out, data)[0])
     return files

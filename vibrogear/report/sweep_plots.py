@@ -8,6 +8,10 @@ direction where the group's own class differs: a loaded mesh can be period-1 whi
 gear rattles), with a legend.  Then one axis per mesh (two-sided contact): drive-flank
 (filled) and back-flank (open) impacts per excitation period; last, where any mesh
 rattles, the impact energy per period of each mesh (log scale; see solvers/motion.py).
+
+With ``branches`` (the arrays of a continuation's ``branch.npz``, same display unit) the
+top panel also carries the continuation branches' maxima and minima: stable solid,
+unstable dashed, LP / PD / NS marked (:mod:`.branch_plots`).
 """
 from __future__ import annotations
 
@@ -77,7 +81,8 @@ def _rect(x, y, w, h, color):
 def plot_bifurcation(data, path, *, param_label: str | None = None,
                      deformation_label: str = "monitored deformation",
                      zero_line: bool = True, bounds=None, title: str | None = None,
-                     formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+                     branches: dict | None = None, formats=("png", "svg"),
+                     dpi: int = 150) -> list[Path]:
     """Draw the bifurcation diagram of ``data`` (a SweepResult or the dict of a read
     ``sweep.npz``) to ``path`` with each suffix in ``formats``; returns the paths.
 
@@ -153,12 +158,20 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
                    label=f"{d}: drive flank")
             a.plot(param[sel], bk[sel], st["marker"], ms=3.5, color=st["color"],
                    mfc="none", lw=0, label=f"{d}: back flank")
+    if branches is not None and np.size(branches["param"]):
+        from .branch_plots import branch_legend, draw_branches
+        for q in ("qmax", "qmin"):
+            draw_branches(ax, branches, q, label_points=q == "qmax")
+        ax.legend(handles=ax.get_legend_handles_labels()[0] + branch_legend(branches),
+                  loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
+                  borderaxespad=0.0)
+    else:
+        ax.legend(loc="best", fontsize=8, markerscale=1.5)
     if zero_line:
         ax.axhline(0.0, color="k", lw=0.8)
     for b in (bounds or ()):
         ax.axhline(float(b), color="0.4", lw=0.8, ls="--")
     ax.set_ylabel(deformation_label)
-    ax.legend(loc="best", fontsize=8, markerscale=1.5)
     ax.grid(alpha=0.3)
     if title:
         ax.set_title(title, fontsize=10)
