@@ -203,8 +203,14 @@ def test_single_stage_small_housing_reduction_accuracy(tmp_path):
     # largest level: every full-model mode below 5 kHz found within a few % and MAC > 0.9
     assert large["max_freq_error"] < 0.04 and large["min_mac"] > 0.9
     assert large["max_freq_error"] < small["max_freq_error"]
-    assert large["response_error"] == 0.0                  # it is the reference response
-    assert np.isfinite(small["response_error"])
+    # the reference response: pointwise where periodic, else by its statistics only
+    assert large["statistics_error"] == 0.0
+    assert small["judged_by"] == large["judged_by"]
+    if large["judged_by"] == "pointwise":
+        assert large["response_error"] == 0.0 and np.isfinite(small["response_error"])
+    else:
+        assert small["response_error"] is None             # no pointwise error on chaos
+    assert np.isfinite(small["statistics_error"]) and small["statistics_error"] > 0
     rows = _read_csv(out / "reduction_modes.csv")
     assert len(rows) == n_ref
     f_full = np.array([float(r["f_full_hz"]) for r in rows])

@@ -52,7 +52,7 @@ from .contact_eval import contact_kinematics
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
            "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics",
            "metrics_with_errors", "classify_period", "count_clusters",
-           "monitored_deformation", "best_defect"]
+           "monitored_deformation", "best_defect", "deformation_statistics", "batch_blocks"]
 
 FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
 MOTION_LEGEND = ("failed", "periodic", "quasi-periodic", "chaotic", "not settled",
@@ -151,9 +151,7 @@ def metrics_with_errors(model: ReducedModel, groups: dict, mode0, events, onset_
     speed = np.asarray(onset_speed, dtype=float)
     full = window_metrics(model, groups, mode0, (t, j, md), speed, t0, t1, period)
     P = int(round((t1 - t0) / period))
-    n = max(1, int(period_n))
-    L = n * max(1, (P // n) // int(blocks))
-    B = P // L
+    L, B = batch_blocks(P, period_n, blocks)
     if B < 2:
         return {**full, **{f"{k}_err": math.nan for k in full}}
     mode = np.array(mode0, dtype=int).copy()
@@ -175,6 +173,46 @@ def metrics_with_errors(model: ReducedModel, groups: dict, mode0, events, onset_
             err[f"{k}_err"] = float(np.std(v, ddof=1) / math.sqrt(v.size))
         else:                                   # no impacts in any block: exactly 0
             err[f"{k}_err"] = 0.0 if v.size == 0 and full[k] == 0.0 else math.nan
+    return {**full, **err}
+
+
+def batch_blocks(periods: int, period_n: int = 0, blocks: int = 8) -> tuple[int, int]:
+    """(L, B): blocks of L whole periods (a multiple of ``period_n`` for a periodic point),
+    B of them, at most about ``blocks``, over a record of ``periods`` periods."""
+    n = max(1, int(period_n))
+    L = n * max(1, (int(periods) // n) // int(blocks))
+    return L, int(periods) // L
+
+
+def deformation_statistics(delta, samples_per_period: int, *, harmonics=(1, 2, 3),
+                           period_n: int = 0, blocks: int = 8) -> dict:
+    """Statistics of a deformation record that converge on chaotic motion: ``rms`` (about
+    its mean: the dynamic deformation) and ``line_<k>x``, the amplitude of the spectral line
+    at k times the excitation frequency (the Fourier coefficient over whole periods,
+    |2/N sum delta exp(-i k W t)|), each with an ``_err`` companion by batch means over
+    blocks of whole periods (:func:`batch_blocks`; NaN with fewer than 2 blocks).
+    ``delta``: S = ``samples_per_period`` equidistant samples per period over whole
+    periods, starting at a period's start (the sample at the record's end left out)."""
+    d = np.asarray(delta, dtype=float).ravel()
+    S = int(samples_per_period)
+    P = d.size // S
+    d = d[:P * S]
+
+    def stats(x):
+        k = np.arange(x.size)
+        out = {"rms": float(np.std(x))}
+        for h in harmonics:
+            c = 2.0 / x.size * np.sum(x * np.exp(-2j * np.pi * h * k / S))
+            out[f"line_{h}x"] = float(abs(c))
+        return out
+
+    full = stats(d)
+    L, B = batch_blocks(P, period_n, blocks)
+    if B < 2:
+        return {**full, **{f"{k}_err": math.nan for k in full}}
+    per = [stats(d[b * L * S:(b + 1) * L * S]) for b in range(B)]
+    err = {f"{k}_err": float(np.std([q[k] for q in per], ddof=1) / math.sqrt(B))
+           for k in full}
     return {**full, **err}
 
 

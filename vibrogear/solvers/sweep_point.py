@@ -49,7 +49,7 @@ from .motion import (FAILED, best_defect, classify_period, contact_groups, count
                      metrics_with_errors, monitored_deformation, motion_class)
 from .status import Status
 
-__all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
+__all__ = ["PointRecord", "run_point", "failed_point", "onset_speeds", "SETTLE_TOL", "NO_CONTRACTION",
            "SETTLE_WINDOW"]
 
 #: settled statistics: mean and std of two windows within this fraction of the range
@@ -124,6 +124,29 @@ def _settled(dense, strob, W: int, max_period: int) -> bool:
     d = [best_defect(strob[len(strob) - (k + 1) * W - 1: len(strob) - k * W], max_period)
          for k in (2, 1, 0)]
     return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
+
+
+def onset_speeds(model, param, start, tr, t_eval, rows, options, counts=None) -> list:
+    """|delta'| of contact ``rows`` at each contact onset of trajectory ``tr`` (from
+    ``start`` at t = 0, dense samples at ``t_eval`` = h, 2h, ..., h = T / S), NaN at the
+    other events: the state at the onset by a short integration from the dense sample
+    before it."""
+    out = []
+    h = float(t_eval[0])
+    for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
+        v = math.nan
+        if md != 0 and int(j) in rows:
+            i = int(math.floor(te / h * (1 + 1e-14))) - 1
+            ts, us = (0.0, start) if i < 0 else (t_eval[i], tr.u[i])
+            if te - ts > 1e-12 * _S_RECORD * h:
+                loc = integrate(model, param, us, ts, te, options=options)
+                if counts is not None:
+                    _count(counts, loc)
+                us = loc.u_end
+            v = abs(float(contact_kinematics(model, param, [te], us[None, :],
+                                             rows=[int(j)])[1][0, 0]))
+        out.append(v)
+    return out
 
 
 def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
@@ -211,21 +234,10 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
         qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
         losses += tr.monitor_losses
         lost_events |= tr.events > tr.event_times.size
-        for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
-            v = math.nan
-            if md != 0 and int(j) in mesh_rows:
-                i = int(math.floor(te / (T / _S_RECORD) * (1 + 1e-14))) - 1
-                ts, us = (0.0, seed) if i < 0 else (t_eval[i], tr.u[i])
-                if te - ts > 1e-12 * T:
-                    loc = integrate(model, param, us, ts, te, options=options)
-                    _count(counts, loc)
-                    us = loc.u_end
-                v = abs(float(contact_kinematics(model, param, [te], us[None, :],
-                                                 rows=[int(j)])[1][0, 0]))
-            ev_t.append(t0 + te)
-            ev_j.append(int(j))
-            ev_m.append(int(md))
-            speeds.append(v)
+        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
+        ev_t += [t0 + te for te in tr.event_times]
+        ev_j += [int(j) for j in tr.event_contacts]
+        ev_m += [int(md) for md in tr.event_modes]
         seed = tr.u_end.copy()
         t0 += k * T
     states = np.concatenate(states)
