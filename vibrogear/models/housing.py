@@ -22,6 +22,7 @@ from ..config.housing import MaterialConfig
 from ..geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
 from .block_lanczos import Breakdown, block_lanczos
 from .housing_result import HousingModes
+from .housing_surface_data import outer_surface
 
 __all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes", "assemble_mesh_matrices"]
 
@@ -44,7 +45,8 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     from mpi4py import MPI
 
     comm = MPI.COMM_WORLD
-    dmesh, V, K, M, _, mass, timings = _assemble(mesh, material, degree, support, foundation_stiffness, comm)
+    dmesh, V, K, M, _, mass, timings, ftags = _assemble(mesh, material, degree, support,
+                                                         foundation_stiffness, comm)
     n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
     from dolfinx import fem  # after _assemble, which sets XDG_CACHE_HOME before the first dolfinx import
 
@@ -74,6 +76,8 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     uh = fem.Function(V)
     pts, pvals, cvals, n_fallback = _bore_values(dmesh, uh, Vloc, bores, comm)
     prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
+    skin = outer_surface(*_surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
+                                          Vloc, comm))
     timings["postprocess"] = time.perf_counter() - t0
 
     shapes_path = None
@@ -94,12 +98,13 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
         n_fallback_points=int(n_fallback), status=status, message=message, converged_reason=reason,
         n_converged=int(nconv), timings=timings, peak_memory_mb=float(peak), n_processes=comm.size,
         shapes_path=shapes_path, preview_points=prev_pts, preview_values=prev_vals,
+        **skin.as_fields(),
     )
 
 
 def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support: str,
               foundation_stiffness: float, comm):
-    """(dolfinx mesh, V, K, M, bcs, mass, timings): Dirichlet rows 1 in K and 0 in M."""
+    """(dolfinx mesh, V, K, M, bcs, mass, timings, facet tags): Dirichlet rows 1 in K, 0 in M."""
     os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
     from mpi4py import MPI
     import dolfinx
@@ -144,7 +149,7 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
     M.assemble()
     mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
     timings["assembly"] = time.perf_counter() - t0
-    return dmesh, V, K, M, bcs, mass, timings
+    return dmesh, V, K, M, bcs, mass, timings, facet_tags
 
 
 def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degree: int = 2,
@@ -161,8 +166,8 @@ def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degre
     comm = MPI.COMM_WORLD
     if comm.size > 1:
         raise HousingSolveError("the full housing matrices are built in serial only (run without mpirun)")
-    dmesh, V, K, M, bcs, mass, timings = _assemble(mesh, material, degree, support, foundation_stiffness,
-                                                    comm)
+    dmesh, V, K, M, bcs, mass, timings, _ = _assemble(mesh, material, degree, support,
+                                                       foundation_stiffness, comm)
     t0 = time.perf_counter()
     n = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
     mask = np.ones(n)
@@ -484,6 +489,45 @@ def _bore_values(dmesh, uh, Vloc, bores, comm):
         cvals[j] = allv[k:k + n].mean(axis=0)
         k += n
     return pts, vals, cvals, n_fallback
+
+
+def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
+    """Exterior facets not tagged ``skip_tags`` (base, bores), gathered on rank 0: their vertex
+    coordinates (nf, 3, 3), ordered so that (b - a) x (c - a) points out of the solid, and each
+    mode's displacement along that normal at the three edge midpoints (nf, 3, m)."""
+    import dolfinx.mesh
+    from dolfinx import cpp
+
+    tdim = dmesh.topology.dim
+    fdim = tdim - 1
+    dmesh.topology.create_connectivity(fdim, tdim)
+    f2c = dmesh.topology.connectivity(fdim, tdim)
+    facets = dolfinx.mesh.exterior_facet_indices(dmesh.topology)
+    facets = facets[facets < dmesh.topology.index_map(fdim).size_local]
+    facets = np.setdiff1d(facets, ftags.indices[np.isin(ftags.values, skip_tags)])
+    x = dmesh.geometry.x
+    cmesh = dmesh._mesh if hasattr(dmesh, "_mesh") else dmesh
+    tri = x[cpp.mesh.entities_to_geometry(cmesh, fdim, facets, False)]        # (nf, 3, 3)
+    cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32)
+    centroid = np.array([x[dmesh.geometry.dofmap.links(c)].mean(axis=0) for c in cells])
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    flip = np.einsum("ij,ij->i", normal, tri[:, 0] - centroid.reshape(-1, 3)) < 0
+    tri[flip] = tri[flip][:, [0, 2, 1]]
+    normal[flip] *= -1.0
+    unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
+    mids = 0.5 * (tri + tri[:, [1, 2, 0]])                                     # edge midpoints
+    pts, where = mids.reshape(-1, 3), np.repeat(cells, 3)
+    vals = np.zeros((len(facets), 3, Vloc.shape[1]))
+    for i in range(Vloc.shape[1]):
+        uh.vector.array[:] = Vloc[:, i]
+        uh.x.scatter_forward()
+        if len(pts):
+            u = uh.eval(pts, where).reshape(-1, 3, 3)
+            vals[:, :, i] = np.einsum("fqc,fc->fq", u, unit)
+    tris, allv = comm.gather(tri, root=0), comm.gather(vals, root=0)
+    if comm.rank != 0:
+        return np.zeros((0, 3, 3)), np.zeros((0, 3, Vloc.shape[1]))
+    return np.concatenate(tris), np.concatenate(allv)
 
 
 def _preview(dmesh, V, uh, Vloc, comm):

@@ -11,6 +11,9 @@ P = the largest rolling-element count; bores with fewer points are padded with N
 - ``bore_centers``        (B, 3)       bore-axis point at the middle of the bore length
 - ``bore_center_values``  (B, 3, m)    bore-centre motion = mean of the ring-point values
 - ``bore_axes``           (B, 3)       unit axis pointing out of the housing
+- ``surface_*``                        the outer surface and the modes' normal displacement
+                                       there (:mod:`.housing_surface_data`; empty arrays when
+                                       the modes come from another program)
 """
 from __future__ import annotations
 
@@ -23,10 +26,12 @@ from typing import Mapping
 
 import numpy as np
 
+from .housing_surface_data import SURFACE_FIELDS, empty_surface_fields
+
 __all__ = ["HousingModes", "save_modes", "load_modes"]
 
 _ARRAYS = ("freqs_hz", "bore_values", "bore_points", "bore_centers", "bore_axes",
-           "bore_center_values", "residuals", "preview_points", "preview_values")
+           "bore_center_values", "residuals", "preview_points", "preview_values") + SURFACE_FIELDS
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -59,6 +64,12 @@ class HousingModes:
     preview_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     preview_values: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
     source_info: Mapping[str, object] = field(default_factory=dict)   # what the housing was made from
+    surface_vertices: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_vertices"])
+    surface_triangles: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_triangles"])
+    surface_centers: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_centers"])
+    surface_areas: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_areas"])
+    surface_weights: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_weights"])
+    surface_values: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_values"])
 
     @property
     def n_modes(self) -> int:
@@ -72,6 +83,11 @@ class HousingModes:
     def damping_ratios(self) -> np.ndarray:
         """Modal damping ratios of B_S = beta K_S: zeta_i = beta omega_i / 2."""
         return 0.5 * self.beta * self.omegas
+
+    @property
+    def has_surface(self) -> bool:
+        """Whether the outer surface and the modes' normal displacement there are known."""
+        return bool(self.surface_areas.size) and self.surface_values.shape[-1] == self.n_modes
 
     def bore(self, i: int) -> np.ndarray:
         """Mode values at the coupling points of bore ``i``: (n_i, 3, m), no padding."""

@@ -34,6 +34,10 @@ __all__ = ["HousingModes", "HousingMatrices", "housing_modes", "housing_matrices
 
 log = logging.getLogger(__name__)
 
+#: layout of the modes / matrices cache entries, part of their keys: entries of an older
+#: layout (1: no outer-surface data) are rebuilt, never misread
+CACHE_FORMAT = 2
+
 
 class HousingNumericalError(ArithmeticError):
     """The housing FE assembly or eigensolve failed numerically; the message says which
@@ -86,7 +90,7 @@ def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
         return cache_key("housing-mesh", geo)
     if stage not in ("modes", "matrices"):
         raise ValueError(f"unknown housing cache stage {stage!r}")
-    return cache_key(f"housing-{stage}", cfg.key_data())
+    return cache_key(f"housing-{stage}", {**cfg.key_data(), "entry_format": CACHE_FORMAT})
 
 
 def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:

@@ -1,0 +1,88 @@
+"""Files of ``nvh``: ``spectra.npz``, ``erp.csv``, ``nvh_waterfall_<quantity>.png``,
+``erp.png`` and ``surface_velocity_<rpm>.xdmf`` / ``.h5`` (ParaView).
+
+``spectra.npz``: ``rpm`` (P,), ``order`` (K,) bin frequency in orders of the first mesh,
+``freq_hz`` (P, K), and per quantity q in ``dte`` [m], ``mesh_force`` [N],
+``bearing_force`` [N]: ``amp_<q>`` (P, channels, K) one-sided amplitudes (bin 0: the mean),
+``channels_<q>`` the channel names, ``parseval_<q>`` the largest relative Parseval error;
+``mesh_hz`` (P, meshes) and ``shaft_hz`` (P, shafts) for order lines.  ``erp.csv``: rpm,
+erp_w, erp_db (only with a housing that has surface data).  The surface file holds the
+outer-surface triangles with the cell data ``v_rms`` [m/s] (RMS normal velocity per facet).
+"""
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from ..analyses.housing_surface import erp_db
+from ..pipeline.files import atomic_write_bytes
+from .nvh_plots import plot_erp, plot_waterfall
+
+__all__ = ["write", "write_surface_velocity"]
+
+_LABELS = {"dte": "dynamic transmission error", "mesh_force": "mesh force",
+           "bearing_force": "bearing force"}
+
+
+def _rss(amp: np.ndarray) -> np.ndarray:
+    """Root sum of squares over the channels: (P, C, K) -> (P, K)."""
+    return np.sqrt(np.sum(np.asarray(amp) ** 2, axis=1))
+
+
+def write_surface_velocity(path, vertices, triangles, v_rms) -> Path:
+    """The outer-surface triangles with the cell data ``v_rms`` as XDMF + HDF5 (meshio)."""
+    import meshio
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = meshio.Mesh(np.asarray(vertices, dtype=float),
+                       [("triangle", np.asarray(triangles, dtype=np.int64))],
+                       cell_data={"v_rms": [np.asarray(v_rms, dtype=float)]})
+    meshio.write(path, mesh, file_format="xdmf")
+    return path
+
+
+def write(scene, outcome, out, previous=None) -> dict:
+    r = outcome.result
+    cfg = scene.nvh
+    out = Path(out)
+    files = {}
+    arrays = {"rpm": r.rpm, "order": r.order, "freq_hz": r.freq_hz, "mesh_hz": r.mesh_hz,
+              "shaft_hz": r.shaft_hz, "shaft_names": np.array(r.shaft_names)}
+    for q, amp in r.amplitudes.items():
+        arrays[f"amp_{q}"] = amp
+        arrays[f"channels_{q}"] = np.array(r.channels[q], dtype=str)
+        arrays[f"parseval_{q}"] = np.float64(r.parseval[q])
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    files["npz"] = str(atomic_write_bytes(out / "spectra.npz", buf.getvalue()))
+    max_hz = cfg.max_order * 1.05 * float(np.max(r.mesh_hz))
+    title = r.study.title if r.study is not None else scene.scene.name
+    for q, amp in r.amplitudes.items():
+        if amp.ndim != 3 or amp.shape[1] == 0:
+            continue
+        label = _LABELS[q] + (" (RSS over channels)" if amp.shape[1] > 1 else "")
+        path = out / f"nvh_waterfall_{q}.png"
+        plot_waterfall(path, r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
+                       max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
+                       max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       title=f"{title}\n{_LABELS[q]}, steady points from {r.source}")
+        files[f"waterfall_{q}"] = str(path)
+    if r.erp_w is not None:
+        lines = ["rpm,erp_w,erp_db"] + [f"{p!r},{w!r},{d!r}" for p, w, d in
+                                        zip(r.rpm.tolist(), r.erp_w.tolist(),
+                                            erp_db(r.erp_w).tolist())]
+        files["erp_csv"] = str(atomic_write_bytes(out / "erp.csv",
+                                                  ("\n".join(lines) + "\n").encode()))
+        plot_erp(out / "erp.png", r.rpm, r.erp_w,
+                 title=f"{title}\nequivalent radiated power of the outer housing surface "
+                       f"(rho c = {cfg.rho_air:g} x {cfg.c_air:g})")
+        files["erp_png"] = str(out / "erp.png")
+        s = r.surface
+        for p, v in r.velocity_fields.items():
+            path = write_surface_velocity(out / f"surface_velocity_{p:.0f}.xdmf", s.vertices,
+                                          s.triangles, v)
+            files[f"surface_velocity_{p:.0f}"] = str(path)
+    return files
