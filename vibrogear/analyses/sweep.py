@@ -98,7 +98,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             record_periods=cfg.record_periods,
             extra_transient_periods=cfg.extra_transient_periods, max_period=cfg.max_period,
             period_tol=cfg.period_tol, options=opts, u0=study.start(params[0]),
-            segments=cfg.segments, workers=cfg.workers, lyapunov=cfg.lyapunov)
+            segments=cfg.segments, workers=cfg.workers, lyapunov=cfg.lyapunov,
+            **({"second_tolerance": True} if cfg.second_tolerance else {}))
     failed = int(np.sum(res.status != 0))
     if failed == res.param.size:
         raise NumericalFailure(f"sweep: all {failed} points failed; first: "
@@ -152,9 +153,12 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
             continue
         k = int(np.nanargmax(v))
         err = res.metrics.get(f"{key}_err")
+        tol = res.metrics.get(f"{key}_tol_err")
         metrics[key] = {"max": float(v[k]), "at": float(res.param[k]),
                         "direction": str(res.direction[k]),
                         "err": _num(err[k]) if err is not None else None}
+        if tol is not None:
+            metrics[key]["tol_err"] = _num(tol[k])
     return {"motion_classes": {n: names.count(n) for n in MOTION_LEGEND if n in names},
             "chaotic_points": chaotic,
             "transient": {"budget": int(budget), "mean_used": _num(np.mean(used))

@@ -107,6 +107,9 @@ class SweepOptions:
                                "(default: all cores; 1: serial; under mpirun: the ranks)")
     lyapunov: bool = spec(True, doc="largest Lyapunov exponent (with its 95 % interval) of "
                           "points without a period: it tells chaotic from quasi-periodic")
+    second_tolerance: bool = spec(False, doc="record every point's window again at rtol/10 "
+                                  "from the same settled state; the change of each statistic "
+                                  "is reported as its tolerance error (<name>_tol_err)")
 
     def __post_init__(self):
         check_fields(self)

@@ -11,7 +11,10 @@
   ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics
   (``impacts_drive_<mesh>``, ``impacts_back_<mesh>``, ``impact_velocity_rms_<mesh>``,
   ``impact_velocity_max_<mesh>``, ``contact_fraction_<mesh>``, ``rattle_<mesh>``,
-  ``unloaded_<bearing>``), each with an ``_err`` companion.  No NaN/inf is ever written:
+  ``unloaded_<bearing>``), each with an ``_err`` companion (batch means over blocks of the
+  record) and, with ``[sweep] second_tolerance``, a ``_tol_err`` companion (the change when
+  the record window is integrated again at rtol / 10 from the same state; also
+  ``qmin_tol_err`` / ``qmax_tol_err``).  No NaN/inf is ever written:
   failed points carry 0 placeholders and ``ok = False`` / ``status < 0``.
 * ``sweep.csv`` repeats the per-point scalars; missing values are empty cells.
 

@@ -137,13 +137,15 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
           done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
           extra_transient_periods: int = 0, segments: int = 1,
           workers: int | None = None, lyapunov: bool = True,
-          settle: bool = True) -> SweepResult:
+          settle: bool = True, second_tolerance: bool = False) -> SweepResult:
     """Sequential continuation of ``model`` over ``params`` in independent units (see the
     module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
 
     ``lyapunov``: the largest Lyapunov exponent of points without a period (their class
     evidence); ``settle``: stop a transient whose statistics have settled (a transient
-    always stops once the stroboscopic map has converged).
+    always stops once the stroboscopic map has converged); ``second_tolerance``: the
+    record window again at rtol / 10 from the same settled state, the change of each
+    statistic (extrema, contact metrics) in ``metrics["<name>_tol_err"]``.
 
     ``segments``: pieces per direction (each starts again from ``u0``).  ``workers``:
     local processes (None: min(units, cores); 1: in this process); under ``mpirun``
@@ -165,7 +167,7 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
                  extra_transient_periods=int(extra_transient_periods), directions=directions,
                  max_period=int(max_period), period_tol=float(period_tol),
                  segments=int(segments), workers=None if workers is None else int(workers),
-                 lyapunov=bool(lyapunov))
+                 lyapunov=bool(lyapunov), second_tolerance=bool(second_tolerance))
     n_states = model.n_states
     seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
     if seed.shape != (n_states,):
@@ -175,7 +177,7 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
               max_period=int(max_period), period_tol=float(period_tol),
               cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
               extra_transient_periods=int(extra_transient_periods), lyapunov=bool(lyapunov),
-              settle=bool(settle))
+              settle=bool(settle), second_tolerance=bool(second_tolerance))
     layout = sweep_units(params.size, directions, int(segments))
     units = [(d, idx, params[list(idx)], seed, {i: done[(d, i)] for i in idx if (d, i) in done})
              for d, idx in layout]

@@ -35,6 +35,7 @@ periods T, so its end state is again at phase 0.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -149,6 +150,76 @@ def onset_speeds(model, param, start, tr, t_eval, rows, options, counts=None) ->
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class _Record:
+    """A record window: its chunks (start state, period-end states, time offset), all
+    period-end states, the end state, monitor extrema and losses, the contact events with
+    the onset speeds."""
+    chunks: list
+    states: np.ndarray
+    end: np.ndarray
+    qmin: float
+    qmax: float
+    losses: int
+    lost_events: bool
+    events: tuple
+    speeds: np.ndarray
+
+
+def _record(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
+    """The record window of R periods in chunks (module docstring): a :class:`_Record`,
+    or (status, message) where the integration failed."""
+    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
+    chunks, states, ev_t, ev_j, ev_m, speeds = [], [], [], [], [], []
+    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
+    seed = np.array(seed, dtype=float)
+    t0 = 0.0
+    while t0 < R * T * (1 - 1e-12):
+        k = min(chunk, R - int(round(t0 / T)))
+        t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        _count(counts, tr)
+        if not tr.ok:
+            return tr.status, tr.message
+        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
+                and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                         and math.isfinite(tr.monitor_max)))):
+            return Status.NONFINITE, "non-finite state or monitor values"
+        ends = tr.u[_S_RECORD - 1::_S_RECORD]
+        chunks.append((seed.copy(), ends, t0))
+        states.append(ends)
+        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
+        losses += tr.monitor_losses
+        lost_events |= tr.events > tr.event_times.size
+        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
+        ev_t += [t0 + te for te in tr.event_times]
+        ev_j += [int(j) for j in tr.event_contacts]
+        ev_m += [int(md) for md in tr.event_modes]
+        seed = tr.u_end.copy()
+        t0 += k * T
+    return _Record(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
+                   (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
+                   np.array(speeds))
+
+
+def _extrema(model, param, rec: _Record, has_monitor) -> tuple[float, float]:
+    """(min, max) of the monitored deformation over a record: the integrator's located
+    extrema and the stroboscopic samples (the samples alone without a monitored contact)."""
+    delta = monitored_deformation(model, param, np.zeros(len(rec.states)), rec.states)
+    if not has_monitor:
+        return float(delta.min()), float(delta.max())
+    return min(rec.qmin, float(delta.min())), max(rec.qmax, float(delta.max()))
+
+
+def _metrics(model, param, u_rec, rec: _Record, groups, R, T, n) -> dict:
+    """The contact metrics of a record with their batch-means errors."""
+    mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
+                  model.contacts.gap_hi, model.contacts.gap_lo)
+    return metrics_with_errors(model, groups, mode0, rec.events, rec.speeds, 0.0, R * T, T,
+                               period_n=n)
+
+
 def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
     """period_n of each contact group from its deformations and rates alone."""
     out = {}
@@ -162,7 +233,8 @@ def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> di
 
 def run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
               max_period, period_tol, cluster_tol, options, keep_states,
-              extra_transient_periods=0, lyapunov=True, settle=True) -> PointRecord:
+              extra_transient_periods=0, lyapunov=True, settle=True,
+              second_tolerance=False) -> PointRecord:
     """One sweep point (module docstring)."""
     wall = time.perf_counter()
     R = int(record_periods)
@@ -209,38 +281,12 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
 
     # ---- record in chunks
     u_rec = seed.copy()
-    chunks = []                        # (start state, period-end states, time offset)
-    states, ev_t, ev_j, ev_m, speeds = [], [], [], [], []
-    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
     groups = contact_groups(model)
-    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
-    t0 = 0.0
     chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
-    while t0 < R * T * (1 - 1e-12):
-        k = min(chunk, R - int(round(t0 / T)))
-        t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
-        t_eval[-1] = k * T
-        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        _count(counts, tr)
-        if not tr.ok:
-            return fail(tr.status, tr.message, used)
-        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
-                and (not has_monitor or (math.isfinite(tr.monitor_min)
-                                         and math.isfinite(tr.monitor_max)))):
-            return fail(Status.NONFINITE, "non-finite state or monitor values", used)
-        ends = tr.u[_S_RECORD - 1::_S_RECORD]
-        chunks.append((seed.copy(), ends, t0))
-        states.append(ends)
-        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
-        losses += tr.monitor_losses
-        lost_events |= tr.events > tr.event_times.size
-        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
-        ev_t += [t0 + te for te in tr.event_times]
-        ev_j += [int(j) for j in tr.event_contacts]
-        ev_m += [int(md) for md in tr.event_modes]
-        seed = tr.u_end.copy()
-        t0 += k * T
-    states = np.concatenate(states)
+    rec = _record(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor)
+    if isinstance(rec, tuple):
+        return fail(*rec, used)
+    chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
 
     # ---- class and evidence
     n, defect = classify_period(states, max_period, period_tol, split=m)
@@ -264,8 +310,6 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
         if logs:
             lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
     cls = motion_class(n, ci, budget_used=settled_by == "budget")
-    mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
-                  model.contacts.gap_hi, model.contacts.gap_lo) if has_monitor else ()
     metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
         if has_monitor else {}
     for key in list(metrics):
@@ -273,17 +317,28 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
         metrics[key.replace("period_n_", "motion_class_")] = motion_class(
             gn, ci, budget_used=settled_by == "budget") if gn > 0 else cls
     if has_monitor:
-        metrics.update(metrics_with_errors(model, groups, mode0,
-                                           (np.array(ev_t), np.array(ev_j, int),
-                                            np.array(ev_m, int)),
-                                           np.array(speeds), 0.0, R * T, T, period_n=n))
-        if lost_events:
+        metrics.update(_metrics(model, param, u_rec, rec, groups, R, T, n))
+        if rec.lost_events:
             msg = "event log full: raise [integration] event_log for the contact metrics"
             metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
                        for k, v in metrics.items()}
+    if second_tolerance:
+        # the record window again at rtol / 10 from the same settled state: the change of
+        # each statistic is its tolerance error
+        fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
+        rec2 = _record(model, param, u_rec, R, T, chunk, groups, fine, counts, has_monitor)
+        tol_err = {k: math.nan for k in ("qmin", "qmax")}
+        if not isinstance(rec2, tuple):
+            e1 = _extrema(model, param, rec, has_monitor)
+            e2 = _extrema(model, param, rec2, has_monitor)
+            tol_err["qmin"], tol_err["qmax"] = abs(e2[0] - e1[0]), abs(e2[1] - e1[1])
+            if has_monitor:
+                m2 = _metrics(model, param, u_rec, rec2, groups, R, T, n)
+                tol_err.update({k: abs(v - metrics[k]) for k, v in m2.items()
+                                if not k.endswith("_err") and k in metrics})
+        metrics.update({f"{k}_tol_err": float(v) for k, v in tol_err.items()})
     delta = monitored_deformation(model, param, np.zeros(R), states)
-    qmin = min(qmin, float(delta.min())) if has_monitor else float(delta.min())
-    qmax = max(qmax, float(delta.max())) if has_monitor else float(delta.max())
+    qmin, qmax = _extrema(model, param, rec, has_monitor)
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
                        losses / R, defect, count_clusters(states, cluster_tol, split=m), 0,
                        msg, seed.copy(), steps=int(counts[0]), rejected=int(counts[1]),
