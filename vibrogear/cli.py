@@ -1,4 +1,4 @@
-"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time SCENE``.
+"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time|map|nvh|runup SCENE``.
 
 Exit codes: 0 done; 1 a numerical failure (the message says where and why) or an analysis
 that produced nothing; 2 invalid input (a scene, an option, an output folder, the cache
@@ -16,7 +16,8 @@ __all__ = ["main", "EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED"]
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 SINGLE = {"sweep": "sweep", "continue": "continuation", "report": "report",
-          "modes": "modes", "campbell": "campbell", "time": "time_response"}
+          "modes": "modes", "campbell": "campbell", "time": "time_response", "map": "map",
+          "nvh": "nvh", "runup": "runup"}
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -9,6 +9,7 @@ without FE parts never imports dolfinx or gmsh.  The contract between them is in
 from __future__ import annotations
 
 import importlib
+import inspect
 import json
 import math
 import platform
@@ -51,6 +52,9 @@ ANALYSIS_TABLE: dict[tuple[str, str], Entry] = {
     ("gearbox", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
     ("gearbox", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
     ("gearbox", "reduction_accuracy"): Entry(f"{_V}.reduction_accuracy:run_reduction_accuracy", None, True),
+    ("gearbox", "nvh"): Entry(f"{_V}.nvh:run", f"{_R}.nvh_report:write", True),
+    ("gearbox", "map"): Entry(f"{_V}.operating_map:run", f"{_R}.map_report:write", True),
+    ("gearbox", "runup"): Entry(f"{_V}.runup:run", f"{_R}.runup_report:write", True),
     ("rotor", "modes"): Entry(f"{_V}.rotor:run_modes"),
     ("rotor", "campbell"): Entry(f"{_V}.rotor:run_campbell"),
     ("housing", "modes"): Entry(f"{_V}.housing:run_modes"),
@@ -140,7 +144,10 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
                 t0 = time.perf_counter()
             fn = _load(entry.analysis)
             args = (study, scene, ctx) if entry.study else (scene, ctx)
-            outcome = _as_outcome(fn(*args))
+            # analyses that read earlier outcomes take them as ``previous`` (read-only)
+            kw = {"previous": MappingProxyType(previous)} \
+                if "previous" in inspect.signature(fn).parameters else {}
+            outcome = _as_outcome(fn(*args, **kw))
             record = dict(outcome.summary)
             if outcome.warnings:
                 record["warnings"] = list(outcome.warnings)

@@ -10,8 +10,11 @@ from .base import ConfigError, build, parse_override, read_toml_file, set_path, 
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
+from .map_section import MapConfig
+from .nvh_section import NvhConfig
 from .options import Parameter
 from .rotor import RotorConfig
+from .runup_section import RunupConfig
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
                        IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
                        RpmContinuationConfig, RpmSweepConfig,
@@ -35,6 +38,9 @@ ANALYSIS_SECTION = {
     "housing_sweep": "housing_sweep",
     "housing_convergence": "housing_convergence",
     "reduction_accuracy": "reduction_accuracy",
+    "nvh": "nvh",
+    "map": "map",
+    "runup": "runup",
 }
 
 #: analysis -> model sections that support it
@@ -49,6 +55,9 @@ ANALYSIS_MODELS = {
     "housing_sweep": ("housing",),
     "housing_convergence": ("housing",),
     "reduction_accuracy": ("gearbox",),
+    "nvh": ("gearbox",),
+    "map": ("gearbox",),
+    "runup": ("gearbox",),
 }
 
 
@@ -69,6 +78,9 @@ class Scene:
     report: ReportConfig | None = spec(None)
     critical_damping: CriticalDampingConfig | None = spec(None)
     reduction_accuracy: ReductionAccuracyConfig | None = spec(None)
+    nvh: NvhConfig | None = spec(None)
+    map: MapConfig | None = spec(None)
+    runup: RunupConfig | None = spec(None)
 
     @property
     def parameter(self) -> Parameter | None:

@@ -38,6 +38,9 @@ ANALYSES = {
     "housing_sweep": "housing geometry sweep: first frequencies against one housing parameter",
     "housing_convergence": "housing mesh convergence: frequency error vs DOF vs wall time, P1 and P2",
     "reduction_accuracy": "gearbox reduction level: frequency error, MAC and response error vs run time",
+    "nvh": "spectra of mesh deformations and forces, bearing forces; housing ERP and surface velocity",
+    "map": "speed x load operating map (sweeps over speed at each load) with LP/PD curves",
+    "runup": "run-up / run-down transient: envelopes, contact losses, order tracks, waterfall",
 }
 
 
@@ -91,6 +94,11 @@ class ContinuationSettings(ContinuationSteps):
     unit), where to start, and the parameter range (see :func:`with_parameter`)."""
     start: str = spec("max", choices=("min", "max"), doc="end of the range to start from")
     transient_periods: int = spec(300, ge=0, doc="periods integrated to find the starting orbit")
+    from_sweep: bool = spec(False, doc="also start a branch (both ways) from each distinct "
+                            "period-n window of the sweep (this run's, or sweep.npz in the "
+                            "output folder)")
+    from_sweep_max_points: int = spec(40, ge=2, le=1_000_000, doc="points of each half-branch "
+                                      "started from a sweep window")
     range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:

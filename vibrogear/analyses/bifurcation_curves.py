@@ -1,0 +1,211 @@
+"""Fold (LP) and period-doubling (PD) curves of the period-1 branch in the (speed, load) plane.
+
+What this is: bifurcation points **located on one-parameter branches at a sequence of
+loads and joined**, not a two-parameter (bordered) continuation of the bifurcation
+condition.  At each load the period-1 branch is continued in speed by the continuation API
+(:func:`~vibrogear.solvers.continuation.continuation`, shooting + pseudo-arclength, LP and
+PD located by the solver's test functions and bisection in arclength); the LP and PD points
+of that branch are collected; the points of successive loads are joined per label by the
+nearest speed.  Between two loads the curve is a straight line: its accuracy in load is the
+load spacing.  A cusp (two folds meeting) shows as a pair of curves that ends between two
+loads.
+
+Only short windows are traced: the first load (the one nearest the scene's nominal load)
+over the whole first window (the map's speed range), every later load over windows of
+``margin`` rpm around the previous load's bifurcation speeds (clusters of speeds closer
+than 2 x margin share a window); loads are visited outward from the first one.  Each
+window starts at its upper end from the period-1 orbit there (the settled motion shot over
+one period, else the orbit that continues the static equilibrium), so the period-2 branch
+is never followed (``period_doubling_branch = False``) and a PD of the period-1 branch is
+where the sweep's period-2 region begins or ends.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config.options import ContinuationOptions
+from ..solvers.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
+from .continuation import starting_orbit
+from .load_scaling import LoadScaling
+from .study import Study, start_state
+
+__all__ = ["Curve", "LoadBifurcations", "BifurcationCurves", "locate_bifurcations",
+           "join_curves", "curves_for_map", "windows_around", "LABELS"]
+
+LABELS = ("LP", "PD")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One bifurcation family: ``label`` (LP / PD), the load factors, torques [N m],
+    twists [rad] and speeds [rpm] of its points in increasing load."""
+    label: str
+    scale: np.ndarray
+    torque: np.ndarray
+    twist: np.ndarray
+    rpm: np.ndarray
+
+
+@dataclass(frozen=True)
+class LoadBifurcations:
+    """The LP / PD points of the period-1 branch at one load: ``points`` ((label, rpm)
+    sorted by speed), the windows traced, the branch points, flows and wall time."""
+    scale: float
+    windows: tuple
+    points: tuple
+    messages: tuple
+    branch_points: int
+    flows: int
+    wall_time: float
+
+
+@dataclass(frozen=True, eq=False)
+class BifurcationCurves:
+    loads: tuple                    # LoadBifurcations, in increasing load
+    curves: tuple                   # Curve
+    torque_nominal: float
+    twist_nominal: float
+    wall_time: float
+    method: str = ("bifurcation points located on one-parameter branches (continuation in "
+                   "speed) at a sequence of loads and joined; not a two-parameter continuation")
+
+    def summary(self) -> dict:
+        return {
+            "method": self.method, "wall_s": self.wall_time,
+            "loads": [{"torque_N_m": ld.scale * self.torque_nominal,
+                       "twist_rad": ld.scale * self.twist_nominal,
+                       "windows_rpm": [list(w) for w in ld.windows],
+                       "points": [{"label": lab, "rpm": p} for lab, p in ld.points],
+                       "branch_points": ld.branch_points, "flows": ld.flows,
+                       "wall_s": ld.wall_time, "messages": list(ld.messages)}
+                      for ld in self.loads],
+            "curves": [{"label": c.label, "rpm": [float(x) for x in c.rpm],
+                        "torque_N_m": [float(x) for x in c.torque]} for c in self.curves],
+        }
+
+
+def windows_around(speeds, margin: float, bounds) -> tuple:
+    """Windows [lo, hi] of ``margin`` around each cluster of ``speeds`` (speeds closer than
+    2 margin share one), clipped to ``bounds``."""
+    s = np.sort(np.asarray(speeds, dtype=float))
+    if s.size == 0:
+        return ()
+    cuts = np.flatnonzero(np.diff(s) > 2.0 * margin) + 1
+    out = []
+    for part in np.split(s, cuts):
+        lo, hi = max(bounds[0], part[0] - margin), min(bounds[1], part[-1] + margin)
+        if hi > lo:
+            out.append((float(lo), float(hi)))
+    return tuple(out)
+
+
+def _trace_window(model, lo, hi, *, integration, tol, steps, transient_periods, period_tol):
+    """(points [(label, rpm)], message, branch points, flows) of the period-1 branch over
+    [lo, hi], started at hi."""
+    u_static = start_state(model, hi, strict=False)
+    u0, _, guess, how = starting_orbit(model, hi, u_static, transient_periods=transient_periods,
+                                       options=integration, tol=tol,
+                                       max_iter=3 * steps.get("max_corrector_iter", 8),
+                                       max_period=1, period_tol=period_tol)
+    if u0 is None:
+        return [], f"[{lo:.6g}, {hi:.6g}] rpm: no period-1 orbit at {hi:.6g} rpm: {how}", 0, 0
+    scale = (hi - lo) / max(float(np.linalg.norm(guess)), 1e-300)
+    problem = PeriodicOrbitProblem(model, u0, hi, n_periods=1, direction=-1)
+    method = PseudoArclength(integration=integration, tol=tol, param_scale=scale)
+    options = ContinuationOptions(param_min=lo, param_max=hi, period_doubling_branch=False,
+                                  **steps)
+    res = continuation(problem, method, options)
+    pts = [(s.label, float(s.param)) for s in res.special_points
+           if s.branch == 0 and s.label in LABELS]
+    n = len(res.branches[0].points) if res.branches else 0
+    return pts, f"[{lo:.6g}, {hi:.6g}] rpm: {res.message}", n, int(res.counters.get("flows", 0))
+
+
+def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, margin: float,
+                        integration, tol: float, steps: dict, transient_periods: int = 200,
+                        period_tol: float = 1e-4, callback=None) -> tuple:
+    """:class:`LoadBifurcations` per load factor in ``scales`` (returned in increasing
+    load), visiting the loads outward from the one nearest 1 (module docstring).
+    ``steps``: the :class:`~vibrogear.config.options.ContinuationSteps` fields (rpm)."""
+    scales = np.sort(np.asarray(scales, dtype=float).ravel())
+    k0 = int(np.argmin(np.abs(scales - 1.0)))
+    bounds = (float(first_window[0]), float(first_window[1]))
+    found: dict = {}
+
+    def visit(k, windows):
+        t0 = time.perf_counter()
+        m = scaling.model_at(model, scales[k])
+        pts, msgs, npts, flows = [], [], 0, 0
+        for lo, hi in windows:
+            p, msg, n, f = _trace_window(m, lo, hi, integration=integration, tol=tol,
+                                         steps=steps, transient_periods=transient_periods,
+                                         period_tol=period_tol)
+            pts += p
+            msgs.append(msg)
+            npts += n
+            flows += f
+        pts = tuple(sorted(set(pts), key=lambda x: x[1]))
+        found[k] = LoadBifurcations(scale=float(scales[k]), windows=tuple(windows), points=pts,
+                                    messages=tuple(msgs), branch_points=npts, flows=flows,
+                                    wall_time=time.perf_counter() - t0)
+        if callback is not None:
+            callback(found[k])
+        # the next load's windows: around these points (else the same windows again)
+        return windows_around([p for _, p in pts], margin, bounds) or tuple(windows)
+
+    start = visit(k0, (bounds,))
+    for order in (range(k0 + 1, scales.size), range(k0 - 1, -1, -1)):
+        windows = start
+        for k in order:
+            windows = visit(k, windows)
+    return tuple(found[k] for k in range(scales.size))
+
+
+def join_curves(loads, scaling: LoadScaling, max_jump: float) -> tuple:
+    """Join the points of successive loads per label by the nearest speed (within
+    ``max_jump`` rpm; a point without a partner starts a new curve)."""
+    curves: list = []           # [label, [(scale, rpm)], open]
+    for ld in loads:
+        for label in LABELS:
+            speeds = [p for lab, p in ld.points if lab == label]
+            open_ = [c for c in curves if c[0] == label and c[2]]
+            pairs = sorted(((abs(c[1][-1][1] - s), i, j) for i, c in enumerate(open_)
+                            for j, s in enumerate(speeds)), key=lambda x: x[0])
+            used_c, used_s = set(), set()
+            for d, i, j in pairs:
+                if d <= max_jump and i not in used_c and j not in used_s:
+                    open_[i][1].append((ld.scale, speeds[j]))
+                    used_c.add(i)
+                    used_s.add(j)
+            for i, c in enumerate(open_):
+                if i not in used_c:
+                    c[2] = False            # this family ends (cusp, or left the range)
+            for j, s in enumerate(speeds):
+                if j not in used_s:
+                    curves.append([label, [(ld.scale, s)], True])
+    out = []
+    for label, pts, _ in curves:
+        sc = np.array([p[0] for p in pts])
+        out.append(Curve(label=label, scale=sc, torque=scaling.torque(sc),
+                         twist=scaling.twist(sc), rpm=np.array([p[1] for p in pts])))
+    return tuple(out)
+
+
+def curves_for_map(study: Study, scene, scaling: LoadScaling, scales) -> BifurcationCurves:
+    """The curves over the loads of a [map] (its speed range is the first window)."""
+    cfg = scene.map
+    t0 = time.perf_counter()
+    steps = dict(ds=cfg.curve_ds, ds_min=min(1e-3, cfg.curve_ds), ds_max=cfg.curve_ds_max,
+                 max_points=cfg.curve_max_points)
+    loads = locate_bifurcations(study.model, scaling, scales, (cfg.rpm_min, cfg.rpm_max),
+                                margin=cfg.curve_margin, integration=scene.integration,
+                                tol=scene.shooting.tol, steps=steps,
+                                transient_periods=cfg.curve_transient_periods,
+                                period_tol=cfg.period_tol)
+    return BifurcationCurves(loads=loads, curves=join_curves(loads, scaling, 2 * cfg.curve_margin),
+                             torque_nominal=scaling.torque_nominal,
+                             twist_nominal=scaling.twist_nominal,
+                             wall_time=time.perf_counter() - t0)
