@@ -1,0 +1,208 @@
+"""Run-up and run-down transients (``vibrogear runup``, section [runup]).
+
+The driving speed follows the section's profile (:mod:`vibrogear.solvers.ramp`: chunks of
+constant speed, excitation phase continuous), from the static equilibrium at the start
+speed.  Against the instantaneous speed the analysis returns, per direction:
+
+* per mesh period, for each mesh: the envelope (min / max of the deformation) and the
+  contact losses (monitored mesh: the integrator's located events, which see between the
+  samples; the other meshes: from the samples);
+* order tracks (:mod:`vibrogear.analyses.order_tracking`) of each mesh deformation: the
+  mesh orders (``mesh_orders`` x each mesh frequency) and 1x of every shaft, in orders of
+  the driving shaft;
+* the waterfall (spectrogram) of the monitored mesh deformation.
+
+The report (:mod:`vibrogear.report.runup_report`) writes ``runup.npz``, ``runup.csv`` and
+the figures.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..models.contact_law import flank
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..solvers.ramp import RampResult, SpeedProfile, ramp
+from ..solvers.status import Status
+from .order_tracking import OrderTracks, Waterfall, order_tracks, waterfall
+from .study import Study, integration_options
+
+__all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed"]
+
+
+@dataclass(frozen=True, eq=False)
+class RunupRun:
+    direction: str
+    time_s: np.ndarray          # (P,) start of each mesh period [s]
+    rpm: np.ndarray             # (P,) mean speed over each mesh period [param unit]
+    env_min: np.ndarray         # (meshes, P) deformation envelope [display unit]
+    env_max: np.ndarray
+    losses: np.ndarray          # (meshes, P) contact losses per mesh period
+    tracks: dict                # mesh name -> OrderTracks of its deformation [display unit]
+    track_rpm: np.ndarray       # (windows,) speed at the order-tracking window centres
+    waterfall: Waterfall        # of the monitored mesh deformation [display unit]
+    waterfall_rpm: np.ndarray   # (segments,) speed at the segment centres
+    ramp: RampResult            # the solver's result (counters, status)
+
+
+@dataclass(frozen=True, eq=False)
+class RunupResult:
+    study: Study
+    mesh_names: tuple[str, ...]
+    order_names: tuple[str, ...]
+    orders: np.ndarray          # per order name: cycles per driving-shaft revolution
+    runs: tuple[RunupRun, ...]
+    teeth: int                  # mesh periods per driving-shaft revolution
+
+
+def shaft_orders(scene, mesh_orders) -> tuple[tuple[str, ...], np.ndarray, int]:
+    """(names, orders per driving-shaft revolution, teeth of the excitation mesh): each
+    mesh's ``mesh_orders`` harmonics (``G1_1x``) and 1x of each shaft (``driving_1x``);
+    an impact pair has the excitation's harmonics (``excitation_1x``)."""
+    gb = scene.gearbox
+    if gb is None:
+        return tuple(f"excitation_{h}x" for h in mesh_orders), np.array(mesh_orders, float), 1
+    shaft_p, gear_p = gb.speed_ratios()
+    names, orders = [], []
+    for m in gb.meshes:
+        ka = gb.gear_index(m.gear_a, "")
+        f1 = gb.gears[ka].teeth * abs(gear_p[ka])
+        for h in mesh_orders:
+            names.append(f"{m.name}_{h}x")
+            orders.append(h * f1)
+    for sh, p in zip(gb.shafts, shaft_p):
+        names.append(f"{sh.name}_1x")
+        orders.append(abs(p))
+    teeth = gb.gears[gb.gear_index(gb.meshes[0].gear_a, "")].teeth if gb.meshes else 1
+    return tuple(names), np.array(orders, dtype=float), int(teeth)
+
+
+def period_table(r: RampResult, monitor_row: int | None, gaps) -> tuple:
+    """Per whole excitation period: (first sample index, min, max, contact losses) of each
+    sampled contact; the monitored one (row ``monitor_row``) merged with the integrator's
+    per-chunk extrema and located contact losses."""
+    sps, cpp = r.samples_per_period, r.chunks_per_period
+    P = r.periods
+    d = r.delta[:, :P * sps].reshape(r.delta.shape[0], P, sps)
+    lo, hi = d.min(axis=2), d.max(axis=2)
+    touch = flank(r.delta[:, :P * sps], gaps[0][:, None], gaps[1][:, None]) != 0
+    lost = np.zeros_like(touch)
+    lost[:, 1:] = touch[:, :-1] & ~touch[:, 1:]
+    losses = lost.reshape(lost.shape[0], P, sps).sum(axis=2)
+    if monitor_row is not None and P:
+        n = P * cpp
+        lo[monitor_row] = np.minimum(lo[monitor_row], r.monitor_min[:n].reshape(P, cpp).min(1))
+        hi[monitor_row] = np.maximum(hi[monitor_row], r.monitor_max[:n].reshape(P, cpp).max(1))
+        losses[monitor_row] = r.monitor_losses[:n].reshape(P, cpp).sum(1)
+    return np.arange(P) * sps, lo, hi, losses
+
+
+def jump_speed(rpm, q, smooth: int = 20) -> dict | None:
+    """Where the (moving-averaged over ``smooth`` periods) envelope ``q`` changes fastest:
+    its speed and the change across it (200 periods either side), or None if that change
+    is below a quarter of the envelope's range."""
+    q = np.asarray(q, float)
+    if q.size < 4 * smooth:
+        return None
+    qs = np.convolve(q, np.ones(smooth) / smooth, mode="valid")
+    k = int(np.argmax(np.abs(np.diff(qs))))
+    a, b = qs[max(k - 200, 0)], qs[min(k + 200, qs.size - 1)]
+    span = float(np.ptp(q))
+    if span == 0.0 or abs(b - a) < 0.25 * span:
+        return None
+    return {"rpm": float(rpm[k + smooth // 2]), "before": float(a), "after": float(b)}
+
+
+def _profile(cfg, study: Study, direction: str) -> SpeedProfile:
+    times, rpm = cfg.profile()
+    prof = SpeedProfile.of(times, rpm, study.time_unit_s)
+    return prof if direction == "up" else prof.reversed()
+
+
+def _one_run(study, scene, ctx, cfg, direction, rows, orders, teeth, opts) -> RunupRun:
+    model = study.model
+    prof = _profile(cfg, study, direction)
+    est = int(np.ceil(np.trapz(prof.params, prof.times) * model.omega_per_param / (2 * np.pi)
+                      * cfg.chunks_per_period))
+    u0 = study.start(float(prof.params[0]))
+    every = 64
+    with ctx.progress(est // every, f"runup {direction}") as bar:
+        count = iter(range(1, 1 << 62))
+
+        def tick(t, p):
+            if next(count) % every == 0:
+                bar.update(1, f"{p:.5g} {study.param_unit}")
+
+        r = ramp(model, prof, u0, options=opts, chunks_per_period=cfg.chunks_per_period,
+                 samples_per_period=cfg.samples_per_period, midpoint=cfg.midpoint,
+                 settle_periods=cfg.settle_periods, rows=rows, callback=tick)
+    if not r.ok:
+        raise NumericalFailure(f"runup {direction}: {r.message}")
+    ct = model.contacts
+    mon = [i for i, j in enumerate(rows) if j == model.monitor]
+    first, lo, hi, losses = period_table(r, mon[0] if mon else None,
+                                         (ct.gap_hi[rows], ct.gap_lo[rows]))
+    sps = cfg.samples_per_period
+    P = r.periods
+    rpm = r.param[:P * sps].reshape(P, sps).mean(axis=1)
+    scale = study.monitor.scale
+    revs = r.phase / (2 * np.pi * teeth)
+    tracks = {}
+    for i, j in enumerate(rows):
+        name = ct.names[j] if ct.names else f"c{j}"
+        tracks[name] = order_tracks(revs, scale * r.delta[i], orders,
+                                    samples_per_rev=sps * teeth, window_revs=cfg.window_revs)
+    any_track = next(iter(tracks.values()))
+    track_rpm = np.interp(any_track.revs, revs, r.param)
+    t_s = r.t * study.time_unit_s
+    f_mesh = model.omega_per_param * prof.params.max() / (2 * np.pi * study.time_unit_s)
+    wi = mon[0] if mon else 0
+    wf = waterfall(t_s, scale * r.delta[wi], segment_s=cfg.spectrogram_s,
+                   fs=sps * f_mesh, f_max=1.2 * f_mesh * max(orders.max() / teeth, 1.0))
+    wf_rpm = np.interp(wf.time_s, t_s, r.param)
+    return RunupRun(direction=direction, time_s=t_s[first], rpm=rpm, env_min=scale * lo,
+                    env_max=scale * hi, losses=losses, tracks=tracks, track_rpm=track_rpm,
+                    waterfall=wf, waterfall_rpm=wf_rpm, ramp=r)
+
+
+def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
+    cfg = scene.runup
+    model = study.model
+    rows = study.contact_groups.get("mesh", study.contact_groups.get("clearance"))
+    rows = np.asarray(rows if rows is not None else np.arange(model.contacts.count), int)
+    if rows.size == 0:
+        raise NumericalFailure("runup: the model has no mesh contact to follow")
+    names, orders, teeth = shaft_orders(scene, cfg.mesh_orders)
+    opts = integration_options(scene, record=True)
+    runs = tuple(_one_run(study, scene, ctx, cfg, d, rows, orders, teeth, opts)
+                 for d in cfg.directions)
+    ct = model.contacts
+    mesh_names = tuple(ct.names[j] if ct.names else f"c{j}" for j in rows)
+    mon = [i for i, j in enumerate(rows) if j == model.monitor]
+    summary = {"status": "ok", "directions": list(cfg.directions),
+               "rpm_range": list(cfg.rpm_range), "meshes": list(mesh_names),
+               "orders": dict(zip(names, map(float, orders))),
+               "rtol": opts.rtol, "atol": opts.atol, "runs": {}}
+    for run_ in runs:
+        r = run_.ramp
+        P = run_.rpm.size
+        jump = jump_speed(run_.rpm, run_.env_max[mon[0] if mon else 0])
+        summary["runs"][run_.direction] = {
+            "duration_s": r.profile.duration * study.time_unit_s, "mesh_periods": P,
+            "chunks": r.chunks, "steps": r.steps, "rejected": r.rejected,
+            "rhs_calls": r.rhs_calls, "events": r.events, "solver_wall_s": r.wall_time,
+            "steps_per_mesh_period": (r.steps - r.settle_steps) / max(P, 1),
+            "periods_with_contact_loss": {n: int(np.sum(run_.losses[i] > 0))
+                                          for i, n in enumerate(mesh_names)},
+            "largest_envelope_change": jump,
+            "error_estimate": {"accumulated_local_error": r.error_estimate,
+                               "phase_deviation_rad": r.phase_deviation,
+                               "chunks_per_period": r.chunks_per_period,
+                               "midpoint": r.midpoint},
+        }
+    status = Status.OK
+    summary["status"] = status.text
+    return AnalysisOutcome(summary=summary, result=RunupResult(
+        study=study, mesh_names=mesh_names, order_names=names, orders=orders, runs=runs,
+        teeth=teeth))

@@ -1,0 +1,129 @@
+"""Figures of a run-up / run-down: envelopes over the steady state, order tracks, waterfall."""
+from __future__ import annotations
+
+import numpy as np
+
+from .figure import new_figure, save_figure
+
+__all__ = ["plot_envelopes", "plot_orders", "plot_waterfall"]
+
+_RUN_STYLE = {"up": dict(color="tab:blue", label="run-up"),
+              "down": dict(color="tab:red", label="run-down")}
+
+
+def _steady(ax, sweep, branch, unit_label):
+    if sweep is not None:
+        for d, marker in (("up", "^"), ("down", "v")):
+            sel = np.asarray(sweep["direction"]) == d
+            for k, q in enumerate(("qmax", "qmin")):
+                ax.plot(sweep["param"][sel], sweep[q][sel], marker, ms=3, color="0.25",
+                        ls="none", label=f"sweep {d}" if k == 0 else None, zorder=3)
+    if branch is not None and np.size(branch["param"]):
+        ids = np.asarray(branch.get("branch", np.zeros(np.size(branch["param"]), int)))
+        first = True
+        for b in np.unique(ids):
+            sel = ids == b
+            p, st = np.asarray(branch["param"])[sel], np.asarray(branch["stable"])[sel]
+            for q in ("qmax", "qmin"):
+                v = np.asarray(branch[q])[sel]
+                for stable, ls in ((True, "-"), (False, "--")):
+                    y = np.where(st == stable, v, np.nan)
+                    lab = None
+                    if first and q == "qmax":
+                        lab = "branch (stable)" if stable else "branch (unstable)"
+                    ax.plot(p, y, ls, color="k", lw=1.2, label=lab, zorder=4)
+            first = False
+
+
+def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
+    """Per mesh: the envelope (min and max per mesh period) against the speed for each
+    direction; on the monitored mesh, the steady-state sweep and branches overlaid."""
+    study = result.study
+    n = len(result.mesh_names)
+    fig = new_figure((9.0, 3.6 * n))
+    mon_name = (study.model.contacts.names[study.model.monitor]
+                if study.model.contacts.names else None)
+    for i, name in enumerate(result.mesh_names):
+        ax = fig.add_subplot(n, 1, i + 1)
+        for r in result.runs:
+            st = _RUN_STYLE.get(r.direction, {})
+            ax.plot(r.rpm, r.env_max[i], lw=0.7, color=st.get("color"), label=st.get("label"))
+            ax.plot(r.rpm, r.env_min[i], lw=0.7, color=st.get("color"))
+        if name == mon_name:
+            _steady(ax, sweep, branch, study.monitor.unit)
+        if study.monitor.zero_line:
+            ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.set_xlabel(study.param_label)
+        ax.set_ylabel(f"{name} deformation [{study.monitor.unit}]")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8, loc="best")
+    rates = ", ".join(f"{r.direction}: {abs(np.ptp(r.rpm)) / max(np.ptp(r.time_s), 1e-30):.4g} "
+                      f"{study.param_unit}/s" for r in result.runs)
+    fig.axes[0].set_title(f"{study.title}\nenvelope per mesh period ({rates})", fontsize=9)
+    out = save_figure(fig, path, formats=("png",))
+    return out
+
+
+def plot_orders(result, path) -> list:
+    """Per mesh: amplitude of each tracked order against the speed (run-up solid,
+    run-down dashed)."""
+    study = result.study
+    n = len(result.mesh_names)
+    fig = new_figure((9.0, 3.6 * n))
+    colors = [f"C{k % 10}" for k in range(len(result.order_names))]
+    for i, name in enumerate(result.mesh_names):
+        ax = fig.add_subplot(n, 1, i + 1)
+        for r in result.runs:
+            ls = "-" if r.direction == "up" else "--"
+            tr = r.tracks[name]
+            for k, oname in enumerate(result.order_names):
+                ax.semilogy(r.track_rpm, np.maximum(tr.amplitude[k], 1e-30), ls, lw=1.0,
+                            color=colors[k],
+                            label=f"{oname} ({result.orders[k]:.4g})" if r is result.runs[0]
+                            else None)
+        ax.set_xlabel(study.param_label)
+        ax.set_ylabel(f"{name} order amplitude [{study.monitor.unit}]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=7, ncol=3, loc="best", title="order (per rev)", title_fontsize=7)
+    fig.axes[0].set_title(f"{study.title}\norder tracks (window "
+                          f"{result.runs[0].tracks[result.mesh_names[0]].window_revs} rev; "
+                          "run-up solid, run-down dashed)", fontsize=9)
+    return save_figure(fig, path, formats=("png",))
+
+
+def plot_waterfall(result, path) -> list:
+    """Per direction: amplitude spectrum (dB) of the monitored mesh deformation against
+    speed and frequency, with the order lines f = order x speed / 60 drawn."""
+    study = result.study
+    runs = result.runs
+    fig = new_figure((9.0, 4.2 * len(runs)))
+    for i, r in enumerate(runs):
+        ax = fig.add_subplot(len(runs), 1, i + 1)
+        wf = r.waterfall
+        x = r.waterfall_rpm
+        monotone = np.all(np.diff(x) > 0) or np.all(np.diff(x) < 0)
+        xs = x if monotone else wf.time_s
+        order = np.argsort(xs)
+        A = wf.amplitude[:, order]
+        db = 20 * np.log10(np.maximum(A, 1e-12 * max(A.max(), 1e-300)))
+        top = db.max() if db.size else 0.0
+        mesh = ax.pcolormesh(xs[order], wf.frequency_hz, db, shading="nearest",
+                             vmin=top - 80, vmax=top, cmap="viridis", rasterized=True)
+        fig.colorbar(mesh, ax=ax, label=f"dB re 1 {study.monitor.unit}")
+        fmax = wf.frequency_hz[-1] if wf.frequency_hz.size else 1.0
+        for k, (oname, o) in enumerate(zip(result.order_names, result.orders)):
+            f = o * x[order] / 60.0
+            if f.min() > fmax:
+                continue
+            ax.plot(xs[order], f, color="w", lw=0.6, ls=":" if "_1x" not in oname else "--")
+            j = int(np.argmin(np.abs(np.minimum(f, fmax) - 0.95 * np.minimum(f, fmax).max())))
+            if 0.05 * fmax <= f[j] <= fmax:
+                ax.text(xs[order][j], f[j], oname, color="w", fontsize=6, va="bottom")
+        ax.set_ylim(0, fmax)
+        ax.set_xlabel(study.param_label if monotone else "time [s]")
+        ax.set_ylabel("frequency [Hz]")
+        ax.set_title(f"{_RUN_STYLE.get(r.direction, {}).get('label', r.direction)}: "
+                     f"{result.mesh_names[0] if len(result.mesh_names) == 1 else 'monitored mesh'}"
+                     " deformation", fontsize=9)
+    fig.axes[0].set_title(f"{study.title}\n" + fig.axes[0].get_title(), fontsize=9)
+    return save_figure(fig, path, formats=("png",))
