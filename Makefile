@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
-.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox
+.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox nvh
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
@@ -54,6 +54,10 @@ gear-pair: $(STAMP)
 	$(VG) run configs/gear_pair.toml --out $(OUT)/gear_pair
 
 gearboxes: two-stage two-stage-helical single-stage gear-pair
+
+## two_stage spectra over speed (waterfalls with order lines) and the housing's ERP ([nvh])
+nvh: $(STAMP)
+	$(VG) nvh configs/two_stage.toml --out $(OUT)/two_stage_nvh
 
 ## housing wall thickness -> resonance speeds and bifurcation diagram of the two-stage gearbox
 housing-dynamics: $(STAMP)
