@@ -106,6 +106,12 @@ def test_outer_surface_area_is_the_box_area(small_modes):
              | (np.abs(c[:, 2] - (cfg.height - t)) < 1e-9))
     assert not np.any(inner)
     assert not np.any(np.abs(c[:, 2] + cfg.base_thickness) < 1e-9)
+    # the triangles are oriented outward: +z on the top face, -x on the wall x = 0
+    tri = hm.surface_vertices[hm.surface_triangles]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    top, wall = np.abs(c[:, 2] - cfg.height) < 1e-9, np.abs(c[:, 0]) < 1e-9
+    assert top.sum() > 4 and wall.sum() > 4
+    assert np.all(n[top, 2] > 0) and np.all(n[wall, 0] < 0)
 
 
 def test_single_mode_erp_closed_form(small_modes):
