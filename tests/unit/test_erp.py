@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.housing_surface import SurfaceMap, erp_db, erp_watts, rms_velocity_field
+from vibrogear.analyses.housing_surface import (SurfaceMap, erp_db, erp_spectrum, erp_watts,
+                                                rms_velocity_field)
 from vibrogear.config import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -57,6 +58,22 @@ def test_synthetic_surface_closed_forms():
     v = rms_velocity_field(smap, _harmonic_rates(2, 0, a, w))
     assert np.allclose(v, w * a / math.sqrt(2), rtol=1e-12)
     assert erp_db(1e-12) == pytest.approx(0.0) and erp_db(1.0) == pytest.approx(120.0)
+
+
+def test_erp_per_bin_two_harmonics():
+    """Mode 0 (phi_n = 1) at omega and mode 1 (phi_n = x) at 3 omega over R = 4 periods: the
+    ERP of bin 4 is 1/2 rho c (omega a)^2 * 1, of bin 12 1/2 rho c (3 omega b)^2 / 3, nothing
+    elsewhere, and the bins sum to the time average."""
+    smap = _unit_square(lambda x, y: np.array([1.0, x]))
+    a, b, w, R, S = 3e-6, 1e-6, 2 * np.pi * 450.0, 4, 16
+    t = np.arange(R * S) * (2 * np.pi / w / S)
+    rates = np.array([a * w * np.cos(w * t), 3 * w * b * np.sin(3 * w * t + 0.3)])
+    p = erp_spectrum(smap.gram, rates, RHO, C)
+    expect = np.zeros(R * S // 2 + 1)
+    expect[R] = 0.5 * RHO * C * (w * a) ** 2
+    expect[3 * R] = 0.5 * RHO * C * (3 * w * b) ** 2 / 3.0
+    assert np.allclose(p, expect, rtol=1e-12, atol=1e-12 * expect.max())
+    assert p.sum() == pytest.approx(erp_watts(smap.gram, rates, RHO, C), rel=1e-12)
 
 
 def _analytic_outer_area(c) -> float:

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SurfaceMap", "surface_map", "erp_watts", "erp_db", "rms_velocity_field",
-           "P_REF_W"]
+__all__ = ["SurfaceMap", "surface_map", "erp_watts", "erp_spectrum", "erp_db",
+           "rms_velocity_field", "P_REF_W"]
 
 #: reference power of the ERP level [W]
 P_REF_W = 1e-12
@@ -82,6 +82,20 @@ def erp_watts(gram: np.ndarray, rates: np.ndarray, rho: float, c: float) -> floa
     periods) [W]."""
     rates = np.asarray(rates, dtype=float)
     return float(rho * c * np.mean(np.einsum("it,ij,jt->t", rates, gram, rates)))
+
+
+def erp_spectrum(gram: np.ndarray, rates: np.ndarray, rho: float, c: float) -> np.ndarray:
+    """The ERP per frequency bin (n // 2 + 1,) [W] of modal velocities ``rates`` (m, n samples
+    over whole periods): rho c X_k^H G X_k / n^2 from the DFT X_k of the rates, doubled for
+    0 < k < n/2 (the one-sided spectrum); by Parseval its sum is :func:`erp_watts`."""
+    rates = np.asarray(rates, dtype=float)
+    n = rates.shape[-1]
+    X = np.fft.rfft(rates, axis=-1) / n
+    p = np.real(np.einsum("ik,ij,jk->k", X.conj(), gram, X))
+    p[1:] *= 2.0
+    if n % 2 == 0:
+        p[-1] *= 0.5
+    return rho * c * p
 
 
 def erp_db(watts) -> np.ndarray:

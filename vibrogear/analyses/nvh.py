@@ -28,7 +28,7 @@ from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.contact_eval import contact_history
 from ..solvers.integrate import integrate
 from ..solvers.spectrum import amplitude_spectrum
-from .housing_surface import erp_db, erp_watts, rms_velocity_field, surface_map
+from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
 from .study import Study, integration_options
 
 __all__ = ["NvhResult", "run", "steady_points", "order_lines"]
@@ -48,6 +48,7 @@ class NvhResult:
     shaft_names: tuple
     source: str                          # "sweep:<direction>" | "nvh grid"
     erp_w: np.ndarray | None = None      # (P,)
+    erp_per_bin: np.ndarray | None = None    # (P, K) ERP of each frequency bin [W]
     erp_note: str = ""
     surface: object = None               # SurfaceMap (for the velocity fields)
     velocity_fields: dict = field(default_factory=dict)    # rpm -> (nf,) RMS v_n [m/s]
@@ -126,7 +127,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     want = {float(rpm[int(np.argmin(np.abs(rpm - r)))]) for r in cfg.velocity_rpms}
     records = {"dte": [], "mesh_force": [], "bearing_force": []}
     parseval = {k: 0.0 for k in records}
-    erp, kept, rates_at, best, warnings = [], [], {}, (-1.0, None), []
+    erp, erp_bins, kept, rates_at, best, warnings = [], [], [], {}, (-1.0, None), []
     with ctx.progress(len(rpm), "nvh") as bar:
         for p, u0 in zip(rpm, states0):
             p = float(p)
@@ -148,6 +149,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
             if smap is not None:
                 rates = smap.modal_rates(tr.u, model.n_modes)
                 erp.append(erp_watts(smap.gram, rates, cfg.rho_air, cfg.c_air))
+                erp_bins.append(erp_spectrum(smap.gram, rates, cfg.rho_air, cfg.c_air))
                 if p in want:
                     rates_at[p] = rates
                 elif not want and erp[-1] > best[0]:
@@ -172,6 +174,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                     units={"dte": "m", "mesh_force": "N", "bearing_force": "N"},
                     parseval=parseval, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                     shaft_names=shaft_names, source=source, erp_w=erp_w, erp_note=note,
+                    erp_per_bin=np.array(erp_bins) if smap is not None else None,
                     surface=smap, velocity_fields=fields, study=study)
     summary = {"status": "ok" if not warnings else "partial", "points": int(rpm.size),
                "source": source, "record_periods": R, "samples_per_period": S,
@@ -180,6 +183,8 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                "wall_s": time.perf_counter() - t_start}
     if erp_w is not None:
         k = int(np.argmax(erp_w))
+        parseval["erp"] = float(np.max(np.abs(res.erp_per_bin.sum(axis=1) - erp_w)
+                                       / np.maximum(erp_w, np.finfo(float).tiny)))
         summary.update({"erp_max_w": float(erp_w[k]), "erp_max_db": float(erp_db(erp_w[k])),
                         "erp_max_at_rpm": float(rpm[k]), "surface_area_m2": smap.area,
                         "surface_facets": int(smap.areas.size), "rho_air": cfg.rho_air,

@@ -17,15 +17,18 @@ def _edges(x: np.ndarray) -> np.ndarray:
 
 
 def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: float,
-                   mesh_hz, shaft_hz, max_order: float, shaft_names=(), title: str = ""):
+                   mesh_hz, shaft_hz, max_order: float, shaft_names=(), title: str = "",
+                   power: bool = False):
     """Colour map of ``amp`` (P, K) [unit] over frequency (P, K) [Hz] and speed (P,) [rpm],
     in dB re the largest amplitude, with mesh order lines h x f_mesh (h = 1 .. max_order,
     each mesh) and 1x shaft order lines.  Each bin is drawn as the cell of its order
     (frequency proportional to speed), so lines at a fixed order stay on their bins.  One
-    speed: the spectrum as a line."""
+    speed: the spectrum as a line.  ``power``: ``amp`` is a power (10 log10 instead of
+    20 log10)."""
     rpm, freq_hz, amp = np.asarray(rpm), np.asarray(freq_hz), np.asarray(amp)
     ref = float(np.max(amp[:, 1:])) if amp.shape[1] > 1 and np.max(amp[:, 1:]) > 0 else 1.0
-    level = 20.0 * np.log10(np.maximum(amp, ref * 1e-6) / ref)
+    floor = 1e-12 if power else 1e-6                      # -120 dB / -120 dB
+    level = (10.0 if power else 20.0) * np.log10(np.maximum(amp, ref * floor) / ref)
     fig = new_figure((8.0, 5.5))
     ax = fig.add_subplot(111)
     if rpm.size >= 2:

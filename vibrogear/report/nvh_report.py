@@ -5,7 +5,8 @@
 ``freq_hz`` (P, K), and per quantity q in ``dte`` [m], ``mesh_force`` [N],
 ``bearing_force`` [N]: ``amp_<q>`` (P, channels, K) one-sided amplitudes (bin 0: the mean),
 ``channels_<q>`` the channel names, ``parseval_<q>`` the largest relative Parseval error;
-``mesh_hz`` (P, meshes) and ``shaft_hz`` (P, shafts) for order lines.  ``erp.csv``: rpm,
+``mesh_hz`` (P, meshes) and ``shaft_hz`` (P, shafts) for order lines; with a housing
+``erp_w_per_bin`` (P, K), the ERP of each bin [W] (its sum over bins: ``erp_w``).  ``erp.csv``: rpm,
 erp_w, erp_db (only with a housing that has surface data).  The surface file holds the
 outer-surface triangles with the cell data ``v_rms`` [m/s] (RMS normal velocity per facet).
 """
@@ -55,6 +56,8 @@ def write(scene, outcome, out, previous=None) -> dict:
         arrays[f"amp_{q}"] = amp
         arrays[f"channels_{q}"] = np.array(r.channels[q], dtype=str)
         arrays[f"parseval_{q}"] = np.float64(r.parseval[q])
+    if r.erp_per_bin is not None:
+        arrays["erp_w_per_bin"], arrays["erp_w"] = r.erp_per_bin, r.erp_w
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     files["npz"] = str(atomic_write_bytes(out / "spectra.npz", buf.getvalue()))
@@ -76,6 +79,12 @@ def write(scene, outcome, out, previous=None) -> dict:
                                             erp_db(r.erp_w).tolist())]
         files["erp_csv"] = str(atomic_write_bytes(out / "erp.csv",
                                                   ("\n".join(lines) + "\n").encode()))
+        plot_waterfall(out / "nvh_waterfall_erp.png", r.rpm, r.freq_hz, r.erp_per_bin,
+                       label="ERP per bin", unit="W", max_hz=max_hz, mesh_hz=r.mesh_hz,
+                       shaft_hz=r.shaft_hz, max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       title=f"{title}\nERP of the outer housing surface per frequency bin",
+                       power=True)
+        files["waterfall_erp"] = str(out / "nvh_waterfall_erp.png")
         plot_erp(out / "erp.png", r.rpm, r.erp_w,
                  title=f"{title}\nequivalent radiated power of the outer housing surface "
                        f"(rho c = {cfg.rho_air:g} x {cfg.c_air:g})")
