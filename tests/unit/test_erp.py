@@ -203,3 +203,25 @@ def test_surface_map_takes_the_housing_coordinates(small_modes):
     assert rates.shape == (m_h, 2) and np.allclose(rates[2], 1234.0)
     assert np.allclose(np.delete(rates, 2, axis=0), 0.0)
     assert surface_map(SimpleNamespace(housing=None))[0] is None
+
+
+def test_surface_values_match_the_boundary_dof_values(small_modes):
+    """A second path to phi_n: the edge midpoints of the P2 surface facets are P2 nodes, so
+    the mode's nodal displacement there (the boundary-DOF preview, read straight from the
+    eigenvectors) dotted with the facet's outward unit normal is phi_n."""
+    from scipy.spatial import cKDTree
+
+    _, hm = small_modes
+    tri = hm.surface_vertices[hm.surface_triangles]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    mids = 0.5 * (tri + tri[:, [1, 2, 0]])                              # (nf, 3, 3)
+    dist, idx = cKDTree(hm.preview_points).query(mids.reshape(-1, 3))
+    hit = dist < 1e-9
+    assert hit.mean() > 0.5                                             # most are in the preview
+    k = hm.preview_values.shape[-1]
+    dofs = hm.preview_values[idx[hit]]                                  # (h, 3, k)
+    normals = np.repeat(n, 3, axis=0)[hit]
+    ref = np.einsum("hck,hc->hk", dofs, normals)
+    got = hm.surface_values.reshape(-1, hm.n_modes)[hit, :k]
+    assert np.max(np.abs(got - ref)) < 1e-8 * np.max(np.abs(ref))
