@@ -9,7 +9,7 @@ import numpy as np
 
 from ..config.options import IntegrationOptions   # defined once, with the [integration] rules
 from ..models.reduced import ReducedModel
-from .dopri import dopri_loop
+from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, dopri_loop, loop_inputs
 from .kernels import model_arrays
 from .status import Status, from_code
 
@@ -50,6 +50,7 @@ class Trajectory:
         return self.status == Status.OK
 
 
+_JACOBIAN = {"auto": JAC_AUTO, "loops": JAC_LOOPS, "blas": JAC_BLAS}
 _W2_MAX: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
@@ -69,15 +70,21 @@ def _initial_step(model: ReducedModel, param: float, span: float, rtol: float) -
 
 def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
               t_eval=None, options: IntegrationOptions = IntegrationOptions(),
-              variational: bool = False, record_from: float | None = None) -> Trajectory:
+              variational: bool = False, record_from: float | None = None,
+              jacobian: str = "auto") -> Trajectory:
     """Integrate u' = f(t, u; param) from (t0, u0) to t1.
 
     ``t_eval``: sorted times for dense output.  ``variational``: also integrate the
     monodromy d u / d u0 and the parameter sensitivity d u / d param (with saltation at
     switches).  ``record_from``: start of the window in which the extrema and contact
-    losses of the monitored contact are recorded (default t0).
+    losses of the monitored contact are recorded (default t0).  ``jacobian``: how the
+    variational equations apply the Jacobian, "auto" (BLAS from
+    :data:`~vibrogear.solvers.variational.BLAS_MIN_WORK` on), "blas" or "loops" (the same
+    products up to round-off).
     """
     wall = time.perf_counter()
+    if jacobian not in _JACOBIAN:
+        raise ValueError(f"jacobian must be one of {sorted(_JACOBIAN)}, not {jacobian!r}")
     u0 = np.ascontiguousarray(u0, dtype=float)
     if u0.shape != (model.n_states,):
         raise ValueError(f"u0 must have {model.n_states} entries")
@@ -94,11 +101,13 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     h0 = min(_initial_step(model, param, span, options.rtol), hmax)
     mon = model.monitor if model.contacts.count else -1
     rec = t0 if record_from is None else float(record_from)
-    (code, t_end, y, Phi, u_eval, cnt, ev_t, ev_j, ev_m, qmin, qmax, modes,
-     f_end, err_sum) = dopri_loop(arrs, Om, dOm, dspin, u0, float(t0), float(t1), options.rtol,
-                         options.atol, h0, hmax, options.max_steps,
-                         options.max_events_per_step, variational, t_eval, rec, mon,
-                         options.event_log)
+    fin, iin = loop_inputs(Om=Om, dOm=dOm, dspin=dspin, t0=t0, t1=t1, rtol=options.rtol,
+                           atol=options.atol, h0=h0, hmax=hmax, rec_t0=rec,
+                           max_steps=options.max_steps, max_events=options.max_events_per_step,
+                           variational=variational, mon=mon, ev_cap=options.event_log,
+                           jacobian=_JACOBIAN[jacobian])
+    res = dopri_loop(arrs, u0, t_eval, fin, iin)
+    code, t_end, y, Phi, u_eval, cnt = res.status, res.t, res.y, res.Phi, res.u_eval, res.counters
     status = from_code(code)
     if status == Status.OK and not np.all(np.isfinite(y)):
         status = Status.NONFINITE
@@ -109,10 +118,11 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=status,
         message=status.message + (f" at t = {t_end:.6g}" if status else ""),
         steps=int(cnt[0]), rejected=int(cnt[1]), rhs_calls=int(cnt[2]), events=nev,
-        event_times=ev_t[:keep], event_contacts=ev_j[:keep], event_modes=ev_m[:keep],
-        monitor_min=float(qmin), monitor_max=float(qmax), monitor_losses=int(cnt[4]),
-        final_modes=modes, f_end=f_end,
+        event_times=res.ev_t[:keep], event_contacts=res.ev_j[:keep],
+        event_modes=res.ev_m[:keep], monitor_min=float(res.mon_min),
+        monitor_max=float(res.mon_max), monitor_losses=int(cnt[4]),
+        final_modes=res.mode, f_end=res.f_end,
         monodromy=Phi[:, :n].copy() if variational else None,
         dparam=Phi[:, n].copy() if variational else None,
-        wall_time=time.perf_counter() - wall, error_estimate=float(err_sum),
+        wall_time=time.perf_counter() - wall, error_estimate=float(res.err_sum),
     )
