@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
-.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox nvh
+.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
@@ -54,6 +54,25 @@ gear-pair: $(STAMP)
 	$(VG) run configs/gear_pair.toml --out $(OUT)/gear_pair
 
 gearboxes: two-stage two-stage-helical single-stage gear-pair
+
+## speed x load operating maps ([map]): two_stage 40 x 20; gear_pair 40 x 6 with LP/PD curves
+map: $(STAMP)
+	$(VG) map configs/two_stage.toml --out $(OUT)/two_stage_map
+
+map-gear-pair: $(STAMP)
+	$(VG) map configs/gear_pair.toml --out $(OUT)/gear_pair_map
+
+## run-up / run-down transients ([runup]) in the scene's own output folder, so that the
+## envelope figure overlays the sweep and branches of `make two-stage` / `make gear-pair`
+runup: $(STAMP)
+	$(VG) runup configs/two_stage.toml --out $(OUT)/two_stage
+
+runup-gear-pair: $(STAMP)
+	$(VG) runup configs/gear_pair.toml --out $(OUT)/gear_pair
+
+## two_stage 10 s run-up: wall time (target <= 30 s), steps per mesh period
+bench-runup: $(STAMP)
+	$(PY) benchmarks/bench_runup.py
 
 ## two_stage spectra over speed (waterfalls with order lines) and the housing's ERP ([nvh])
 nvh: $(STAMP)

@@ -17,7 +17,9 @@ than 2 x margin share a window); loads are visited outward from the first one.  
 window starts at its upper end from the period-1 orbit there (the settled motion shot over
 one period, else the orbit that continues the static equilibrium), so the period-2 branch
 is never followed (``period_doubling_branch = False``) and a PD of the period-1 branch is
-where the sweep's period-2 region begins or ends.
+where the sweep's period-2 region begins or ends.  The branch enters and leaves each
+window, so its folds come in pairs: a window with an odd number of LPs (a step passed over
+one) is traced once more at half the step, and its message says so.
 """
 from __future__ import annotations
 
@@ -102,6 +104,16 @@ def windows_around(speeds, margin: float, bounds) -> tuple:
     return tuple(out)
 
 
+def _distinct(pts, tol: float = 0.1) -> tuple:
+    """(label, rpm) sorted by speed, a point within ``tol`` rpm of one of the same label
+    kept once (the solver can locate one PD from both sides of a turn)."""
+    out: list = []
+    for lab, p in sorted(pts, key=lambda x: x[1]):
+        if not any(lab == q_lab and abs(p - q) < tol for q_lab, q in out):
+            out.append((lab, p))
+    return tuple(out)
+
+
 def _trace_window(model, lo, hi, *, integration, tol, steps, transient_periods, period_tol):
     """(points [(label, rpm)], message, branch points, flows) of the period-1 branch over
     [lo, hi], started at hi."""
@@ -143,11 +155,25 @@ def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, ma
             p, msg, n, f = _trace_window(m, lo, hi, integration=integration, tol=tol,
                                          steps=steps, transient_periods=transient_periods,
                                          period_tol=period_tol)
+            if sum(1 for lab, _ in p if lab == "LP") % 2:
+                # the branch enters and leaves the window: folds come in pairs; an odd count
+                # means a step passed over one (seen near a PD close to a fold): once more
+                # with half the steps
+                half = {**steps, "ds": 0.5 * steps["ds"], "ds_max": 0.5 * steps["ds_max"],
+                        "max_points": 2 * steps["max_points"]}
+                p2, msg2, n2, f2 = _trace_window(m, lo, hi, integration=integration, tol=tol,
+                                                 steps=half, transient_periods=transient_periods,
+                                                 period_tol=period_tol)
+                n, f = n + n2, f + f2
+                if sum(1 for lab, _ in p2 if lab == "LP") % 2 == 0:
+                    p, msg = p2, f"{msg2} (traced again at half the step: an odd number of LPs)"
+                else:
+                    msg = f"{msg}; an odd number of LPs, also at half the step: a fold may be missing"
             pts += p
             msgs.append(msg)
             npts += n
             flows += f
-        pts = tuple(sorted(set(pts), key=lambda x: x[1]))
+        pts = _distinct(pts)
         found[k] = LoadBifurcations(scale=float(scales[k]), windows=tuple(windows), points=pts,
                                     messages=tuple(msgs), branch_points=npts, flows=flows,
                                     wall_time=time.perf_counter() - t0)
@@ -164,28 +190,50 @@ def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, ma
     return tuple(found[k] for k in range(scales.size))
 
 
+def _align(prev, new, max_jump: float) -> list:
+    """Order-preserving pairs (i, j) of two sorted speed lists with the least total distance
+    (a point left unpaired costs ``max_jump``; pairs farther apart are not allowed): the
+    curves of one label do not cross between two loads."""
+    n, m = len(prev), len(new)
+    cost = np.full((n + 1, m + 1), np.inf)
+    cost[0, :] = max_jump * np.arange(m + 1)
+    cost[:, 0] = max_jump * np.arange(n + 1)
+    for i in range(1, n + 1):
+        for j in range(1, m + 1):
+            d = abs(prev[i - 1] - new[j - 1])
+            pair = cost[i - 1, j - 1] + d if d <= max_jump else np.inf
+            cost[i, j] = min(pair, cost[i - 1, j] + max_jump, cost[i, j - 1] + max_jump)
+    pairs, i, j = [], n, m
+    while i > 0 and j > 0:
+        d = abs(prev[i - 1] - new[j - 1])
+        if d <= max_jump and cost[i, j] == cost[i - 1, j - 1] + d:
+            pairs.append((i - 1, j - 1))
+            i, j = i - 1, j - 1
+        elif cost[i, j] == cost[i - 1, j] + max_jump:
+            i -= 1
+        else:
+            j -= 1
+    return pairs[::-1]
+
+
 def join_curves(loads, scaling: LoadScaling, max_jump: float) -> tuple:
-    """Join the points of successive loads per label by the nearest speed (within
-    ``max_jump`` rpm; a point without a partner starts a new curve)."""
+    """Join the points of successive loads per label: the order-preserving pairing with the
+    least total speed change (:func:`_align`, pairs within ``max_jump`` rpm); a point
+    without a partner starts a new curve, a curve without one ends (a cusp, or the family
+    left the window)."""
     curves: list = []           # [label, [(scale, rpm)], open]
     for ld in loads:
         for label in LABELS:
-            speeds = [p for lab, p in ld.points if lab == label]
-            open_ = [c for c in curves if c[0] == label and c[2]]
-            pairs = sorted(((abs(c[1][-1][1] - s), i, j) for i, c in enumerate(open_)
-                            for j, s in enumerate(speeds)), key=lambda x: x[0])
-            used_c, used_s = set(), set()
-            for d, i, j in pairs:
-                if d <= max_jump and i not in used_c and j not in used_s:
-                    open_[i][1].append((ld.scale, speeds[j]))
-                    used_c.add(i)
-                    used_s.add(j)
-            for i, c in enumerate(open_):
-                if i not in used_c:
-                    c[2] = False            # this family ends (cusp, or left the range)
-            for j, s in enumerate(speeds):
-                if j not in used_s:
-                    curves.append([label, [(ld.scale, s)], True])
+            speeds = sorted(p for lab, p in ld.points if lab == label)
+            open_ = sorted((c for c in curves if c[0] == label and c[2]),
+                           key=lambda c: c[1][-1][1])
+            pairs = _align([c[1][-1][1] for c in open_], speeds, max_jump)
+            for i, j in pairs:
+                open_[i][1].append((ld.scale, speeds[j]))
+            for i in set(range(len(open_))) - {i for i, _ in pairs}:
+                open_[i][2] = False
+            for j in set(range(len(speeds))) - {j for _, j in pairs}:
+                curves.append([label, [(ld.scale, speeds[j])], True])
     out = []
     for label, pts, _ in curves:
         sc = np.array([p[0] for p in pts])

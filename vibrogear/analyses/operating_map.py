@@ -102,9 +102,12 @@ def grid_array(m: OperatingMap, name: str) -> np.ndarray:
 
 
 def map_integration_options(scene, cfg):
-    """The scene's [integration] section, or (rtol not given) the tolerances that deliver
-    ``[map] accuracy``, no looser than ``[map] period_tol`` (as a sweep's)."""
+    """``[map] rtol`` where given; else the scene's [integration] section, or (rtol not
+    given there) the tolerances that deliver ``[map] accuracy``, no looser than ``[map]
+    period_tol`` (as a sweep's).  atol = 1e-6 rtol unless the section's is taken."""
     opts = scene.integration
+    if cfg.rtol is not None:
+        return dataclasses.replace(opts, rtol=cfg.rtol, atol=ATOL_PER_RTOL * cfg.rtol)
     if rtol_given(scene):
         return opts
     rtol = min(tolerances_for(cfg.accuracy)[0], cfg.period_tol)

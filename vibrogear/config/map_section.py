@@ -37,6 +37,9 @@ class MapConfig(SweepOptions):
     twist_min: float | None = spec(None, ge=0.0, le=10.0, doc="twist of the motor coupling, "
                                    "lower end [rad] (or give torque_min/torque_max)")
     twist_max: float | None = spec(None, ge=0.0, le=10.0, doc="motor twist, upper end [rad]")
+    rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for the map "
+                              "(atol = 1e-6 rtol); default: [integration] rtol where given, "
+                              "else the rtol the accuracy asks for (as a sweep's)")
     force_periods: int = spec(4, ge=1, le=1000, doc="mesh periods sampled after each point "
                               "for the largest mesh force")
     force_samples: int = spec(128, ge=8, le=100_000, doc="samples per mesh period for the "
