@@ -48,7 +48,8 @@ def test_nyquist_bin_and_odd_lengths():
     x = np.cos(np.pi * np.arange(n))             # the Nyquist bin: +1, -1, ...
     sp = amplitude_spectrum(x, 1.0)
     assert sp.amplitude[-1] == pytest.approx(1.0) and np.allclose(sp.amplitude[:-1], 0.0)
-    assert sp.parseval_error < 1e-14 and power_from_amplitudes(sp.amplitude, n) == pytest.approx(1.0)
+    assert sp.parseval_error < 1e-14
+    assert power_from_amplitudes(sp.amplitude, n) == pytest.approx(1.0)
     rng = np.random.default_rng(1)
     for m in (15, 17, 64):
         y = rng.standard_normal((3, m))

@@ -55,7 +55,8 @@ class NvhResult:
     study: Study | None = None
 
 
-def steady_points(study: Study, scene, previous) -> tuple[np.ndarray, np.ndarray, str]:
+def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, str]:
     """(rpm (P,), settled states (P, n), source) of the steady points (module docstring)."""
     cfg = scene.nvh
     prev = (previous or {}).get("sweep") if cfg.use_sweep else None
@@ -74,9 +75,15 @@ def steady_points(study: Study, scene, previous) -> tuple[np.ndarray, np.ndarray
     from ..solvers.sweep import sweep
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)
-    res = sweep(study.model, rpm, directions=("up",), transient_periods=cfg.transient_periods,
-                record_periods=1, max_period=1, options=integration_options(scene, record=True),
-                u0=study.start(rpm[0]), workers=1, lyapunov=False)
+    kw = dict(directions=("up",), transient_periods=cfg.transient_periods, record_periods=1,
+              max_period=1, options=integration_options(scene, record=True),
+              u0=study.start(rpm[0]), workers=1, lyapunov=False)
+    if ctx is None:
+        res = sweep(study.model, rpm, **kw)
+    else:
+        with ctx.progress(rpm.size, "nvh settle") as bar:
+            res = sweep(study.model, rpm, **kw,
+                        callback=lambda rec: bar.update(1, f"{rec.param:.4g} rpm"))
     ok = res.status == 0
     if not np.any(ok):
         raise NumericalFailure(f"nvh: no speed of the [nvh] grid settled: {res.message[0]}")
@@ -117,7 +124,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     cfg = scene.nvh
     gm, model = study.gearbox, study.model
     t_start = time.perf_counter()
-    rpm, states0, source = steady_points(study, scene, previous)
+    rpm, states0, source = steady_points(study, scene, previous, ctx)
     t_settle = time.perf_counter() - t_start
     R, S = cfg.record_periods, cfg.samples_per_period
     opts = integration_options(scene, record=True)
