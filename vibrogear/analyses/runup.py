@@ -24,8 +24,7 @@ import numpy as np
 from ..models.contact_law import flank
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.ramp import RampResult, SpeedProfile, ramp
-from ..solvers.status import Status
-from .order_tracking import OrderTracks, Waterfall, order_tracks, waterfall
+from .order_tracking import Waterfall, order_tracks, waterfall
 from .study import Study, integration_options
 
 __all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed"]
@@ -201,8 +200,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                "chunks_per_period": r.chunks_per_period,
                                "midpoint": r.midpoint},
         }
-    status = Status.OK
-    summary["status"] = status.text
     return AnalysisOutcome(summary=summary, result=RunupResult(
         study=study, mesh_names=mesh_names, order_names=names, orders=orders, runs=runs,
         teeth=teeth))

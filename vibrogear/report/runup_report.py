@@ -101,5 +101,6 @@ def write(scene, outcome, out, previous=None) -> dict:
                                                branch=branch)[0])
     files["orders_png"] = str(plot_orders(result, out / "runup_orders")[0])
     files["waterfall_png"] = str(plot_waterfall(result, out / "runup_waterfall")[0])
-    files["overlaid"] = [k for k, v in (("sweep", sweep), ("continuation", branch)) if v is not None]
+    files["overlaid"] = [k for k, v in (("sweep", sweep), ("continuation", branch))
+                         if v is not None]
     return files

@@ -88,7 +88,7 @@ class RampResult:
     t: np.ndarray               # (n,) model time of the samples
     param: np.ndarray           # (n,) the profile's parameter at t
     held: np.ndarray            # (n,) the parameter held by the sample's chunk
-    phase: np.ndarray           # (n,) accumulated excitation phase [rad], j 2 pi / samples_per_period
+    phase: np.ndarray           # (n,) excitation phase [rad]: j 2 pi / samples_per_period
     delta: np.ndarray           # (len(rows), n) contact deformations
     delta_dot: np.ndarray       # (len(rows), n) their rates (model units)
     samples_per_period: int
