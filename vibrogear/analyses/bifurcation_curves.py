@@ -25,10 +25,12 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..config.options import ContinuationOptions
+from ..pipeline.executors import run_units, under_mpi
 from ..solvers.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from .continuation import starting_orbit
 from .load_scaling import LoadScaling
@@ -136,39 +138,51 @@ def _trace_window(model, lo, hi, *, integration, tol, steps, transient_periods, 
     return pts, f"[{lo:.6g}, {hi:.6g}] rpm: {res.message}", n, int(res.counters.get("flows", 0))
 
 
+def _window_unit(model, kw, window, _emit):
+    """One window, with the retry of an odd number of LPs (module docstring)."""
+    lo, hi = window
+    steps = kw["steps"]
+    p, msg, n, f = _trace_window(model, lo, hi, **kw)
+    if sum(1 for lab, _ in p if lab == "LP") % 2:
+        half = {**steps, "ds": 0.5 * steps["ds"], "ds_max": 0.5 * steps["ds_max"],
+                "max_points": 2 * steps["max_points"]}
+        p2, msg2, n2, f2 = _trace_window(model, lo, hi, **{**kw, "steps": half})
+        n, f = n + n2, f + f2
+        if sum(1 for lab, _ in p2 if lab == "LP") % 2 == 0:
+            p, msg = p2, f"{msg2} (traced again at half the step: an odd number of LPs)"
+        else:
+            msg = f"{msg}; an odd number of LPs, also at half the step: a fold may be missing"
+    return p, msg, n, f
+
+
+def _run_windows(model, kw, windows, workers):
+    """The windows of one load: in parallel on local processes (``workers``, None: all
+    cores), serially under MPI (the curves run on rank 0 alone)."""
+    fn = partial(_window_unit, model, kw)
+    if len(windows) == 1 or workers == 1 or under_mpi():
+        return [fn(w, None) for w in windows]
+    return run_units(fn, list(windows), workers=workers)
+
+
 def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, margin: float,
                         integration, tol: float, steps: dict, transient_periods: int = 200,
-                        period_tol: float = 1e-4, callback=None) -> tuple:
+                        period_tol: float = 1e-4, callback=None, workers=None) -> tuple:
     """:class:`LoadBifurcations` per load factor in ``scales`` (returned in increasing
     load), visiting the loads outward from the one nearest 1 (module docstring).
-    ``steps``: the :class:`~vibrogear.config.options.ContinuationSteps` fields (rpm)."""
+    ``steps``: the :class:`~vibrogear.config.options.ContinuationSteps` fields (rpm);
+    ``workers``: local processes for the windows of one load (None: all cores)."""
     scales = np.sort(np.asarray(scales, dtype=float).ravel())
     k0 = int(np.argmin(np.abs(scales - 1.0)))
     bounds = (float(first_window[0]), float(first_window[1]))
     found: dict = {}
+    kw = dict(integration=integration, tol=tol, steps=dict(steps),
+              transient_periods=transient_periods, period_tol=period_tol)
 
     def visit(k, windows):
         t0 = time.perf_counter()
         m = scaling.model_at(model, scales[k])
         pts, msgs, npts, flows = [], [], 0, 0
-        for lo, hi in windows:
-            p, msg, n, f = _trace_window(m, lo, hi, integration=integration, tol=tol,
-                                         steps=steps, transient_periods=transient_periods,
-                                         period_tol=period_tol)
-            if sum(1 for lab, _ in p if lab == "LP") % 2:
-                # the branch enters and leaves the window: folds come in pairs; an odd count
-                # means a step passed over one (seen near a PD close to a fold): once more
-                # with half the steps
-                half = {**steps, "ds": 0.5 * steps["ds"], "ds_max": 0.5 * steps["ds_max"],
-                        "max_points": 2 * steps["max_points"]}
-                p2, msg2, n2, f2 = _trace_window(m, lo, hi, integration=integration, tol=tol,
-                                                 steps=half, transient_periods=transient_periods,
-                                                 period_tol=period_tol)
-                n, f = n + n2, f + f2
-                if sum(1 for lab, _ in p2 if lab == "LP") % 2 == 0:
-                    p, msg = p2, f"{msg2} (traced again at half the step: an odd number of LPs)"
-                else:
-                    msg = f"{msg}; an odd number of LPs, also at half the step: a fold may be missing"
+        for p, msg, n, f in _run_windows(m, kw, windows, workers):
             pts += p
             msgs.append(msg)
             npts += n
@@ -252,7 +266,7 @@ def curves_for_map(study: Study, scene, scaling: LoadScaling, scales) -> Bifurca
                                 margin=cfg.curve_margin, integration=scene.integration,
                                 tol=scene.shooting.tol, steps=steps,
                                 transient_periods=cfg.curve_transient_periods,
-                                period_tol=cfg.period_tol)
+                                period_tol=cfg.period_tol, workers=cfg.workers)
     return BifurcationCurves(loads=loads, curves=join_curves(loads, scaling, 2 * cfg.curve_margin),
                              torque_nominal=scaling.torque_nominal,
                              twist_nominal=scaling.twist_nominal,
