@@ -7,9 +7,9 @@ at once (returning ``False`` stops all work).  Only the coordinator calls ``on_r
 so it is the one writer of files.  The backend is chosen automatically:
 
 * **MPI** when the program runs under ``mpirun`` with more than one rank (detected from
-  ``OMPI_COMM_WORLD_SIZE`` / ``PMI_SIZE`` before :mod:`mpi4py` is imported): rank 0
-  coordinates (hands out units, receives the items), the other ranks compute.  Every
-  rank must call :func:`run_units` (collective).  An exception inside ``fn`` is sent back
+  ``OMPI_COMM_WORLD_SIZE`` / ``PMI_SIZE`` before :mod:`mpi4py` is imported): every rank
+  computes; rank 0 also coordinates (hands out units, receives the items) between its
+  own items.  Every rank must call :func:`run_units` (collective).  An exception inside ``fn`` is sent back
   to rank 0 and re-raised as :class:`UnitError` on every rank after an orderly shutdown;
   any other exception aborts all ranks (``MPI.Abort``) so that ``mpirun`` never hangs.
 * **processes** (``multiprocessing``, ``fork`` context) when ``workers > 1``; default
@@ -87,22 +87,33 @@ def backend_for(n_units: int, workers: int | None = None) -> str:
     return "processes" if w > 1 else "serial"
 
 
-def run_units(fn, units, *, workers: int | None = None, on_result=None) -> list:
+def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=None) -> list:
     """Run ``fn(unit, emit)`` for every unit; returns the list of ``fn``'s return values
     in unit order (None for units left unfinished after a stop).  ``on_result(i, item)``
     receives every emitted item in the coordinating process; returning ``False`` stops.
     An exception in ``fn`` propagates as is when serial, as :class:`UnitError` (with the
     remote traceback) from processes or ranks.  Under MPI this is collective and every
-    rank gets the same list."""
+    rank gets the same list.
+
+    Units are handed out dynamically (a free process or rank takes the next one); with
+    ``costs`` (one estimate per unit, any scale) the costliest go first, so that the
+    short ones fill the end (longest-processing-time order).  Serial runs keep unit
+    order.  The results never depend on the order."""
     units = list(units)
     if workers is not None and int(workers) < 1:
         raise ValueError("run_units: workers must be >= 1 (or None: all cores)")
+    order = list(range(len(units)))
+    if costs is not None:
+        costs = [float(c) for c in costs]
+        if len(costs) != len(units):
+            raise ValueError(f"run_units: costs has {len(costs)} entries for {len(units)} units")
+        order.sort(key=lambda i: -costs[i])
     kind = backend_for(len(units), workers)
     if kind == "mpi":
-        return _run_mpi(fn, units, on_result)
+        return _run_mpi(fn, units, on_result, order)
     if kind == "processes":
         w = default_workers(len(units)) if workers is None else min(int(workers), len(units))
-        return _run_processes(fn, units, w, on_result)
+        return _run_processes(fn, units, w, on_result, order)
     return _run_serial(fn, units, on_result)
 
 
@@ -169,7 +180,7 @@ def _process_worker(fn, units, tasks, results, parent_pid) -> None:
         results.put(("done", i, out))
 
 
-def _run_processes(fn, units, workers, on_result) -> list:
+def _run_processes(fn, units, workers, on_result, order) -> list:
     import multiprocessing as mp
 
     ctx = mp.get_context("fork")
@@ -182,7 +193,7 @@ def _run_processes(fn, units, workers, on_result) -> list:
     try:
         for p in procs:
             p.start()
-        for i in [*range(len(units)), *([None] * workers)]:
+        for i in [*order, *([None] * workers)]:
             tasks.put(i)                        # after the forks: no feeder thread yet
         while finished < len(units):
             try:
@@ -221,16 +232,19 @@ def _run_processes(fn, units, workers, on_result) -> list:
 
 # ---------------------------------------------------------------- MPI
 
-_CTRL, _DATA = 11, 12
+_CTRL, _DATA, _STOP = 11, 12, 13
+#: units queued at a computing rank while enough are left (no rank waits for rank 0,
+#: which computes too and answers only between its own items)
+_AHEAD = 2
 
 
-def _run_mpi(fn, units, on_result) -> list:
+def _run_mpi(fn, units, on_result, order) -> list:
     comm = _comm()
     try:
         if comm.size < 2:
             return _run_serial(fn, units, on_result)
         if comm.rank == 0:
-            outcome = _mpi_root(comm, units, on_result)
+            outcome = _MpiRoot(comm, fn, units, on_result, order).run()
         else:
             _mpi_worker(comm, fn)
             outcome = None
@@ -246,72 +260,138 @@ def _run_mpi(fn, units, on_result) -> list:
     return outcome[1]
 
 
-def _mpi_root(comm, units, on_result):
-    from mpi4py import MPI
+class _MpiRoot:
+    """Rank 0: hands out units in ``order`` (one at a time, a second one ahead while more
+    than one per rank is left), computes units itself between the messages it serves,
+    delivers every item to ``on_result``.  ``on_result`` returning False interrupts every
+    rank's unit (tag _STOP, "stop"); an error lets the units in progress finish, their
+    items delivered, and skips the queued ones ("drain"); then every rank ends (_CTRL)."""
 
-    results: list = [None] * len(units)
-    todo = list(range(len(units)))
-    active = set(range(1, comm.size))
-    stop_sent: set[int] = set()
-    stopping = False
-    error = None
+    def __init__(self, comm, fn, units, on_result, order):
+        from collections import deque
+        from mpi4py import MPI
 
-    def next_task(r):
-        if todo and not stopping:
-            i = todo.pop(0)
-            comm.send(("unit", i, units[i]), dest=r, tag=_CTRL)
-        elif r not in stop_sent:
-            stop_sent.add(r)
-            comm.send(("stop",), dest=r, tag=_CTRL)
+        self.comm, self.fn, self.units, self.on_result = comm, fn, units, on_result
+        self.todo, self.results = deque(order), [None] * len(units)
+        self.workers = range(1, comm.size)
+        self.active, self.queued = set(self.workers), {r: 0 for r in self.workers}
+        self.ended: set[int] = set()            # ranks sent the final _CTRL stop
+        self.stopping = self.interrupted = False   # interrupted: on_result asked to stop
+        self.error = None
+        self.status, self.any_source = MPI.Status(), MPI.ANY_SOURCE
 
-    def stop_all():
-        for r in sorted(active - stop_sent):
-            stop_sent.add(r)
-            comm.send(("stop",), dest=r, tag=_CTRL)
+    def feed(self, r):
+        if self.stopping or r in self.ended:
+            return
+        while self.todo and (self.queued[r] == 0 or (
+                self.queued[r] < _AHEAD and len(self.todo) > self.comm.size)):
+            i = self.todo.popleft()
+            self.comm.send(("unit", i, self.units[i]), dest=r, tag=_CTRL)
+            self.queued[r] += 1
+        if not self.todo:
+            self.ended.add(r)
+            self.comm.send(("stop",), dest=r, tag=_CTRL)
 
-    for r in sorted(active):
-        next_task(r)
-    status = MPI.Status()
-    while active:
-        while not comm.iprobe(source=MPI.ANY_SOURCE, tag=_DATA, status=status):
-            time.sleep(0.002)                   # leave the cores to the computing ranks
-        r = status.Get_source()
-        msg = comm.recv(source=r, tag=_DATA)
-        kind = msg[0]
-        if kind == "bye":
-            active.discard(r)
-        elif kind == "item":
-            if not stopping and not _deliver(on_result, msg[1], msg[2]):
-                stopping = True
-                stop_all()
-        elif kind == "done":
-            results[msg[1]] = msg[2]
-            next_task(r)
-        elif kind == "error":
-            if error is None:
-                error = ("error", msg[1], msg[2], msg[3])
-            stopping = True
-            stop_all()
-    return error if error is not None else ("ok", results)
+    def stop(self, interrupt: bool = True):
+        if self.stopping:
+            return
+        self.stopping = True
+        self.interrupted = interrupt
+        self.todo.clear()
+        for r in sorted(self.active):
+            self.comm.send(("stop" if interrupt else "drain",), dest=r, tag=_STOP)
+            if r not in self.ended:
+                self.ended.add(r)
+                self.comm.send(("stop",), dest=r, tag=_CTRL)
+
+    def serve(self, block: bool):
+        """Handle the pending messages (at least one when ``block``)."""
+        while True:
+            if not self.comm.iprobe(source=self.any_source, tag=_DATA, status=self.status):
+                if not block:
+                    return
+                time.sleep(0.002)               # leave the cores to the computing ranks
+                continue
+            block = False
+            r = self.status.Get_source()
+            msg = self.comm.recv(source=r, tag=_DATA)
+            kind = msg[0]
+            if kind == "bye":
+                self.active.discard(r)
+            elif kind == "item":
+                if not self.interrupted and not _deliver(self.on_result, msg[1], msg[2]):
+                    self.stop()
+            elif kind == "done":
+                self.results[msg[1]] = msg[2]
+                self.queued[r] -= 1
+                self.feed(r)
+            elif kind == "error":
+                if self.error is None:
+                    self.error = ("error", msg[1], msg[2], msg[3])
+                self.stop(interrupt=False)
+
+    def own_unit(self, i):
+        def emit(item):
+            if not self.interrupted and not _deliver(self.on_result, i, item):
+                self.stop()
+            self.serve(block=False)
+            if self.interrupted:
+                raise _Stop
+
+        try:
+            self.results[i] = self.fn(self.units[i], emit)
+        except _Stop:
+            pass
+        except Exception as exc:                # noqa: BLE001 - ends every rank as a worker's
+            if self.error is None:
+                self.error = ("error", i, traceback.format_exc(), _transportable(exc))
+            self.stop(interrupt=False)
+
+    def run(self):
+        for r in self.workers:
+            self.feed(r)
+        while self.active or self.todo:         # a stop empties todo
+            self.serve(block=not self.todo)
+            if self.todo:
+                self.own_unit(self.todo.popleft())
+                if not self.todo:
+                    for r in self.workers:
+                        self.feed(r)            # the last units are out: end the idle ranks
+        return self.error if self.error is not None else ("ok", self.results)
 
 
 def _mpi_worker(comm, fn) -> None:
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
+    stopping = False
+
+    def stop_message():
+        """The pending _STOP message ("stop": interrupt, "drain": finish this unit), or None."""
+        return comm.recv(source=0, tag=_STOP)[0] if comm.iprobe(source=0, tag=_STOP) else None
+
     while True:
         msg = comm.recv(source=0, tag=_CTRL)
         if msg[0] == "stop":
+            while stop_message() is not None:   # nothing left unreceived
+                pass
             comm.send(("bye",), dest=0, tag=_DATA)
             return
         _, i, unit = msg
+        stopping = stopping or stop_message() is not None
+        if stopping:
+            continue                            # a queued unit after a stop
 
         def emit(item, i=i):
+            nonlocal stopping
             comm.send(("item", i, item), dest=0, tag=_DATA)
-            if comm.iprobe(source=0, tag=_CTRL):
-                raise _Stop                     # the pending message is the stop
+            kind = stop_message()
+            stopping = stopping or kind is not None
+            if kind == "stop":
+                raise _Stop
 
         try:
             out = fn(unit, emit)
         except _Stop:
+            stopping = True
             continue
         except Exception as exc:                # noqa: BLE001 - sent back to rank 0
             comm.send(("error", i, traceback.format_exc(), _transportable(exc)), dest=0,

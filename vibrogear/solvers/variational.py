@@ -21,8 +21,8 @@ from .tableau import DP_A, DP_B, DP_C
 __all__ = ["BLAS_MIN_WORK", "variational_step", "saltation"]
 
 #: the Jacobian action goes through BLAS from this many entries m (n + 1) of the tangent's
-#: position half on (measured: the gear pair ... ; the two-stage gearbox, 146 x 293:
-#: 1.3-1.4x faster by BLAS)
+#: position half on (measured per J Phi, loops / BLAS: gear pair m = 34, 2346 entries, 26 /
+#: 31 us; single stage m = 80, 12880 entries, 119 / 89 us; two stage m = 146, 1.35x)
 BLAS_MIN_WORK = 4096
 
 @njit(cache=True, _nrt=False, inline="always")
