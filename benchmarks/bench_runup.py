@@ -5,7 +5,8 @@ waterfall): wall time against the target of 30 s, steps per mesh period.
 Baseline measured in the same run: one integrate() call over the same number of mesh
 periods at the run's mean speed (2250 rpm), i.e. the cost of the motion without chunks; the
 ratio is what the chunks of constant speed (restarts, repacking the speed-dependent
-coupling) cost.  Also the solver alone at 4, 2 and 1 chunks per mesh period.
+coupling) cost.  Also the solver alone at 4, 2 and 1 chunks per mesh period, and at 1 chunk
+at the [integration] section's rtol (1e-6) instead of [runup] rtol.
 
 Run: .venv/bin/python benchmarks/bench_runup.py   (never run by the tests; ~3 min)
 Writes benchmarks/results/bench_runup.json.
@@ -26,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from vibrogear.analyses import runup  # noqa: E402
-from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
+from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.pipeline.outcome import RunContext  # noqa: E402
 from vibrogear.solvers.integrate import integrate  # noqa: E402
@@ -40,7 +41,7 @@ def main() -> dict:
     cfg = scene.runup
     study = build_study(scene)
     model = study.model
-    opts = integration_options(scene, record=True)
+    opts = runup.runup_options(scene)
     times, rpm = cfg.profile()
     prof = SpeedProfile.of(times, rpm, study.time_unit_s)
     periods = float(np.trapz(prof.params, prof.times) * model.omega_per_param / (2 * np.pi))
@@ -68,11 +69,19 @@ def main() -> dict:
         solver[str(cpp)] = {"wall_s": time.perf_counter() - t0, "steps": rr.steps,
                             "steps_per_mesh_period": (rr.steps - rr.settle_steps) / rr.periods,
                             "chunks": rr.chunks}
+    t0 = time.perf_counter()
+    fine = ramp(model, prof, u0, options=scene.integration, chunks_per_period=1,
+                samples_per_period=cfg.samples_per_period, settle_periods=cfg.settle_periods,
+                rows=study.contact_groups["mesh"])
+    solver["1 at [integration] rtol"] = {
+        "rtol": scene.integration.rtol, "wall_s": time.perf_counter() - t0, "steps": fine.steps,
+        "steps_per_mesh_period": (fine.steps - fine.settle_steps) / fine.periods}
     res = {
         "benchmark": "two_stage [runup]: 10 s run-up 1500 -> 3000 rpm at 150 rpm/s, "
                      f"settle {cfg.settle_periods} mesh periods, {cfg.chunks_per_period} "
                      f"chunks and {cfg.samples_per_period} samples per mesh period",
         "machine": f"{platform.node()} ({os.cpu_count()} cores, shared: timings +-30 %)",
+        "load_average_1_5_15": list(os.getloadavg()),
         "rtol": opts.rtol, "atol": opts.atol, "m": model.n_modes,
         "mesh_periods": r.periods,
         "wall_s_analysis": wall_analysis, "wall_s_solver": r.wall_time,

@@ -156,6 +156,7 @@ def test_waterfall_of_a_pure_tone():
     ({"table": [[0, 1, 3], [1, 2]]}, "runup.table[0]"),
     ({"table": [[0, 1], [1, 2]], "samples_per_period": 30}, "runup.samples_per_period"),
     ({"table": [[0, 1], [1, 2]], "directions": ["sideways"]}, "runup.directions[0]"),
+    ({"table": [[0, 1], [1, 2]], "rtol": 1.5}, "runup.rtol"),
 ])
 def test_bad_runup_section_names_the_field(data, field):
     with pytest.raises(ConfigError) as exc:

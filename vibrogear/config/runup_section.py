@@ -37,6 +37,9 @@ class RunupConfig:
     mesh_orders: tuple[int, ...] = spec((1, 2, 3), min_len=1, max_len=10, ge=1, le=100,
                                         doc="harmonics of each mesh frequency tracked")
     spectrogram_s: float = spec(0.05, gt=0.0, doc="waterfall: segment length [s]")
+    rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for the run "
+                              "(atol = 1e-6 rtol); default: the [integration] section's where "
+                              "given, else the rtol the [sweep] accuracy asks for")
 
     def validate(self, path: str) -> None:
         p = f"{path}." if path else ""
