@@ -246,7 +246,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                           root=ctx.root, force_periods=cfg.force_periods,
                           force_samples=cfg.force_samples,
                           callback=lambda k, rec: bar.update(
-                              1, f"{scaling.torque(scales[k]):.4g} N m {rec.param:.4g} rpm "
+                              1, f"{scaling.torque(scales[k]):.4g} N m "
+                                 f"({scaling.twist(scales[k]):.4g} rad) {rec.param:.4g} rpm "
                                  f"P{rec.period_n}"))
     failed = sum(int(np.sum(r.status != 0)) for r in res.rows)
     if failed == sum(r.param.size for r in res.rows):
