@@ -12,6 +12,10 @@ rattle windows, and its branch shows where stability is lost (PD / NS / LP).  Fo
 model (gearbox: states ~1e-5 m, speeds ~1e3 rpm) the arclength is measured in parameter
 units: the parameter is scaled by range / |u|, so ``ds``, ``ds_min``, ``ds_max`` are given in
 the scene's parameter unit (:class:`~vibrogear.config.options.ContinuationSteps`).
+
+With ``from_sweep`` also a branch both ways from each distinct period-n window of the sweep
+whose ``sweep.npz`` is in the output folder (this run's sweep writes it before; or an
+earlier run's), each half ending with its reason (:mod:`.sweep_branches`).
 """
 from __future__ import annotations
 
@@ -22,9 +26,9 @@ import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.continuation import (ContinuationResult, PeriodicOrbitProblem, PseudoArclength,
-                                    continuation)
+                                    SpecialPoint, continuation)
 from ..solvers.integrate import integrate
-from ..solvers.shooting import shoot
+from ..solvers.shooting import residual_norm, shoot
 from ..solvers.sweep import classify_period
 from .study import Study, integration_options
 
@@ -102,14 +106,20 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         scale = (hi - lo) / max(float(np.linalg.norm(guess)), 1e-300)
     problem = PeriodicOrbitProblem(model, u0, p0, n_periods=n_periods,
                                    direction=-1 if cfg.start == "max" else 1)
-    method = PseudoArclength(integration=opts, tol=scene.shooting.tol, param_scale=scale)
+    # a gearbox's special points to 2e-4 of the step (ds <= 60 rpm: 0.012 rpm), each
+    # regula-falsi iterate an orbit with the variational equations
+    method = PseudoArclength(integration=opts, tol=scene.shooting.tol, param_scale=scale,
+                             **({"locate_tol": 2e-4} if study.balance_arclength else {}))
     with ctx.progress(options.max_points, "continuation") as bar:
         res = continuation(problem, method, options,
                            callback=lambda p: bar.update(1, f"{p.param:.4g} {study.param_unit}"))
+    if not res.branches[0].points:
+        raise NumericalFailure(f"continuation: {res.message}")
+    from_sweep = None
+    if getattr(cfg, "from_sweep", False):
+        res, from_sweep = _from_sweep(study, ctx, res, method, options, cfg)
     wall = time.perf_counter() - t0
     branches = res.branches
-    if not branches[0].points:
-        raise NumericalFailure(f"continuation: {res.message}")
     special = [{"label": s.label, study.param_name: float(s.param), "branch": s.branch,
                 "qmax": float(branches[s.branch].points[s.index].qmax)}
                for s in res.special_points]
@@ -118,6 +128,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "message": res.message,
         "start": {study.param_name: p0, "n_periods": n_periods, "how": how},
         "branches": [{"n_periods": b.n_periods, "points": len(b.points),
+                      "param_range": [float(min(p.param for p in b.points)),
+                                      float(max(p.param for p in b.points))]
+                      if b.points else None,
                       "neutral_points": sum(1 for p in b.points if p.neutral),
                       "status": b.status.text, "message": b.message, **b.counters,
                       "wall_s": b.wall_time}
@@ -126,7 +139,80 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "folds": [s[study.param_name] for s in special if s["label"] == "LP" and s["branch"] == 0],
         "counters": res.counters,
         "solver_wall_s": wall,
+        **({"from_sweep": from_sweep} if from_sweep is not None else {}),
         "error_estimate": {**res.error_estimate, "shooting_tol": scene.shooting.tol,
                            "rtol": opts.rtol},
     }
     return AnalysisOutcome(summary=summary, result=ContinuationStudyResult(res, study))
+
+
+def _least_period(model, w, method):
+    """(u0, n): the orbit shot over the window's n periods from its sweep state, and its
+    least period d (the smallest divisor of n with u(d T) = u0 to 1e-6: shooting over n
+    periods also converges onto an orbit of period d | n); (None, n) where it fails."""
+    sh = shoot(model, w.param, w.u0, n_periods=w.n, options=method.integration,
+               tol=method.tol, max_iter=method.start_max_iter or 24)
+    if not sh.converged:
+        return None, w.n
+    T = model.excitation_period(w.param)
+    for d in range(1, w.n):
+        if w.n % d == 0:
+            tr = integrate(model, w.param, sh.u0, 0.0, d * T, options=method.integration)
+            if tr.ok and residual_norm(tr.u_end - sh.u0, sh.u0) < 1e-6:
+                return sh.u0, d
+    return sh.u0, w.n
+
+
+def _from_sweep(study, ctx, res: ContinuationResult, method, options, cfg):
+    """Branches started both ways from each distinct period-n window of the sweep in
+    ``ctx.out/sweep.npz`` (written by this run's sweep, or an earlier one) that no branch
+    traced so far passes through (:mod:`.sweep_branches`).  Returns (the result with them
+    appended, a summary of the windows: where each started and how each half ended)."""
+    import dataclasses
+    from pathlib import Path
+
+    from .sweep_branches import on_branch, period_windows
+
+    path = Path(ctx.out) / "sweep.npz"
+    if not path.is_file():
+        return res, {"windows": [], "note": "no sweep.npz in the output folder"}
+    with np.load(path, allow_pickle=False) as z:
+        data = {k: z[k] for k in z.files}
+    if str(data.get("param_name", study.model.param_name)) != study.model.param_name:
+        return res, {"windows": [], "note": "sweep.npz is over another parameter"}
+    lo, hi = options.param_min, options.param_max
+    windows = [w for w in period_windows(data, study.model.n_states)
+               if lo <= w.param <= hi]
+    half = dataclasses.replace(options, max_points=cfg.from_sweep_max_points,
+                               period_doubling_branch=False)
+    branches, counters, notes = list(res.branches), dict(res.counters), []
+    for w in windows:
+        item = {"n_periods": w.n, "direction": w.direction, "range": [w.lo, w.hi],
+                "points": w.points, "start": w.param}
+        notes.append(item)
+        u0, n = _least_period(study.model, w, method)
+        if u0 is None:
+            item["traced"] = "no periodic orbit from the sweep's state (shooting failed)"
+            continue
+        if n != w.n:
+            item["least_period"] = n          # a period-d orbit is also period-n for d | n
+        if on_branch(branches, n, w.param, w.qmax, 1e-3):
+            item["traced"] = "already on a branch"
+            continue
+        item["halves"] = []
+        for sign in (-1, 1):
+            got = continuation(PeriodicOrbitProblem(study.model, u0, w.param, n_periods=n,
+                                                    direction=sign), method, half)
+            br = got.branches[0]
+            item["halves"].append({"branch": len(branches), "points": len(br.points),
+                                   "status": br.status.text, "message": br.message})
+            for k in ("flows", "rhs_calls", "points"):
+                counters[k] = counters.get(k, 0) + got.counters.get(k, 0)
+            if br.points:
+                branches.append(br)
+    special = tuple(SpecialPoint(p.label, p.param, b, i) for b, br in enumerate(branches)
+                    for i, p in enumerate(br.points) if p.label)
+    out = ContinuationResult(branches=tuple(branches), special_points=special,
+                             status=res.status, message=res.message, counters=counters,
+                             wall_time=res.wall_time)
+    return out, {"windows": notes, "source": str(path)}

@@ -42,7 +42,8 @@ class PseudoArclength:
     """Shooting (the orbit's residual H(u0, p) = u(T) - u0 with its exact Jacobian from the
     variational equations) + pseudo-arclength steps: Keller's corrector to ``tol`` (relative
     periodicity residual), a second-order predictor, at most ``max_angle`` radians between
-    successive tangents, ``locate_iter`` regula-falsi steps per special point.  The
+    successive tangents, at most ``locate_iter`` regula-falsi steps per special point (fewer
+    once successive iterates differ by less than ``locate_tol`` of the step).  The
     arclength measures the parameter divided by ``param_scale``; the options' ds, ds_min,
     ds_max are in parameter units (a step along the parameter axis moves it by ds)."""
     integration: IntegrationOptions = IntegrationOptions()
@@ -50,14 +51,18 @@ class PseudoArclength:
     param_scale: float = 1.0
     max_angle: float = 0.35
     locate_iter: int = 10
+    locate_tol: float = 1e-5           # a special point is located when successive
+    #                                    regula-falsi iterates differ by < this x the step
     start_max_iter: int | None = None   # Newton iterations for the starting orbit
     #                                     (default: 3 x the options' max_corrector_iter)
 
     def __post_init__(self):
         if not (0 < self.tol < 1 and self.param_scale > 0 and 0 < self.max_angle < np.pi
-                and self.locate_iter >= 1 and (self.start_max_iter or 1) >= 1):
+                and self.locate_iter >= 1 and (self.start_max_iter or 1) >= 1
+                and 0 < self.locate_tol < 1):
             raise ValueError("PseudoArclength: need 0 < tol < 1, param_scale > 0, "
-                             "0 < max_angle < pi, locate_iter >= 1, start_max_iter >= 1")
+                             "0 < max_angle < pi, locate_iter >= 1, start_max_iter >= 1, "
+                             "0 < locate_tol < 1")
 
 
 @dataclass(frozen=True, eq=False)

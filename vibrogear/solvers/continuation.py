@@ -2,7 +2,8 @@
 
 Problem: H(u0, p) = u(T(p); u0, p) - u0 = 0 (shooting, :mod:`.shooting`), unknowns
 z = (u0, p/param_scale).  Predictor along the tangent (null vector of dH), Newton
-corrector on [H; t.(z - z_pred)] (Keller), adaptive step.  Floquet multipliers at
+corrector on [H; t.(z - z_pred)] (Keller; Broyden's method on orbits without the
+variational equations first, :mod:`.corrector`), adaptive step.  Floquet multipliers at
 every point; test functions locate folds (LP: the parameter component of the
 tangent changes sign), period doublings (PD: det(M + I) changes sign) and
 Neimark-Sacker points (NS: prod_{i<j}(mu_i mu_j - 1) changes sign with a complex
@@ -38,8 +39,11 @@ import numpy as np
 from ..config.options import ContinuationOptions
 from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProblem,
                      PseudoArclength, SpecialPoint, stability_notes)
-from .floquet import flip_vector, floquet_multipliers, liouville_error, test_functions
+from .floquet import (flip_vector, floquet_multipliers, liouville_error, stability,
+                      test_functions)
 from .integrate import integrate
+from .corrector import (QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK,
+                        CorrectorProblem, correct, tangent)
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
 from .status import Status
 
@@ -48,93 +52,14 @@ __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "Br
 
 log = logging.getLogger(__name__)
 
+#: where an NS changes no stability, it is located to this fraction of the step
+NS_COARSE = 1e-2
 
 class _Stop(Exception):
     """The callback returned False."""
 
 
-class _Problem:
-    """Evaluations of H and its Jacobian in z = (u0, p / scale), with counters."""
-
-    def __init__(self, model, n_periods, method: PseudoArclength):
-        self.model, self.n_periods, self.method = model, n_periods, method
-        self.scale = method.param_scale
-        self.flows = 0
-        self.rhs_calls = 0
-        self.last_failure = None        # Status of the last failed integration
-        self.rejected = {"angle": 0, "corrector": 0}    # rejected steps by reason
-
-    def flow(self, z: np.ndarray) -> PeriodicFlow:
-        self.flows += 1
-        f = periodic_flow(self.model, z[-1] * self.scale, z[:-1], n_periods=self.n_periods,
-                          options=self.method.integration)
-        self.rhs_calls += f.trajectory.rhs_calls
-        return f
-
-    def neutral(self, f: PeriodicFlow) -> int:
-        return f.neutral(self.model)[0].shape[1]
-
-    def jac(self, f: PeriodicFlow) -> np.ndarray:
-        """[[dH/du0, dH/dp, B], [V^T, 0, 0]]: (n + k) x (n + 1 + k), k neutral directions."""
-        V, B = f.neutral(self.model)
-        n, k = f.G.size, V.shape[1]
-        J = np.zeros((n + k, n + 1 + k))
-        J[:n, :n] = f.dG_du0
-        J[:n, n] = f.dG_dparam * self.scale
-        J[:n, n + 1:] = B
-        J[n:, :n] = V.T
-        return J
-
-
-def _tangent(J: np.ndarray, prev: np.ndarray | None, nz: int | None = None) -> np.ndarray:
-    """Unit null vector of the bordered Jacobian, its z = (u0, p) part (the leading ``nz``
-    entries, default ``prev.size``; the k multipliers' entries are zero on a family),
-    oriented along ``prev``."""
-    _, _, vt = np.linalg.svd(J)
-    t = vt[-1][:prev.size if nz is None else nz]
-    if prev is not None and t @ prev < 0:
-        t = -t
-    return t / np.linalg.norm(t)
-
-
-def _correct(prob: _Problem, z_pred: np.ndarray, t: np.ndarray, max_iter: int,
-             k_ref: int | None = None):
-    """Newton on [H(z) + B lam; V^T dz = 0; t.(z - z_pred)] = 0. Returns (z, flow,
-    iterations, residual) or None (why in ``prob.last_failure``: the integrator's failure,
-    or GRAZING_END where an iterate's number of neutral directions differs from ``k_ref``:
-    a contact of the free coordinate opens or closes, the flow is not smooth there)."""
-    tol = prob.method.tol
-    z = z_pred.copy()
-    for it in range(max_iter + 1):
-        if not z[-1] * prob.scale > 0:
-            return None
-        f = prob.flow(z)
-        if not f.ok:
-            prob.last_failure = f.trajectory.status
-            return None
-        if k_ref is not None and prob.neutral(f) != k_ref:
-            prob.last_failure = Status.GRAZING_END
-            return None
-        res = residual_norm(f.G, z[:-1])
-        if res < tol:
-            return z, f, it, res
-        if it == max_iter:
-            return None
-        J = prob.jac(f)
-        n1 = z.size
-        A = np.vstack([J, np.concatenate([t, np.zeros(J.shape[1] - n1)])[None, :]])
-        rhs = -np.concatenate([f.G, np.zeros(J.shape[0] - f.G.size), [t @ (z - z_pred)]])
-        try:
-            dz = np.linalg.solve(A, rhs)[:n1]
-        except np.linalg.LinAlgError:
-            return None
-        z = z + dz
-        if not np.all(np.isfinite(z)):
-            return None
-    return None
-
-
-def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPoint:
+def _point(prob: CorrectorProblem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPoint:
     tr = f.trajectory
     p = float(z[-1] * prob.scale)
     mu = floquet_multipliers(f.monodromy)
@@ -146,13 +71,18 @@ def _point(prob: _Problem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPo
                        neutral=prob.neutral(f))
 
 
-def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None):
+def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None, J0=None,
+            locate_tol=None):
     """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
-    and the next point (``fb``, s = ds_total) for the zero of test function ``which``."""
+    and the next point (``fb``, s = ds_total) for the zero of test function ``which``;
+    ``J0``: point a's bordered Jacobian (the corrector's quasi-Newton start);
+    ``locate_tol``: instead of the method's."""
+    locate_tol = prob.method.locate_tol if locate_tol is None else locate_tol
     lo, hi = 0.0, ds_total
     f_lo, f_hi = fa, fb
     best = None
     side = 0
+    last = None
     for _ in range(prob.method.locate_iter):
         if f_hi != f_lo:
             mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
@@ -160,11 +90,11 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None):
             mid = 0.5 * (lo + hi)
         if not lo < mid < hi:
             mid = 0.5 * (lo + hi)
-        got = _correct(prob, za + mid * ta, ta, options.max_corrector_iter, k_ref)
+        got = correct(prob, za + mid * ta, ta, options.max_corrector_iter, k_ref, J0)
         if got is None:
             break
         z, f, it, res = got
-        t = _tangent(prob.jac(f), ta)
+        t = tangent(prob.jac(f), ta)
         val = test_functions(f.monodromy, t, k_ref or 0)[which]
         best = (z, f, t, it, res)
         if np.sign(val) == np.sign(f_lo):
@@ -177,8 +107,11 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None):
             if side == 1:
                 f_lo *= 0.5
             side = 1
-        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9:
+        # the bracket, or the located point itself, settled (1e-6 / locate_tol of the step)
+        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9 or (
+                last is not None and abs(mid - last) < locate_tol * ds_total):
             break
+        last = mid
     return best
 
 
@@ -207,7 +140,10 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
         z0 = np.concatenate([sh.u0, [problem.param / method.param_scale]])
         t0 = np.zeros_like(z0)
         t0[-1] = float(problem.direction)
-        branches = (_run_branch(model, z0, t0, method, options, n_periods, callback),)
+        # an even period: the branch can pass through the half-period orbit (a PD of it),
+        # where an n-period orbit is also one of n / 2 periods: it has rejoined there
+        branches = (_run_branch(model, z0, t0, method, options, n_periods, callback,
+                                doubled=n_periods % 2 == 0),)
         first = branches[0]
         pd = [p for p in first.points if p.label == "PD"]
         if (options.period_doubling_branch and pd
@@ -224,6 +160,7 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
     message = "; ".join(f"period-{br.n_periods} branch: {br.message}" for br in branches)
     counters = {"points": sum(len(b.points) for b in branches), "start_flows": sh.flows,
                 "flows": sh.flows + sum(b.counters.get("flows", 0) for b in branches),
+                "plain_flows": sum(b.counters.get("plain_flows", 0) for b in branches),
                 "rhs_calls": sh.rhs_calls + sum(b.counters.get("rhs_calls", 0) for b in branches)}
     log.info("continuation: %s (%d points, %d flows)", message, counters["points"],
              counters["flows"])
@@ -235,7 +172,7 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
 def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
                 doubled: bool = False) -> Branch:
     wall = time.perf_counter()
-    prob = _Problem(model, n_periods, method)
+    prob = CorrectorProblem(model, n_periods, method)
     pts: list[BranchPoint] = []
 
     def emit(point):
@@ -246,7 +183,7 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
     status, message = Status.LEFT_RANGE, Status.LEFT_RANGE.message
     try:
         f = prob.flow(z0)
-        t = _tangent(prob.jac(f), t_hint)
+        t = tangent(prob.jac(f), t_hint)
         emit(_point(prob, z0, f, t, 0, residual_norm(f.G, z0[:-1])))
         status, message = _walk(prob, z0, f, t, method, options, n_periods, emit, doubled)
     except _Stop:
@@ -255,7 +192,8 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
     message += stability_notes(pts, model.param_name)
     return Branch(tuple(pts), n_periods, status, message,
                   2 * np.pi * n_periods / model.omega_per_param,
-                  counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls,
+                  counters={"flows": prob.flows, "plain_flows": prob.plain_flows,
+                            "rhs_calls": prob.rhs_calls,
                             "rejected_angle": prob.rejected["angle"],
                             "rejected_corrector": prob.rejected["corrector"]},
                   wall_time=time.perf_counter() - wall)
@@ -269,6 +207,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
     n_points = 1
     k_prev = prob.neutral(f)
     tests_prev = test_functions(f.monodromy, t, k_prev)
+    J = prob.jac(f)             # the last point's bordered Jacobian: the corrector's start
+    qn_failed = 0               # successive failed correctors
     t_prev, ds_prev = None, ds
     d_prev = _half_defect(model, z, scale, method, n_periods) if doubled else None
     # a start on the range's end may lie an ulp outside it: only a point beyond the range
@@ -287,11 +227,17 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             if np.linalg.norm(bend) < 0.25 * ds:
                 pred = pred + bend
         prob.last_failure = None
-        got = _correct(prob, pred, t, options.max_corrector_iter, k_prev)
+        # a failed quasi-Newton corrector first halves the step; the exact Newton corrector
+        # (an orbit with the variational equations per iterate) only after a second failure
+        got = correct(prob, pred, t, options.max_corrector_iter, k_prev, J,
+                      exact_fallback=qn_failed > 0 or ds <= 2 * ds_min,
+                      max_move=QUASI_NEWTON_MOVE * ds)
+        qn_failed = qn_failed + 1 if got is None else 0
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
-            t_new = _tangent(prob.jac(f_new), t)
+            J_new = prob.jac(f_new)
+            t_new = tangent(J_new, t)
             angle = np.arccos(np.clip(t_new @ t, -1, 1))
             if angle > method.max_angle and ds > ds_min:
                 got = None
@@ -328,8 +274,14 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                 labels.append(which)
         if labels:
             which = labels[0]
+            # an NS on an orbit unstable on both sides (another multiplier already outside
+            # the unit circle) changes no stability: located to NS_COARSE of the step only
+            coarse = which == "NS" and not (stability(floquet_multipliers(f.monodromy),
+                                                      trivial=k_prev)
+                                            or stability(floquet_multipliers(f_new.monodromy),
+                                                         trivial=k_new))
             loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
-                          k_prev)
+                          k_prev, J, NS_COARSE if coarse else None)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
                 if not (which == "NS" and not test_functions(fl.monodromy, tl,
@@ -337,7 +289,12 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                     n_points += 1
                     emit(_point(prob, zl, fl, tl, itl, resl, label=which))
         ds_used = ds
-        ds = min(ds * 1.5, ds_max) if it <= 2 else (ds * 0.7 if it >= 5 else ds)
+        qn = prob.quasi_newton_iterations
+        if qn is not None and it == 0:
+            grow, shrink = qn <= QUASI_NEWTON_GROW, qn >= QUASI_NEWTON_SHRINK
+        else:
+            grow, shrink = it <= 2, it >= 5
+        ds = min(ds * 1.5, ds_max) if grow else (ds * 0.7 if shrink else ds)
         ds = max(ds, ds_min)
         if doubled:
             # the signed half-period defect changes sign where the branch passes
@@ -349,7 +306,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                                          f"{p:.6g} and {p_new:.6g}")
             d_prev = d_new
         t_prev, ds_prev = t, ds_used
-        z, f, t, tests_prev, k_prev = z_new, f_new, t_new, tests, k_new
+        z, f, t, tests_prev, k_prev, J = z_new, f_new, t_new, tests, k_new, J_new
         n_points += 1
         emit(_point(prob, z, f, t, it, res))
 
@@ -374,18 +331,18 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
     t2 = np.concatenate([w, [0.0]])
     t2 = t2 - (t2 @ t1) * t1
     t2 /= np.linalg.norm(t2)
-    prob = _Problem(model, 2 * n_periods, method)
+    prob = CorrectorProblem(model, 2 * n_periods, method)
     z_pd = np.concatenate([pd.u0, [pd.param / scale]])
     ds0 = options.ds / scale
     for ds in (ds0, 0.3 * ds0, 0.1 * ds0, 3 * ds0):
-        got = _correct(prob, z_pd + ds * t2, t2, options.max_corrector_iter)
+        got = correct(prob, z_pd + ds * t2, t2, options.max_corrector_iter)
         if got is None:
             continue
         z, f, it, res = got
         half = integrate(model, z[-1] * scale, z[:-1], 0.0, f.period / 2,
                          options=method.integration)
         if np.linalg.norm(half.u_end - z[:-1]) > 1e-6 * (1 + np.linalg.norm(z[:-1])):
-            t = _tangent(prob.jac(f), None, z.size)
+            t = tangent(prob.jac(f), None, z.size)
             # continue away from the PD point
             if t @ (z - z_pd) < 0:
                 t = -t
