@@ -45,6 +45,7 @@ class RunupRun:
     waterfall: Waterfall        # of the monitored mesh deformation [display unit]
     waterfall_rpm: np.ndarray   # (segments,) speed at the segment centres
     ramp: RampResult            # the solver's result (counters, status)
+    jump: dict | None = None    # jump_speed of the monitored mesh's upper envelope
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,7 +175,8 @@ def _one_run(study, scene, ctx, cfg, direction, rows, orders, teeth, opts) -> Ru
     wf_rpm = np.interp(wf.time_s, t_s, r.param)
     return RunupRun(direction=direction, time_s=t_s[first], rpm=rpm, env_min=scale * lo,
                     env_max=scale * hi, losses=losses, tracks=tracks, track_rpm=track_rpm,
-                    waterfall=wf, waterfall_rpm=wf_rpm, ramp=r)
+                    waterfall=wf, waterfall_rpm=wf_rpm, ramp=r,
+                    jump=jump_speed(rpm, scale * hi[wi]))
 
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
@@ -190,7 +192,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                  for d in cfg.directions)
     ct = model.contacts
     mesh_names = tuple(ct.names[j] if ct.names else f"c{j}" for j in rows)
-    mon = [i for i, j in enumerate(rows) if j == model.monitor]
     summary = {"status": "ok", "directions": list(cfg.directions),
                "rpm_range": list(cfg.rpm_range), "meshes": list(mesh_names),
                "orders": dict(zip(names, map(float, orders))),
@@ -198,7 +199,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     for run_ in runs:
         r = run_.ramp
         P = run_.rpm.size
-        jump = jump_speed(run_.rpm, run_.env_max[mon[0] if mon else 0])
         summary["runs"][run_.direction] = {
             "duration_s": r.profile.duration * study.time_unit_s, "mesh_periods": P,
             "chunks": r.chunks, "steps": r.steps, "rejected": r.rejected,
@@ -206,7 +206,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             "steps_per_mesh_period": (r.steps - r.settle_steps) / max(P, 1),
             "periods_with_contact_loss": {n: int(np.sum(run_.losses[i] > 0))
                                           for i, n in enumerate(mesh_names)},
-            "largest_envelope_change": jump,
+            "largest_envelope_change": run_.jump,
             "error_estimate": {"accumulated_local_error": r.error_estimate,
                                "phase_deviation_rad": r.phase_deviation,
                                "chunks_per_period": r.chunks_per_period,

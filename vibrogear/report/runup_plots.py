@@ -51,8 +51,20 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
             ax.plot(r.rpm, r.env_min[i], lw=0.7, color=st.get("color"))
         if name == mon_name:
             _steady(ax, sweep, branch, study.monitor.unit)
+            for r in result.runs:
+                if r.jump is not None:
+                    st = _RUN_STYLE.get(r.direction, {})
+                    ax.axvline(r.jump["rpm"], color=st.get("color"), lw=0.8, ls=":")
+                    ax.annotate(f"{st.get('label', r.direction)} jump {r.jump['rpm']:.1f}",
+                                (r.jump["rpm"], 1.0), xycoords=("data", "axes fraction"),
+                                rotation=90, va="top", ha="right", fontsize=7,
+                                color=st.get("color"))
         if study.monitor.zero_line:
             ax.axhline(0.0, color="0.6", lw=0.6)
+        speeds = np.concatenate([r.rpm for r in result.runs])
+        if speeds.size and np.ptp(speeds) > 0:
+            lo, hi = speeds.min(), speeds.max()
+            ax.set_xlim(lo - 0.03 * (hi - lo), hi + 0.03 * (hi - lo))
         ax.set_xlabel(study.param_label)
         ax.set_ylabel(f"{name} deformation [{study.monitor.unit}]")
         ax.grid(True, alpha=0.3)
