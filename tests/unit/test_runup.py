@@ -172,3 +172,28 @@ def test_check_rejects_a_bad_runup_section(tmp_path, capsys):
     assert not out.exists()
     assert main(["check", "configs/gear_pair.toml", "--set", "runup.rpm_end=4800",
                  "--out", str(out)]) == 2
+
+
+def test_runup_verb_writes_its_files(tmp_path):
+    """`vibrogear runup` on gear_pair, 5000 -> 5010 rpm at 100 rpm/s (0.1 s) and back: the
+    files hold floor(integral of the mesh frequency dt) = floor(40 x 5005 / 60 x 0.1) = 333
+    whole mesh periods per direction, speeds inside the ramp, and a 1x mesh order no larger
+    than half the envelope's peak-to-peak (a harmonic cannot exceed the signal's swing)."""
+    out = tmp_path / "gp"
+    code = main(["runup", "configs/gear_pair.toml", "--quiet", "--out", str(out),
+                 "--set", "runup.rpm_start=5000", "--set", "runup.rpm_end=5010",
+                 "--set", "runup.settle_periods=20", "--set", "runup.window_revs=2"])
+    assert code == 0
+    for name in ("runup.npz", "runup.csv", "runup_envelope.png", "runup_orders.png",
+                 "runup_waterfall.png"):
+        assert (out / name).is_file(), name
+    with np.load(out / "runup.npz") as z:
+        for d in ("up", "down"):
+            rpm = z[f"{d}_rpm"]
+            assert rpm.size == 333
+            assert np.all((rpm > 5000) & (rpm < 5010))
+            assert np.all(np.diff(rpm) > 0) if d == "up" else np.all(np.diff(rpm) < 0)
+            swing = z[f"{d}_env_max_G1"].max() - z[f"{d}_env_min_G1"].min()
+            assert 0 < z[f"{d}_order_G1_G1_1x"].max() <= 0.5 * swing
+    rows = (out / "runup.csv").read_text().splitlines()
+    assert len(rows) == 1 + 2 * 333
