@@ -9,9 +9,9 @@ so it is the one writer of files.  The backend is chosen automatically:
 * **MPI** when the program runs under ``mpirun`` with more than one rank (detected from
   ``OMPI_COMM_WORLD_SIZE`` / ``PMI_SIZE`` before :mod:`mpi4py` is imported): every rank
   computes; rank 0 also coordinates (hands out units, receives the items) between its
-  own items.  Every rank must call :func:`run_units` (collective).  An exception inside ``fn`` is sent back
-  to rank 0 and re-raised as :class:`UnitError` on every rank after an orderly shutdown;
-  any other exception aborts all ranks (``MPI.Abort``) so that ``mpirun`` never hangs.
+  own items.  Every rank must call :func:`run_units` (collective).  An exception in ``fn``
+  comes back to rank 0, re-raised as :class:`UnitError` on every rank after an orderly
+  shutdown; any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs.
 * **processes** (``multiprocessing``, ``fork`` context) when ``workers > 1``; default
   ``workers = min(len(units), os.cpu_count())``.  Items come back through a queue;
   an exception in a worker (or a worker that dies) stops the others and raises

@@ -83,7 +83,8 @@ def event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk):
                 hi = th
                 for _ in range(60):
                     mid = 0.5 * (lo + hi)
-                    dm = contact_delta(A, j, t + mid * h, Om, dense_projection(mid, h, x0, pk, bw), cs, sn)
+                    dm = contact_delta(A, j, t + mid * h, Om,
+                                       dense_projection(mid, h, x0, pk, bw), cs, sn)
                     if mode_violation(A, j, md, dm) > 0.0:
                         hi = mid
                     else:
