@@ -46,7 +46,9 @@ def test_branch_value_through_a_fold():
     br = SimpleNamespace(n_periods=1, points=[_pt(0.0, 0.0), _pt(2.0, 2.0), _pt(1.0, 3.0, False),
                                               _pt(3.0, 5.0, False)])
     vals = sorted(branch_value_at(br, 1.5))
-    assert vals == [(1.5, True), (2.5, False), (3.5, False)]
+    assert vals == [(1.5, True, 2.0), (2.5, False, 1.0), (3.5, False, 2.0)]
     assert on_branch([br], 1, 1.5, 2.5 * (1 + 5e-4), 1e-3)
-    assert not on_branch([br], 1, 1.5, 2.0, 1e-3)
+    assert on_branch([br], 1, 1.5, 2.74, 1e-3)           # within a quarter of the change
+    assert not on_branch([br], 1, 1.5, 2.1, 1e-3)
+    assert not on_branch([br], 1, 1.5, 2.95, 1e-3)
     assert not on_branch([br], 2, 1.5, 2.5, 1e-3)

@@ -28,7 +28,7 @@ from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.continuation import (ContinuationResult, PeriodicOrbitProblem, PseudoArclength,
                                     SpecialPoint, continuation)
 from ..solvers.integrate import integrate
-from ..solvers.shooting import residual_norm, shoot
+from ..solvers.shooting import shoot
 from ..solvers.sweep import classify_period
 from .study import Study, integration_options
 
@@ -148,8 +148,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
 
 def _least_period(model, w, method):
     """(u0, n): the orbit shot over the window's n periods from its sweep state, and its
-    least period d (the smallest divisor of n with u(d T) = u0 to 1e-6: shooting over n
-    periods also converges onto an orbit of period d | n); (None, n) where it fails."""
+    least period d (the smallest divisor of n with |u(d T) - u0| <= 1e-6 |u0|: shooting
+    over n periods also converges onto an orbit of period d | n); (None, n) where it
+    fails."""
     sh = shoot(model, w.param, w.u0, n_periods=w.n, options=method.integration,
                tol=method.tol, max_iter=method.start_max_iter or 24)
     if not sh.converged:
@@ -158,7 +159,7 @@ def _least_period(model, w, method):
     for d in range(1, w.n):
         if w.n % d == 0:
             tr = integrate(model, w.param, sh.u0, 0.0, d * T, options=method.integration)
-            if tr.ok and residual_norm(tr.u_end - sh.u0, sh.u0) < 1e-6:
+            if tr.ok and np.linalg.norm(tr.u_end - sh.u0) <= 1e-6 * np.linalg.norm(sh.u0):
                 return sh.u0, d
     return sh.u0, w.n
 

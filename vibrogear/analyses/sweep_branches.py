@@ -9,8 +9,8 @@ Windows: per sweep direction, maximal runs of consecutive good points with the s
 period n >= 1.  Two windows are one orbit family when they have the same n, overlap in the
 parameter and their maxima agree within ``rel_tol`` at a common point (the up and the down
 sweep on the same orbit); the window's middle point starts it.  A window whose orbit an
-existing branch of the same n already passes through (its maximum within ``rel_tol`` of
-the branch's, linearly interpolated at the same parameter) is not traced again.
+existing branch of the same n already passes through (:func:`on_branch`: its maximum
+near the branch's, linearly interpolated at the same parameter) is not traced again.
 """
 from __future__ import annotations
 
@@ -88,27 +88,32 @@ def period_windows(data: dict, n_states: int, *, rel_tol: float = 1e-3,
     return found
 
 
-def branch_value_at(branch, param: float, quantity: str = "qmax") -> list[tuple[float, bool]]:
-    """(value, stable) of ``branch`` at ``param``, linearly interpolated between each pair
-    of consecutive points (labelled points included) that brackets it: a folded branch
-    can pass a parameter several times.  Stable: both points of the pair stable."""
+def branch_value_at(branch, param: float, quantity: str = "qmax"
+                    ) -> list[tuple[float, bool, float]]:
+    """(value, stable, change) of ``branch`` at ``param``, linearly interpolated between
+    each pair of consecutive points (labelled points included) that brackets it (a
+    folded branch can pass a parameter several times); stable: both points of the pair
+    are; change: |difference of the value| across the pair (the interpolation's scale)."""
     pts = branch.points
     out = []
     for a, b in zip(pts[:-1], pts[1:]):
         lo, hi = sorted((a.param, b.param))
+        va, vb = getattr(a, quantity), getattr(b, quantity)
         if lo <= param <= hi and hi > lo:
             s = (param - a.param) / (b.param - a.param)
-            va, vb = getattr(a, quantity), getattr(b, quantity)
-            out.append((float(va + s * (vb - va)), bool(a.stable and b.stable)))
+            out.append((float(va + s * (vb - va)), bool(a.stable and b.stable),
+                        float(abs(vb - va))))
         elif a.param == param:
-            out.append((float(getattr(a, quantity)), bool(a.stable)))
+            out.append((float(va), bool(a.stable), 0.0))
     if pts and pts[-1].param == param:
-        out.append((float(getattr(pts[-1], quantity)), bool(pts[-1].stable)))
+        out.append((float(getattr(pts[-1], quantity)), bool(pts[-1].stable), 0.0))
     return out
 
 
 def on_branch(branches, n: int, param: float, qmax: float, rel_tol: float) -> bool:
-    """Whether a branch of period ``n`` passes through (param, qmax) within rel_tol."""
-    return any(abs(v - qmax) <= rel_tol * max(abs(v), abs(qmax))
+    """Whether a branch of period ``n`` passes through (param, qmax): within rel_tol of
+    the value, or within a quarter of the value's change across the bracketing pair of
+    points (linear interpolation between coarse points is no better than that)."""
+    return any(abs(v - qmax) <= max(rel_tol * max(abs(v), abs(qmax)), 0.25 * dv)
                for br in branches if br.n_periods == n
-               for v, _ in branch_value_at(br, param))
+               for v, _, dv in branch_value_at(br, param))

@@ -231,8 +231,9 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         # (an orbit with the variational equations per iterate) only after a second failure
         got = correct(prob, pred, t, options.max_corrector_iter, k_prev, J,
                       exact_fallback=qn_failed > 0 or ds <= 2 * ds_min,
-                      max_move=QUASI_NEWTON_MOVE * ds)
-        qn_failed = qn_failed + 1 if got is None else 0
+                      max_move=QUASI_NEWTON_MOVE * ds, z_base=z,
+                      max_angle=method.max_angle if ds > ds_min else None)
+        qn_failed = qn_failed + 1 if got is None and not prob.secant_rejected else 0
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
@@ -243,7 +244,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                 got = None
                 prob.rejected["angle"] += 1
         else:
-            prob.rejected["corrector"] += 1
+            prob.rejected["angle" if prob.secant_rejected else "corrector"] += 1
         if got is None:
             ds *= 0.5
             if ds < ds_min:
@@ -264,6 +265,16 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                 f"{Status.GRAZING_END.message}: the orbit family's neutral directions go "
                 f"from {k_prev} to {k_new} between {model.param_name} = {p:.6g} and "
                 f"{p_new:.6g}")
+        if doubled:
+            # the signed half-period defect changes sign where the branch passes
+            # through the period-n orbit (the other PD): there it has rejoined (before
+            # any label: the 2nT problem's branch turns in the parameter right there)
+            d_new = _half_defect(model, z_new, scale, method, n_periods)
+            if d_prev is not None and d_new @ d_prev < 0:
+                return Status.REJOINED, (f"period-{n_periods} branch rejoined the "
+                                         f"period-{n_periods // 2} branch between param = "
+                                         f"{p:.6g} and {p_new:.6g}")
+            d_prev = d_new
         tests = test_functions(f_new.monodromy, t_new, k_new)
         labels = []
         for which in ("LP", "PD", "NS"):
@@ -296,15 +307,6 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             grow, shrink = it <= 2, it >= 5
         ds = min(ds * 1.5, ds_max) if grow else (ds * 0.7 if shrink else ds)
         ds = max(ds, ds_min)
-        if doubled:
-            # the signed half-period defect changes sign where the branch passes
-            # through the period-n orbit (the other PD): there it has rejoined
-            d_new = _half_defect(model, z_new, scale, method, n_periods)
-            if d_prev is not None and d_new @ d_prev < 0:
-                return Status.REJOINED, (f"period-{n_periods} branch rejoined the "
-                                         f"period-{n_periods // 2} branch between param = "
-                                         f"{p:.6g} and {p_new:.6g}")
-            d_prev = d_new
         t_prev, ds_prev = t, ds_used
         z, f, t, tests_prev, k_prev, J = z_new, f_new, t_new, tests, k_new, J_new
         n_points += 1

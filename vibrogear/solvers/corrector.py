@@ -43,6 +43,7 @@ class CorrectorProblem:
         self.flows = 0
         self.plain_flows = 0            # orbits without the variational equations
         self.quasi_newton_iterations = None   # of the last corrector (None: exact Newton)
+        self.secant_rejected = False          # the last corrector refused by its secant
         self.rhs_calls = 0
         self.last_failure = None        # Status of the last failed integration
         self.rejected = {"angle": 0, "corrector": 0}    # rejected steps by reason
@@ -152,7 +153,8 @@ def _quasi_newton(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, J0:
 
 def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter: int,
              k_ref: int | None = None, J0: np.ndarray | None = None,
-             exact_fallback: bool = True, max_move: float = np.inf):
+             exact_fallback: bool = True, max_move: float = np.inf,
+             z_base: np.ndarray | None = None, max_angle: float | None = None):
     """Newton on [H(z) + B lam; V^T dz = 0; t.(z - z_pred)] = 0. Returns (z, flow,
     iterations, residual) or None (why in ``prob.last_failure``: the integrator's failure,
     or GRAZING_END where an iterate's number of neutral directions differs from ``k_ref``:
@@ -165,14 +167,25 @@ def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter:
     it fails or ends farther than ``max_move`` from the predictor (Broyden's iterates can
     cross over to another sheet near a fold), the exact iteration starts from the
     predictor, or (``exact_fallback`` False) the corrector gives up at once (the caller
-    halves the step: cheaper)."""
+    halves the step: cheaper).  With ``z_base`` (the last point) and ``max_angle``: a
+    quasi-Newton solution whose secant from ``z_base`` leaves the tangent ``t`` by more
+    than max_angle / 2 is refused before its orbit with the variational equations is
+    integrated (``prob.secant_rejected``): on an arc the tangent turns by twice the
+    secant's angle, so the new tangent would turn by more than max_angle."""
     tol = prob.method.tol
     z = z_pred.copy()
     prob.quasi_newton_iterations = None
+    prob.secant_rejected = False
     if J0 is not None:
         got = _quasi_newton(prob, z_pred, t, J0, QUASI_NEWTON_ITER, max_move)
         if got is not None:
             z, prob.quasi_newton_iterations = got
+            if z_base is not None and max_angle is not None:
+                sec = z - z_base
+                c = float(sec @ t) / max(float(np.linalg.norm(sec)), 1e-300)
+                if np.arccos(np.clip(c, -1.0, 1.0)) > 0.5 * max_angle:
+                    prob.secant_rejected = True
+                    return None
         elif not exact_fallback:
             prob.last_failure = Status.NOT_CONVERGED
             return None
