@@ -184,8 +184,8 @@ def _from_sweep(study, ctx, res: ContinuationResult, method, options, cfg):
     lo, hi = options.param_min, options.param_max
     windows = [w for w in period_windows(data, study.model.n_states)
                if lo <= w.param <= hi]
-    half = dataclasses.replace(options, max_points=cfg.from_sweep_max_points,
-                               period_doubling_branch=False)
+    grid = np.diff(np.unique(np.asarray(data["param"], dtype=float)))
+    grid = float(grid.min()) if grid.size else options.ds
     branches, counters, notes = list(res.branches), dict(res.counters), []
     for w in windows:
         item = {"n_periods": w.n, "direction": w.direction, "range": [w.lo, w.hi],
@@ -200,6 +200,11 @@ def _from_sweep(study, ctx, res: ContinuationResult, method, options, cfg):
         if on_branch(branches, n, w.param, w.qmax, 1e-3):
             item["traced"] = "already on a branch"
             continue
+        # first steps of an eighth of the window (one grid step added on each side): a
+        # narrow window (a period-4 window between two PDs) is not stepped over
+        ds = min(options.ds, max(options.ds_min, (w.hi - w.lo + 2 * grid) / 8))
+        half = dataclasses.replace(options, max_points=cfg.from_sweep_max_points,
+                                   period_doubling_branch=False, ds=ds)
         item["halves"] = []
         for sign in (-1, 1):
             got = continuation(PeriodicOrbitProblem(study.model, u0, w.param, n_periods=n,
