@@ -32,6 +32,11 @@ periods T, so its end state is again at phase 0.
   (the state at each onset by a short integration from the dense sample before it),
   contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
   error over blocks of the record window.
+* **Second tolerance** (``second_tolerance``): the record window again at rtol / 10 (atol /
+  10) from the same settled state; the change of the extrema and of each metric is its
+  tolerance error (``<name>_tol_err`` in the metrics).  On a periodic point it estimates
+  the integration error; on a chaotic one the two records diverge and it is a sampling
+  difference of the same size as the batch-means error.
 """
 from __future__ import annotations
 
