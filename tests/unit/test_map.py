@@ -115,6 +115,19 @@ def test_bad_map_input_names_the_field_and_check_exits_2(override, field, capsys
     assert field in capsys.readouterr().err
 
 
+def test_a_map_needs_a_loaded_motor_coupling(tmp_path, capsys):
+    """The load is scaled from the motor coupling's twist: none, or twist 0, is bad input
+    of `vibrogear map` (exit 2, nothing written); other verbs of the scene are not blocked."""
+    out = tmp_path / "none"
+    assert main(["map", GEAR_PAIR, "--out", str(out), "--set",
+                 "gearbox.couplings[0].twist=0"]) == 2
+    assert "gearbox.couplings[0].twist" in capsys.readouterr().err and not out.exists()
+    assert main(["check", GEAR_PAIR, "--set", "gearbox.couplings[0].role=\"load\"",
+                 "--set", "scene.analyses=[\"map\"]"]) == 2
+    assert "gearbox.couplings:" in capsys.readouterr().err
+    assert main(["check", GEAR_PAIR, "--set", "gearbox.couplings[0].twist=0"]) == 0
+
+
 def test_a_load_range_needs_both_ends():
     from vibrogear.config.scene import read_toml, scene_from_dict
     data = read_toml(GEAR_PAIR)

@@ -79,6 +79,18 @@ class MapConfig(SweepOptions):
             raise ConfigError(f"{path}.curve_ds_max", f"must be >= curve_ds = "
                               f"{self.curve_ds:g}, got {self.curve_ds_max:g}")
 
+    def check_couplings(self, gearbox, path: str) -> None:
+        """The load is scaled from the motor coupling: the scene needs one, with twist > 0
+        (stiffness > 0 is the coupling's own rule)."""
+        motors = [i for i, c in enumerate(gearbox.couplings) if c.role == "motor"]
+        if not motors:
+            raise ConfigError("gearbox.couplings", f"[{path}] scales the load of the motor "
+                              "coupling: the scene needs a coupling with role = \"motor\"")
+        if not gearbox.couplings[motors[0]].twist > 0:
+            raise ConfigError(f"gearbox.couplings[{motors[0]}].twist", f"[{path}] scales the "
+                              "scene's twists: the motor coupling needs twist > 0 (any value "
+                              "sets the load pattern; the map's range sets the load), got 0")
+
     @property
     def load_kind(self) -> str:
         """"torque" or "twist": how the load range is given."""

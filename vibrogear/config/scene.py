@@ -118,6 +118,8 @@ class Scene:
                                   "[rotor.campbell] (rpm_max, ...)")
         if self.housing_sweep is not None and self.housing is not None:
             self.housing_sweep.housing_points(self.housing, "housing_sweep")
+        if self.map is not None and self.gearbox is not None and "map" in self.scene.analyses:
+            self.map.check_couplings(self.gearbox, "map")
         from .layout import check_layout        # checks across sections, in one place
         check_layout(self)
 
