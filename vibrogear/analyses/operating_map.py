@@ -3,8 +3,8 @@
 Each load row is a sweep over the driving speed (the sweep's point solver,
 :func:`~vibrogear.solvers.sweep_point.run_point`, walked exactly as
 :func:`~vibrogear.solvers.sweep.sweep` walks a unit: every point starts from the end state
-of the previous good point of its direction, the first from the static equilibrium of
-that load at the lowest speed), so every map point is a settled sweep point with its motion
+of the previous good point of its direction, the first of each unit from the static
+equilibrium of that load at the grid's first speed, as a sweep's), so every map point is a settled sweep point with its motion
 class and the rattle / contact metrics of :mod:`vibrogear.solvers.motion` (impacts per
 mesh period per flank, rattle energy, contact fraction, bearing elements out of contact).
 The largest mesh force of each point is added here: ``force_periods`` mesh periods more,
