@@ -53,6 +53,7 @@ class PseudoArclength:
     locate_iter: int = 10
     locate_tol: float = 1e-5           # a special point is located when successive
     #                                    regula-falsi iterates differ by < this x the step
+    quasi_newton: bool = True          # the corrector's Broyden stage (solvers/corrector.py)
     start_max_iter: int | None = None   # Newton iterations for the starting orbit
     #                                     (default: 3 x the options' max_corrector_iter)
 

@@ -229,7 +229,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         prob.last_failure = None
         # a failed quasi-Newton corrector first halves the step; the exact Newton corrector
         # (an orbit with the variational equations per iterate) only after a second failure
-        got = correct(prob, pred, t, options.max_corrector_iter, k_prev, J,
+        got = correct(prob, pred, t, options.max_corrector_iter, k_prev,
+                      J if method.quasi_newton else None,
                       exact_fallback=qn_failed > 0 or ds <= 2 * ds_min,
                       max_move=QUASI_NEWTON_MOVE * ds, z_base=z,
                       max_angle=method.max_angle if ds > ds_min else None)
@@ -292,7 +293,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                                             or stability(floquet_multipliers(f_new.monodromy),
                                                          trivial=k_new))
             loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
-                          k_prev, J, NS_COARSE if coarse else None)
+                          k_prev, J if method.quasi_newton else None,
+                          NS_COARSE if coarse else None)
             if loc is not None:
                 zl, fl, tl, itl, resl = loc
                 if not (which == "NS" and not test_functions(fl.monodromy, tl,
