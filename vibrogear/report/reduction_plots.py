@@ -16,17 +16,23 @@ _COLS = ("level", "shaft_modes", "housing_modes", "m", "modes_compared", "max_fr
          "statistics_error_bar", "f_top_hz", "build_s", "sim_wall_s", "steps", "status")
 
 
+def _cell(v) -> str:
+    """A CSV cell: floats to 6 digits, missing or non-finite values empty."""
+    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+        return ""
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
 def write_reduction_tables(out_dir, rows, extra=()) -> dict:
     """reduction_levels.csv (a row per level: ``rows``, the count levels, then ``extra``,
-    the frequency-criterion levels) and reduction_modes.csv (full vs reduced frequency and
+    the frequency-criterion levels; empty cells where a value does not apply, e.g. the
+    pointwise errors of non-periodic motion) and reduction_modes.csv (full vs reduced frequency and
     MAC per mode at the largest count level; reduction_modes_frequency.csv: at the first
     extra level)."""
     out = Path(out_dir)
     lines = [",".join(_COLS)]
     for r in list(rows) + list(extra):
-        lines.append(",".join("" if r.get(c) is None else
-                              (f"{r[c]:.6g}" if isinstance(r.get(c), float) else str(r.get(c, "")))
-                              for c in _COLS))
+        lines.append(",".join(_cell(r.get(c)) for c in _COLS))
     p1 = atomic_write_bytes(out / "reduction_levels.csv", ("\n".join(lines) + "\n").encode())
     pairs = rows[-1].get("pairs", [])
     lines = ["index,f_full_hz,f_reduced_hz,rel_error,mac"]
