@@ -120,7 +120,8 @@ def loop_inputs(**kw) -> tuple:
 
 @njit(cache=True)
 def dopri_loop(A, y0, t_eval, fin, iin):
-    """Integrate from (t0, y0) to t1 (inputs packed by :func:`loop_inputs`) -> LoopResult."""
+    """Integrate from (t0, y0) to t1 (inputs packed by :func:`loop_inputs`) -> the fields
+    of a LoopResult, as a tuple."""
     Om, dOm, dspin, t0, t1, rtol, atol, h0, hmax, rec_t0 = (
         fin[0], fin[1], fin[2], fin[3], fin[4], fin[5], fin[6], fin[7], fin[8], fin[9])
     max_steps, max_events, variational, mon, ev_cap, jacobian = (
@@ -293,5 +294,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
         h = h_next
     counters = np.array([steps, rejected, nfev, nev, losses])
     f_end = K[0].copy()
-    return LoopResult(status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode,
-                      f_end, err_sum)
+    # a plain tuple (LoopResult._make on the Python side): boxing a namedtuple runs Python
+    # code, where a pending Ctrl-C raised inside numba's boxing crashed the process
+    return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end,
+            err_sum)

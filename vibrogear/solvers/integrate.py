@@ -9,7 +9,7 @@ import numpy as np
 
 from ..config.options import IntegrationOptions   # defined once, with the [integration] rules
 from ..models.reduced import ReducedModel
-from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, dopri_loop, loop_inputs
+from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, LoopResult, dopri_loop, loop_inputs
 from .kernels import model_arrays
 from .status import Status, from_code
 
@@ -106,7 +106,7 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
                            max_steps=options.max_steps, max_events=options.max_events_per_step,
                            variational=variational, mon=mon, ev_cap=options.event_log,
                            jacobian=_JACOBIAN[jacobian])
-    res = dopri_loop(arrs, u0, t_eval, fin, iin)
+    res = LoopResult._make(dopri_loop(arrs, u0, t_eval, fin, iin))
     code, t_end, y, Phi, u_eval, cnt = res.status, res.t, res.y, res.Phi, res.u_eval, res.counters
     status = from_code(code)
     if status == Status.OK and not np.all(np.isfinite(y)):
