@@ -57,7 +57,7 @@ def mode_violation(A, j, md, delta):
 
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False)
 def event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk):
     """Earliest switch in the accepted step: (theta in (0, 1] or 2, contact, new mode)."""
     nc = A.C.shape[0]
@@ -105,7 +105,7 @@ def event_search(A, t, h, Om, mode, CxS, CvS, cs, sn, bw, pk):
     return theta_ev, j_ev, m_ev
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False)
 def dense_eval(t, h_used, t_new, y, K, t_eval, ie, u_eval, bw):
     """Dense output at the requested times inside the step; returns the next index."""
     n = y.shape[0]
@@ -122,7 +122,7 @@ def dense_eval(t, h_used, t_new, y, K, t_eval, ie, u_eval, bw):
     return ie
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False)
 def monitor_extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext):
     """Update ext = [min, max] of the monitored deformation over the step (after rec_t0):
     samples of the dense output plus the located zeros of its rate."""

@@ -6,6 +6,10 @@ after an accepted step the switching functions are sampled on the dense output; 
 earliest crossing is located by bisection on the interpolant and the step is retaken
 to end exactly there, so each step integrates one smooth vector field and the method
 keeps its order.  All loops are bounded (max_steps, max consecutive events).
+
+The once-per-step helpers (event search, dense output, extrema, tangent step, saltation)
+are compiled functions of their own, not inlined into the loop: the first compilation
+took 53 s with them inlined, 22 s without, at the same run time and the same numbers.
 """
 from __future__ import annotations
 

@@ -40,7 +40,7 @@ def _stage_input(s, h, Phi, KP, Ph):
                 row_axpy_1d(a, KP[k, i], phr)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS, cs, sn,
                      dfp, tmp, W, WS, use_blas):
     """Advance Phi = [d u / d u0, d u / d param] with the stages of the accepted step
@@ -65,7 +65,7 @@ def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, c
                 row_axpy_1d(a, KP[k, i], pir)
 
 
-@njit(cache=True, _nrt=False, inline="always")
+@njit(cache=True, _nrt=False)
 def saltation(A, j, t, Om, dOm, rate, f_new, f_old, Phi, cs, sn):
     """Phi += (f+ - f-) (c_j . Phi_x + d h / d param e_param) / rate at a switch of contact j
     (switching function h = c_j . x - e_j(t; Om) - gap, rate = dh/dt)."""
