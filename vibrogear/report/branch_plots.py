@@ -34,10 +34,16 @@ def draw_branches(ax, arrays, quantity, *, label_points: bool = False, lw_scale=
     stable solid, unstable dashed, special points marked (and named: ``label_points``)."""
     _draw(ax, arrays, quantity, lw_scale)
     if label_points:
+        # names only where they do not overprint: one per 3 % x 6 % of the branch's span
         label = np.asarray(arrays["label"]).astype(str)
+        x, y = np.asarray(arrays["param"], float), np.asarray(arrays[quantity], float)
+        wx, wy = 0.03 * (np.ptp(x) or 1.0), 0.06 * (np.ptp(y) or 1.0)
+        done = []
         for lab, (_, col) in _MARK.items():
-            for xv, yv in zip(np.asarray(arrays["param"])[label == lab],
-                              np.asarray(arrays[quantity])[label == lab]):
+            for xv, yv in zip(x[label == lab], y[label == lab]):
+                if any(abs(xv - a) < wx and abs(yv - b) < wy for a, b in done):
+                    continue
+                done.append((xv, yv))
                 ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4),
                             fontsize=7, color=col)
 
