@@ -264,8 +264,9 @@ class _MpiRoot:
     """Rank 0: hands out units in ``order`` (one at a time, a second one ahead while more
     than one per rank is left), computes units itself between the messages it serves,
     delivers every item to ``on_result``.  ``on_result`` returning False interrupts every
-    rank's unit (tag _STOP, "stop"); an error lets the units in progress finish, their
-    items delivered, and skips the queued ones ("drain"); then every rank ends (_CTRL)."""
+    rank's unit (tag _STOP) and skips the queued ones; an error lets the units already
+    handed out (at most _AHEAD per rank) finish, their items delivered; then every rank
+    ends (_CTRL)."""
 
     def __init__(self, comm, fn, units, on_result, order):
         from collections import deque
@@ -277,8 +278,7 @@ class _MpiRoot:
         self.active, self.queued = set(self.workers), {r: 0 for r in self.workers}
         self.ended: set[int] = set()            # ranks sent the final _CTRL stop
         self.stopping = self.interrupted = False   # interrupted: on_result asked to stop
-        self.error = None
-        self.status, self.any_source = MPI.Status(), MPI.ANY_SOURCE
+        self.error, self.status, self.any_source = None, MPI.Status(), MPI.ANY_SOURCE
 
     def feed(self, r):
         if self.stopping or r in self.ended:
@@ -295,11 +295,11 @@ class _MpiRoot:
     def stop(self, interrupt: bool = True):
         if self.stopping:
             return
-        self.stopping = True
-        self.interrupted = interrupt
+        self.stopping, self.interrupted = True, interrupt
         self.todo.clear()
         for r in sorted(self.active):
-            self.comm.send(("stop" if interrupt else "drain",), dest=r, tag=_STOP)
+            if interrupt:
+                self.comm.send(("stop",), dest=r, tag=_STOP)
             if r not in self.ended:
                 self.ended.add(r)
                 self.comm.send(("stop",), dest=r, tag=_CTRL)
@@ -364,34 +364,34 @@ def _mpi_worker(comm, fn) -> None:
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
     stopping = False
 
-    def stop_message():
-        """The pending _STOP message ("stop": interrupt, "drain": finish this unit), or None."""
-        return comm.recv(source=0, tag=_STOP)[0] if comm.iprobe(source=0, tag=_STOP) else None
+    def interrupted() -> bool:                  # a pending interrupt (tag _STOP), received
+        if comm.iprobe(source=0, tag=_STOP):
+            comm.recv(source=0, tag=_STOP)
+            return True
+        return False
 
     while True:
         msg = comm.recv(source=0, tag=_CTRL)
         if msg[0] == "stop":
-            while stop_message() is not None:   # nothing left unreceived
+            while interrupted():                # nothing left unreceived
                 pass
             comm.send(("bye",), dest=0, tag=_DATA)
             return
         _, i, unit = msg
-        stopping = stopping or stop_message() is not None
+        stopping = stopping or interrupted()
         if stopping:
-            continue                            # a queued unit after a stop
+            continue                            # a queued unit after an interrupt
 
         def emit(item, i=i):
             nonlocal stopping
             comm.send(("item", i, item), dest=0, tag=_DATA)
-            kind = stop_message()
-            stopping = stopping or kind is not None
-            if kind == "stop":
+            if interrupted():
+                stopping = True
                 raise _Stop
 
         try:
             out = fn(unit, emit)
-        except _Stop:
-            stopping = True
+        except _Stop:                           # interrupted (stopping is set)
             continue
         except Exception as exc:                # noqa: BLE001 - sent back to rank 0
             comm.send(("error", i, traceback.format_exc(), _transportable(exc)), dest=0,
