@@ -25,6 +25,7 @@ __all__ = ["BLAS_MIN_WORK", "variational_step", "saltation"]
 #: 31 us; single stage m = 80, 12880 entries, 119 / 89 us; two stage m = 146, 1.35x)
 BLAS_MIN_WORK = 4096
 
+
 @njit(cache=True, _nrt=False, inline="always")
 def _stage_input(s, h, Phi, KP, Ph):
     """Ph = Phi + h sum_{k < s} a_sk KP[k], row by row (the same operations per entry as
