@@ -35,7 +35,8 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from vibrogear.analyses.load_scaling import load_scaling  # noqa: E402
-from vibrogear.analyses.operating_map import compute_map, map_integration_options  # noqa: E402
+from vibrogear.analyses.operating_map import compute_map  # noqa: E402
+from vibrogear.analyses.study import integration_options  # noqa: E402
 from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.solvers.sweep import sweep  # noqa: E402
@@ -63,7 +64,7 @@ def main() -> dict:
     build_s = time.perf_counter() - t0
     cfg = scene.map
     ls = load_scaling(study.gearbox, scene.gearbox)
-    opts = map_integration_options(scene, cfg)
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg)
     rpm, scales = cfg.speeds(), _scales(cfg, ls)
     # the timed block: rows and speeds spread over the ranges (every k-th speed)
     rows = np.linspace(0, scales.size - 1, args.loads).round().astype(int)

@@ -27,7 +27,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from vibrogear.analyses import runup  # noqa: E402
-from vibrogear.analyses.study import build_study  # noqa: E402
+from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.pipeline.outcome import RunContext  # noqa: E402
 from vibrogear.solvers.integrate import integrate  # noqa: E402
@@ -41,7 +41,7 @@ def main() -> dict:
     cfg = scene.runup
     study = build_study(scene)
     model = study.model
-    opts = runup.runup_options(scene)
+    opts = integration_options(scene, record=True, section=scene.runup)
     times, rpm = cfg.profile()
     prof = SpeedProfile.of(times, rpm, study.time_unit_s)
     periods = float(np.trapz(prof.params, prof.times) * model.omega_per_param / (2 * np.pi))

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.study import integration_options, rtol_given, tolerances_for
+from vibrogear.analyses.study import (ATOL_PER_RTOL, integration_options, rtol_given,
+                                      tolerances_for)
 from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.models.gearbox import build_gearbox
 from vibrogear.solvers.contact_eval import contact_history
@@ -81,6 +82,25 @@ def test_explicit_rtol_wins_and_shooting_keeps_the_section():
     loose = integration_options(free, record=True)
     assert integration_options(free, record=True, period_tol=1e-5).rtol == \
         min(loose.rtol, 1e-5)
+
+
+def test_an_analysis_section_rtol_comes_first():
+    """[continuation]/[reduction_accuracy]/[map]/[runup] rtol: that analysis's tolerance,
+    whether or not [integration] rtol is given; a section without one follows the rule."""
+    from types import SimpleNamespace
+    for scene in (_scene(accuracy=1e-3), _scene(rtol=1e-6)):
+        own = SimpleNamespace(rtol=3e-7)
+        for record in (False, True):
+            opts = integration_options(scene, record=record, section=own)
+            assert (opts.rtol, opts.atol) == (3e-7, pytest.approx(3e-7 * ATOL_PER_RTOL))
+        unset = SimpleNamespace(rtol=None)
+        assert integration_options(scene, record=True, section=unset) == \
+            integration_options(scene, record=True)
+    # a section's own accuracy is the one the rule serves
+    free = _scene(accuracy=1e-3)
+    acc = SimpleNamespace(rtol=None, accuracy=1e-5)
+    assert integration_options(free, record=True, section=acc).rtol == \
+        pytest.approx(tolerances_for(1e-5)[0])
 
 
 def test_tolerances_for_is_monotone_and_bounded():

@@ -41,10 +41,10 @@ from ..solvers.status import Status
 from ..solvers.sweep import assemble_result, sweep_units
 from ..solvers.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
-from .study import ATOL_PER_RTOL, Study, rtol_given, start_state, tolerances_for
+from .study import Study, integration_options, start_state
 from .sweep import record_from_json, record_to_json
 
-__all__ = ["OperatingMap", "run", "compute_map", "map_integration_options", "PARTIAL_NAME",
+__all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
            "grid_array"]
 
 PARTIAL_NAME = "map.partial.jsonl"
@@ -99,19 +99,6 @@ def grid_array(m: OperatingMap, name: str) -> np.ndarray:
             sel = row.direction == d
             out[j, k, row.index[sel]] = np.asarray(vals)[sel]
     return out
-
-
-def map_integration_options(scene, cfg):
-    """``[map] rtol`` where given; else the scene's [integration] section, or (rtol not
-    given there) the tolerances that deliver ``[map] accuracy``, no looser than ``[map]
-    period_tol`` (as a sweep's).  atol = 1e-6 rtol unless the section's is taken."""
-    opts = scene.integration
-    if cfg.rtol is not None:
-        return dataclasses.replace(opts, rtol=cfg.rtol, atol=ATOL_PER_RTOL * cfg.rtol)
-    if rtol_given(scene):
-        return opts
-    rtol = min(tolerances_for(cfg.accuracy)[0], cfg.period_tol)
-    return dataclasses.replace(opts, rtol=rtol, atol=ATOL_PER_RTOL * rtol)
 
 
 # ---------------------------------------------------------------- work units
@@ -239,7 +226,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     scales = (scaling.scale_of_twist(values) if cfg.load_kind == "twist"
               else scaling.scale_of_torque(values))
     rpm = cfg.speeds()
-    opts = map_integration_options(scene, cfg)
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg)
     total = len(cfg.directions) * rpm.size * scales.size
     with ctx.progress(total, "map") as bar:
         res = compute_map(study, scaling, rpm, scales, cfg.sweep_options(), opts, out=ctx.out,

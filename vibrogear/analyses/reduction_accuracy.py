@@ -140,7 +140,7 @@ def _response(gm, scene, cfg):
 
     r, rpm = gm.reduced, cfg.rpm
     T = r.excitation_period(rpm)
-    opts = integration_options(scene)
+    opts = integration_options(scene, section=scene.reduction_accuracy)
     warm = integrate(r, rpm, _start(gm, rpm), 0.0, cfg.transient_periods * T, options=opts)
     if not warm.ok:
         return None, warm, {}, 0
@@ -221,7 +221,7 @@ def _warm_up(gm, scene, cfg) -> None:
 
     r = gm.reduced
     integrate(r, cfg.rpm, _start(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
-              options=integration_options(scene))
+              options=integration_options(scene, section=scene.reduction_accuracy))
 
 
 def _full_reference(gm, scene, x0, f_max_hz):

@@ -17,7 +17,6 @@ the figures.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,9 +25,9 @@ from ..models.contact_law import flank
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.ramp import RampResult, SpeedProfile, ramp
 from .order_tracking import Waterfall, order_tracks, waterfall
-from .study import ATOL_PER_RTOL, Study, integration_options
+from .study import Study, integration_options
 
-__all__ = ["RunupResult", "RunupRun", "run", "runup_options", "shaft_orders", "period_table",
+__all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table",
            "jump_speed"]
 
 
@@ -116,16 +115,6 @@ def jump_speed(rpm, q, smooth: int = 20) -> dict | None:
     return {"rpm": float(rpm[k + smooth // 2]), "before": float(a), "after": float(b)}
 
 
-def runup_options(scene):
-    """The integrator's options of a run-up: ``[runup] rtol`` where given (atol = 1e-6
-    rtol), else those of a recorded analysis (:func:`.study.integration_options`)."""
-    opts = integration_options(scene, record=True)
-    rtol = scene.runup.rtol
-    if rtol is None:
-        return opts
-    return dataclasses.replace(opts, rtol=rtol, atol=ATOL_PER_RTOL * rtol)
-
-
 def _profile(cfg, study: Study, direction: str) -> SpeedProfile:
     times, rpm = cfg.profile()
     prof = SpeedProfile.of(times, rpm, study.time_unit_s)
@@ -187,7 +176,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     if rows.size == 0:
         raise NumericalFailure("runup: the model has no mesh contact to follow")
     names, orders, teeth = shaft_orders(scene, cfg.mesh_orders)
-    opts = runup_options(scene)
+    opts = integration_options(scene, record=True, section=scene.runup)
     runs = tuple(_one_run(study, scene, ctx, cfg, d, rows, orders, teeth, opts)
                  for d in cfg.directions)
     ct = model.contacts

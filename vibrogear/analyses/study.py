@@ -122,24 +122,30 @@ def rtol_given(scene) -> bool:
     return scene.integration.rtol != IntegrationOptions.__dataclass_fields__["rtol"].default
 
 
-def integration_options(scene, *, record: bool = False,
-                        period_tol: float | None = None) -> IntegrationOptions:
-    """The scene's [integration] section: it is the integrator's options object.
+def integration_options(scene, *, record: bool = False, period_tol: float | None = None,
+                        section=None) -> IntegrationOptions:
+    """The integrator's options of one analysis: the one rule, in this order.
 
-    ``record=True`` (sweep, time response: results read from recorded motion) on a gearbox
-    scene whose [integration] rtol is not given (:func:`rtol_given`): rtol and atol come from
-    the accuracy asked for, ``[sweep] accuracy`` (default 1e-3; the error of the monitored
-    mesh deformation relative to its range over the record window), by
-    :func:`tolerances_for`, and no looser than ``period_tol`` where given (the sweep's
-    Poincare-sample tolerance: integration error alone must not make a periodic point look
-    not periodic).  An explicit rtol always wins (atol then is the section's).  Shooting and
-    continuation (``record=False``) always take the section as written."""
+    1. ``section.rtol`` where the analysis's own section has one and it is set ([continuation],
+       [reduction_accuracy], [map], [runup]): that rtol, atol = ATOL_PER_RTOL * rtol.
+    2. ``record=True`` (sweep, map, run-up, time response, spectra: results read from recorded
+       motion) on a gearbox scene whose [integration] rtol is not given (:func:`rtol_given`):
+       rtol and atol from the accuracy asked for (``section.accuracy`` where the section has
+       one, else ``[sweep] accuracy``, default 1e-3: the error of the monitored mesh
+       deformation relative to its range over the record window) by :func:`tolerances_for`,
+       no looser than ``period_tol`` where given (the Poincare-sample tolerance: integration
+       error alone must not make a periodic point look not periodic).
+    3. Otherwise the [integration] section as written (shooting and continuation without
+       their own rtol; an explicit [integration] rtol wins over the accuracy rule)."""
     opts = scene.integration
+    own = getattr(section, "rtol", None)
+    if own is not None:
+        return dataclasses.replace(opts, rtol=own, atol=ATOL_PER_RTOL * own)
     if not record or scene.gearbox is None or rtol_given(scene):
         return opts
     from ..config.options import SweepOptions
 
-    acc = getattr(scene.sweep, "accuracy", None) or \
+    acc = getattr(section, "accuracy", None) or getattr(scene.sweep, "accuracy", None) or \
         SweepOptions.__dataclass_fields__["accuracy"].default
     rtol, _ = tolerances_for(acc)
     rtol = rtol if period_tol is None else min(rtol, period_tol)

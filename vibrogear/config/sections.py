@@ -99,6 +99,8 @@ class ContinuationSettings(ContinuationSteps):
                             "output folder)")
     from_sweep_max_points: int = spec(40, ge=2, le=1_000_000, doc="points of each half-branch "
                                       "started from a sweep window")
+    rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for shooting and continuation "
+                              "(atol = 1e-6 rtol); default: [integration] as written")
     range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
@@ -209,6 +211,8 @@ class ReductionAccuracyConfig:
                                       "(assembles the housing's K and M)")
     frequency_level: bool = spec(True, doc="also the level of gearbox.master_modes = "
                                  "\"frequency\" (with and without the static correction)")
+    rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for the study "
+                              "(atol = 1e-6 rtol); default: [integration] as written")
 
     def validate(self, path: str) -> None:
         if len(self.shaft_counts) != len(self.housing_counts):
