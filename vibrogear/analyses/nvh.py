@@ -54,6 +54,11 @@ class NvhResult:
     velocity_fields: dict = field(default_factory=dict)    # rpm -> (nf,) RMS v_n [m/s]
     study: Study | None = None
 
+    @property
+    def erp_db(self) -> np.ndarray | None:
+        """(P,) ERP level [dB re 1e-12 W] (None without surface data)."""
+        return None if self.erp_w is None else erp_db(self.erp_w)
+
 
 def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
                   ) -> tuple[np.ndarray, np.ndarray, str]:

@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analyses.housing_surface import erp_db
 from ..pipeline.files import atomic_write_bytes
 from .nvh_plots import plot_erp, plot_waterfall
 
@@ -76,7 +75,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     if r.erp_w is not None:
         lines = ["rpm,erp_w,erp_db"] + [f"{p!r},{w!r},{d!r}" for p, w, d in
                                         zip(r.rpm.tolist(), r.erp_w.tolist(),
-                                            erp_db(r.erp_w).tolist())]
+                                            r.erp_db.tolist())]
         files["erp_csv"] = str(atomic_write_bytes(out / "erp.csv",
                                                   ("\n".join(lines) + "\n").encode()))
         plot_waterfall(out / "nvh_waterfall_erp.png", r.rpm, r.freq_hz, r.erp_per_bin,

@@ -65,6 +65,21 @@ def jac_workspace(A, ncol: int) -> np.ndarray:
 
 
 @njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+def _modal_part(X, V, OX, OV, w2, damp):
+    """The modal diagonal of J Phi: OX = V, OV = -w2 X - damp V (row by row)."""
+    for i in range(w2.shape[0]):
+        a = w2[i]
+        b = damp[i]
+        xi = X[i]
+        vi = V[i]
+        oxi = OX[i]
+        ovi = OV[i]
+        for c in range(X.shape[1]):
+            oxi[c] = vi[c]
+            ovi[c] = -a * xi[c] - b * vi[c]
+
+
+@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
 def jac_times(Phi, mode, A, kd, cd, out, W):
     """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``.
 
@@ -76,16 +91,7 @@ def jac_times(Phi, mode, A, kd, cd, out, W):
     V = Phi[m:2 * m]
     OX = out[:m]
     OV = out[m:2 * m]
-    for i in range(m):
-        a = A.w2[i]
-        b = A.damp[i]
-        xi = X[i]
-        vi = V[i]
-        oxi = OX[i]
-        ovi = OV[i]
-        for c in range(ncol):
-            oxi[c] = vi[c]
-            ovi[c] = -a * xi[c] - b * vi[c]
+    _modal_part(X, V, OX, OV, A.w2, A.damp)
     r = A.P.shape[0]
     if r > 0:
         QX = W[:r]
@@ -251,16 +257,7 @@ def jac_times_blas(Phi, mode, A, kd, cd, out, WS):
     V = Phi[m:2 * m]
     OX = out[:m]
     OV = out[m:2 * m]
-    for i in range(m):
-        a = A.w2[i]
-        b = A.damp[i]
-        xi = X[i]
-        vi = V[i]
-        oxi = OX[i]
-        ovi = OV[i]
-        for c in range(ncol):
-            oxi[c] = vi[c]
-            ovi[c] = -a * xi[c] - b * vi[c]
+    _modal_part(X, V, OX, OV, A.w2, A.damp)
     r = A.P.shape[0]
     nc = A.C.shape[0]
     # rows of G taking part: the dense rows of P, then the active contacts
