@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.study import integration_options
+from vibrogear.analyses.study import integration_options, rtol_given
 from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.solvers.integrate import IntegrationOptions
 from vibrogear.solvers.static import static_equilibrium
@@ -33,12 +33,11 @@ ACCURACY = 1e-3
 
 
 def _scene_asking_for_accuracy():
-    """configs/two_stage.toml without its explicit [integration] rtol / atol: the sweep's
-    tolerance then comes from [sweep] accuracy (analyses.study.integration_options)."""
-    data = read_toml(SCENE)
-    data["integration"].pop("rtol", None)
-    data["integration"].pop("atol", None)
-    return scene_from_dict(data, base_dir=SCENE.parent)
+    """configs/two_stage.toml as shipped: it sets no [integration] rtol, so the sweep's
+    tolerance comes from [sweep] accuracy (analyses.study.integration_options)."""
+    scene = scene_from_dict(read_toml(SCENE), base_dir=SCENE.parent)
+    assert not rtol_given(scene)
+    return scene
 
 
 def _run(scene, rpms, level, options):
