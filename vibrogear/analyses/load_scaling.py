@@ -2,7 +2,7 @@
 
 A gearbox's static load is the twist of its external couplings (``[[gearbox.couplings]]``,
 role motor / load): coupling c applies the torque ``stiffness_c * twist_c`` to its shaft
-(:func:`vibrogear.models.gearbox._external_couplings`).  The load enters the reduced model
+(:func:`vibrogear.models.gearbox.external_couplings`).  The load enters the reduced model
 only through the constant force ``forcing.F0``, which is linear in the twists.  With every
 twist scaled by one factor ``s`` (the scene's load pattern kept):
 
@@ -79,7 +79,7 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
     """The decomposition of the scene's F0 (module docstring).  ConfigError (naming
     ``gearbox.couplings``) where the scene has no motor coupling, or its twist or stiffness
     is 0 so that no load can be scaled from it."""
-    from ..models.gearbox import _external_couplings
+    from ..models.gearbox import external_couplings
     from ..models.synthesis import PhysicalVector, modal_vector
 
     motors = motor_couplings(gearbox_cfg)
@@ -93,7 +93,7 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
                           "scene's twists: the motor coupling needs twist > 0 and stiffness > "
                           f"0, got twist = {first.twist:g} rad, stiffness = {first.stiffness:g}")
     gm = gearbox_model
-    _, forces = _external_couplings(gearbox_cfg, gm.rotors, gm.shaft_ratios)
+    _, forces = external_couplings(gearbox_cfg, gm.rotors, gm.shaft_ratios)
     f0_c = modal_vector(PhysicalVector.of(*forces), gm.subsystems) / gm.omega_ref ** 2
     f0 = np.asarray(gm.reduced.forcing.F0, dtype=float)
     return LoadScaling(f0_rest=f0 - f0_c, f0_couplings=f0_c, torque_nominal=torque,

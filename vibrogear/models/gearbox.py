@@ -45,7 +45,7 @@ from .master_level import (coupling_loads, excitation_frequencies_hz, highest_sp
 from .rotor import build_rotor_model
 from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
 
-__all__ = ["GearboxModel", "build_gearbox", "check_layout", "OMEGA_REF", "RPM",
+__all__ = ["GearboxModel", "build_gearbox", "external_couplings", "check_layout", "OMEGA_REF", "RPM",
            "housing_to_rotor", "iso_mesh_stiffness", "gravity_load"]
 
 log = logging.getLogger(__name__)
@@ -191,7 +191,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     bc, bl, blocks = _bearings(scene, cfg, rotors, hm)
     contacts += bc
     links += bl
-    cl, forces = _external_couplings(cfg, rotors, shaft_p)
+    cl, forces = external_couplings(cfg, rotors, shaft_p)
     forces += gravity_load(cfg.gravity, rotors)
     links += cl
     for k, g in enumerate(cfg.gears):
@@ -364,7 +364,9 @@ def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
     return out, records
 
 
-def _external_couplings(cfg, rotors, shaft_p):
+def external_couplings(cfg, rotors, shaft_p):
+    """The external torsional couplings: (links, forces), the links' springs and dampers and
+    the constant torques of their static twists (stiffness x twist, the load), per shaft."""
     links, forces = [], []
     for c in cfg.couplings:
         s = cfg.shaft_index(c.shaft, "")
