@@ -15,6 +15,13 @@ harmonics exactly on bins, no window) of
 
 and, with a housing, the ERP of its outer surface (:mod:`.housing_surface`).  Frequencies
 are k / (record_periods T_mesh): order k / record_periods of the first mesh.
+
+Branch spectra (``[nvh] branch_spectra``, :func:`branch_spectra`): the same quantities for
+each point of the branches of a ``continuation`` that ran before in the same run, from its
+state u0 at phase 0 over exactly ONE orbit period (n_periods excitation periods).  The
+point is a converged shooting solution, u(n T) = u0, so the one-period record is the
+periodic signal itself and its DFT the exact line spectrum (no leakage, no window), for
+unstable orbits as much as stable ones: the orbit is computed, not settled onto.
 """
 from __future__ import annotations
 
@@ -31,7 +38,8 @@ from ..solvers.spectrum import amplitude_spectrum
 from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
 from .study import Study, integration_options
 
-__all__ = ["NvhResult", "run", "steady_points", "order_lines"]
+__all__ = ["NvhResult", "BranchSpectra", "run", "steady_points", "order_lines",
+           "branch_spectra"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -53,6 +61,7 @@ class NvhResult:
     surface: object = None               # SurfaceMap (for the velocity fields)
     velocity_fields: dict = field(default_factory=dict)    # rpm -> (nf,) RMS v_n [m/s]
     study: Study | None = None
+    branch: BranchSpectra | None = None    # spectra of the continuation's branch points
 
     @property
     def erp_db(self) -> np.ndarray | None:
@@ -125,6 +134,96 @@ def _record(study: Study, p: float, u0, R: int, S: int, opts):
     return t, R * T, integrate(study.model, p, u0, 0.0, R * T, t_eval=t, options=opts)
 
 
+def _signals(study: Study, p: float, t, u, mesh, bearings) -> dict:
+    """quantity -> (channels, samples): the DTE, mesh forces and bearing forces of a record."""
+    delta, _, force = contact_history(study.model, p, t, u)
+    force = force * study.force_unit_n
+    bforce = [np.einsum("jt,jc->ct", force[idx], units) for _, idx, units in bearings]
+    return {"dte": delta[mesh], "mesh_force": force[mesh],
+            "bearing_force": np.concatenate(bforce) if bforce else np.zeros((0, t.size))}
+
+
+@dataclass(frozen=True, eq=False)
+class BranchSpectra:
+    """Line spectra of the continuation's branch points (module docstring), all on the
+    common order grid k / N (N = lcm of the points' n_periods): a period-n orbit's bin k
+    lies at k N / n, the bins between are exactly zero (the spectrum of N periods)."""
+    rpm: np.ndarray                      # (P,)
+    branch: np.ndarray                   # (P,) index of the branch in the continuation
+    index: np.ndarray                    # (P,) index along it (order of continuation)
+    stable: np.ndarray                   # (P,) bool
+    n_periods: np.ndarray                # (P,) orbit period in excitation periods
+    order: np.ndarray                    # (K,) bin frequency in orders of the first mesh
+    freq_hz: np.ndarray                  # (P, K)
+    amplitudes: dict                     # quantity -> (P, channels, K)
+    parseval: dict                       # quantity -> largest relative Parseval error
+    closure: np.ndarray                  # (P,) |u(n T) - u0| / |u0| of the one-period record
+    first_pass: np.ndarray               # (P,) bool: branch 0 up to its first fold
+    erp_w: np.ndarray | None = None      # (P,)
+    erp_per_bin: np.ndarray | None = None    # (P, K)
+
+
+def _first_pass(rpm: np.ndarray, branch: np.ndarray) -> np.ndarray:
+    """Branch 0's points up to its first fold (the speed monotone along the branch): the
+    waterfall draws these only, as after a fold the branch revisits speeds."""
+    keep = branch == 0
+    idx = np.flatnonzero(keep)
+    step = np.sign(np.diff(rpm[idx]))
+    turn = np.flatnonzero(step != step[0]) if step.size else np.zeros(0, int)
+    if turn.size:
+        keep[idx[turn[0] + 1:]] = False
+    return keep
+
+
+def branch_spectra(study: Study, scene, continuation, mesh, bearings, smap
+                   ) -> tuple[BranchSpectra | None, list]:
+    """(the spectra of every point of ``continuation``'s branches, warnings): one orbit
+    period from each point's u0 with ``samples_per_period`` samples per excitation period
+    (module docstring).  None when every point failed."""
+    cfg = scene.nvh
+    S, opts = cfg.samples_per_period, integration_options(scene, record=True)
+    pts = [(b, i, br.n_periods, pt) for b, br in enumerate(continuation.branches)
+           for i, pt in enumerate(br.points)]
+    N = int(np.lcm.reduce([n for _, _, n, _ in pts])) if pts else 1
+    K = N * S // 2 + 1
+    rows, recs, warnings = [], {"dte": [], "mesh_force": [], "bearing_force": []}, []
+    parseval, erp, erp_bins = {k: 0.0 for k in recs}, [], []
+    for b, i, n, pt in pts:
+        p, u0 = float(pt.param), np.asarray(pt.u0, dtype=float)
+        t, span, tr = _record(study, p, u0, n, S, opts)
+        if not tr.ok:
+            warnings.append(f"nvh: branch {b} point {i} ({p:g} rpm) left out: {tr.message}")
+            continue
+        closure = float(np.linalg.norm(tr.u_end - u0) / max(np.linalg.norm(u0), 1e-300))
+        for k, x in _signals(study, p, t, tr.u, mesh, bearings).items():
+            spec = amplitude_spectrum(x, span)
+            amp = np.zeros(x.shape[:-1] + (K,))
+            amp[..., ::N // n] = spec.amplitude
+            recs[k].append(amp)
+            if x.size:
+                parseval[k] = max(parseval[k], spec.parseval_error)
+        if smap is not None:
+            rates = smap.modal_rates(tr.u, study.model.n_modes)
+            erp.append(erp_watts(smap.gram, rates, cfg.rho_air, cfg.c_air))
+            per_bin = np.zeros(K)
+            per_bin[::N // n] = erp_spectrum(smap.gram, rates, cfg.rho_air, cfg.c_air)
+            erp_bins.append(per_bin)
+        rows.append((p, b, i, pt.stable, n, closure))
+    if not rows:
+        return None, warnings
+    rpm, branch, index, stable, n_per, closure = (np.array(c) for c in zip(*rows))
+    model = study.model
+    return BranchSpectra(
+        rpm=rpm, branch=branch, index=index, stable=stable.astype(bool), n_periods=n_per,
+        order=np.arange(K) / N,
+        freq_hz=np.outer(model.excitation_frequency(rpm) / (2 * np.pi * study.time_unit_s),
+                         np.arange(K) / N),
+        amplitudes={k: np.array(v) for k, v in recs.items()}, parseval=parseval,
+        closure=closure, first_pass=_first_pass(rpm, branch),
+        erp_w=np.array(erp) if smap is not None else None,
+        erp_per_bin=np.array(erp_bins) if smap is not None else None), warnings
+
+
 def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     cfg = scene.nvh
     gm, model = study.gearbox, study.model
@@ -148,12 +247,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
             if not tr.ok:
                 warnings.append(f"nvh: {p:g} rpm left out: {tr.message}")
                 continue
-            delta, _, force = contact_history(model, p, t, tr.u)
-            force = force * study.force_unit_n
-            bforce = [np.einsum("jt,jc->ct", force[idx], units) for _, idx, units in bearings]
-            sig = {"dte": delta[mesh], "mesh_force": force[mesh],
-                   "bearing_force": np.concatenate(bforce) if bforce else np.zeros((0, t.size))}
-            for k, x in sig.items():
+            for k, x in _signals(study, p, t, tr.u, mesh, bearings).items():
                 spec = amplitude_spectrum(x, span)
                 records[k].append(spec.amplitude)
                 if x.size:
@@ -174,6 +268,17 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     rpm = np.array(kept)
     erp_w = np.array(erp) if smap is not None else None
     fields = {p: rms_velocity_field(smap, r) for p, r in sorted(rates_at.items())}
+    branch = None
+    if cfg.branch_spectra:
+        cont = (previous or {}).get("continuation")
+        if cont is None:
+            warnings.append("nvh.branch_spectra: no continuation ran before nvh in this run "
+                            "(list 'continuation' before 'nvh' in scene.analyses): the branch "
+                            "spectra are left out")
+        else:
+            branch, more = branch_spectra(study, scene, cont.result.result, mesh, bearings,
+                                          smap)
+            warnings.extend(more)
     order = np.arange(R * S // 2 + 1) / R
     mesh_hz, shaft_hz, shaft_names = order_lines(scene.gearbox, rpm)
     names = {"dte": tuple(gm.contacts[j].name for j in mesh),
@@ -187,7 +292,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                     parseval=parseval, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                     shaft_names=shaft_names, source=source, erp_w=erp_w, erp_note=note,
                     erp_per_bin=np.array(erp_bins) if smap is not None else None,
-                    surface=smap, velocity_fields=fields, study=study)
+                    surface=smap, velocity_fields=fields, study=study, branch=branch)
     summary = {"status": "ok" if not warnings else "partial", "points": int(rpm.size),
                "source": source, "record_periods": R, "samples_per_period": S,
                "resolution_orders": 1.0 / R, "window": "none (whole mesh periods)",
@@ -203,4 +308,11 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                         "c_air": cfg.c_air, "velocity_fields_rpm": sorted(fields)})
     else:
         summary["erp"] = note
+    if branch is not None:
+        summary["branch_spectra"] = {
+            "points": int(branch.rpm.size), "stable": int(branch.stable.sum()),
+            "n_periods": sorted({int(n) for n in branch.n_periods}),
+            "record": "one orbit period (n_periods excitation periods) per point",
+            "max_closure_rel": float(branch.closure.max()),
+            "parseval_max_rel_error": branch.parseval}
     return AnalysisOutcome(summary=summary, result=res, warnings=tuple(warnings))

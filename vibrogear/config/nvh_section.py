@@ -9,6 +9,12 @@ settled state ``record_periods`` whole excitation (mesh) periods are integrated 
 highest mesh order shown, below the Nyquist order samples_per_period / 2).  ERP uses
 ``rho_air`` and ``c_air``; the RMS surface normal velocity is written at the speeds
 ``velocity_rpms`` (the nearest steady point each; none given: the point of largest ERP).
+
+``branch_spectra = true`` adds the spectra of every point of the branches of a
+[continuation] that ran before nvh in the same run (list it first in ``scene.analyses``):
+one orbit period (n_periods excitation periods) from each point's u0, the exact line
+spectrum of the periodic orbit, unstable ones included (``spectra_branch.npz``).  The steady
+points above are still needed (a sweep before, or the own grid).
 """
 from __future__ import annotations
 
@@ -44,6 +50,9 @@ class NvhConfig:
     velocity_rpms: tuple[float, ...] = spec((), max_len=50, gt=0.0, le=1e6,
                                             doc="speeds [rpm] at which the RMS surface "
                                             "velocity field is written (nearest point)")
+    branch_spectra: bool = spec(False, doc="also the spectra of the branch points of a "
+                                "[continuation] that ran before in the same run (one orbit "
+                                "period each)")
 
     def validate(self, path: str) -> None:
         n = self.samples_per_period

@@ -9,6 +9,16 @@
 ``erp_w_per_bin`` (P, K), the ERP of each bin [W] (its sum over bins: ``erp_w``).  ``erp.csv``: rpm,
 erp_w, erp_db (only with a housing that has surface data).  The surface file holds the
 outer-surface triangles with the cell data ``v_rms`` [m/s] (RMS normal velocity per facet).
+
+With ``[nvh] branch_spectra``: ``spectra_branch.npz`` holds, per continuation branch point
+(P), ``rpm``, ``branch`` (index of the branch), ``index`` (along it, the order of
+continuation = of arclength), ``stable``, ``n_periods``, ``closure`` (|u(n T) - u0| / |u0| of
+its one-period record), ``first_pass``, ``order`` (K,) on the common grid k / N (N = lcm of
+the n_periods; a period-n orbit has lines only at multiples of 1 / n), ``freq_hz`` (P, K),
+``amp_<q>``, ``channels_<q>``, ``parseval_<q>`` as above, with a housing ``erp_w`` and
+``erp_w_per_bin``; and ``nvh_waterfall_branch_dte.png``: the DTE over the speeds of the first
+pass of branch 0 (its points up to the first fold, where the branch would revisit speeds;
+stable and unstable alike).
 """
 from __future__ import annotations
 
@@ -17,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analyses.nvh import order_lines
 from ..pipeline.files import atomic_write_bytes
 from .nvh_plots import plot_erp, plot_waterfall
 
-__all__ = ["write", "write_surface_velocity"]
+__all__ = ["write", "write_branch", "write_surface_velocity"]
 
 _LABELS = {"dte": "dynamic transmission error", "mesh_force": "mesh force",
            "bearing_force": "bearing force"}
@@ -93,4 +104,37 @@ def write(scene, outcome, out, previous=None) -> dict:
             path = write_surface_velocity(out / f"surface_velocity_{p:.0f}.xdmf", s.vertices,
                                           s.triangles, v)
             files[f"surface_velocity_{p:.0f}"] = str(path)
+    if r.branch is not None:
+        files.update(write_branch(scene, r, out, max_hz, title))
+    return files
+
+
+def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
+    """``spectra_branch.npz`` and the DTE waterfall of branch 0's first pass (module
+    docstring)."""
+    b, cfg, files = r.branch, scene.nvh, {}
+    arrays = {k: getattr(b, k) for k in ("rpm", "branch", "index", "stable", "n_periods",
+                                          "closure", "first_pass", "order", "freq_hz")}
+    for q, amp in b.amplitudes.items():
+        arrays[f"amp_{q}"] = amp
+        arrays[f"channels_{q}"] = np.array(r.channels[q], dtype=str)
+        arrays[f"parseval_{q}"] = np.float64(b.parseval[q])
+    if b.erp_per_bin is not None:
+        arrays["erp_w_per_bin"], arrays["erp_w"] = b.erp_per_bin, b.erp_w
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    files["branch_npz"] = str(atomic_write_bytes(out / "spectra_branch.npz", buf.getvalue()))
+    amp = b.amplitudes["dte"]
+    sel = np.flatnonzero(b.first_pass)
+    if amp.shape[1] and sel.size:
+        sel = sel[np.argsort(b.rpm[sel], kind="stable")]
+        mesh_hz, shaft_hz, names = order_lines(scene.gearbox, b.rpm[sel])
+        path = out / "nvh_waterfall_branch_dte.png"
+        label = _LABELS["dte"] + (" (RSS over channels)" if amp.shape[1] > 1 else "")
+        plot_waterfall(path, b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
+                       unit=r.units["dte"], max_hz=max_hz, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
+                       max_order=cfg.max_order, shaft_names=names,
+                       title=f"{title}\n{_LABELS['dte']} of the continuation branch (first "
+                             "pass, one orbit period per point)")
+        files["waterfall_branch_dte"] = str(path)
     return files
