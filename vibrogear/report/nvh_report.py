@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analyses.nvh import order_lines
 from ..pipeline.files import atomic_write_bytes
 from .nvh_plots import plot_erp, plot_waterfall
 
@@ -128,7 +127,10 @@ def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
     sel = np.flatnonzero(b.first_pass)
     if amp.shape[1] and sel.size:
         sel = sel[np.argsort(b.rpm[sel], kind="stable")]
-        mesh_hz, shaft_hz, names = order_lines(scene.gearbox, b.rpm[sel])
+        # order lines: frequencies proportional to the speed (the steady points' ratios)
+        mesh_hz = np.outer(b.rpm[sel], np.asarray(r.mesh_hz)[0] / r.rpm[0])
+        shaft_hz = np.outer(b.rpm[sel], np.asarray(r.shaft_hz)[0] / r.rpm[0])
+        names = r.shaft_names
         path = out / "nvh_waterfall_branch_dte.png"
         label = _LABELS["dte"] + (" (RSS over channels)" if amp.shape[1] > 1 else "")
         plot_waterfall(path, b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
