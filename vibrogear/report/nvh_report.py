@@ -61,15 +61,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {}
     arrays = {"rpm": r.rpm, "order": r.order, "freq_hz": r.freq_hz, "mesh_hz": r.mesh_hz,
               "shaft_hz": r.shaft_hz, "shaft_names": np.array(r.shaft_names)}
-    for q, amp in r.amplitudes.items():
-        arrays[f"amp_{q}"] = amp
-        arrays[f"channels_{q}"] = np.array(r.channels[q], dtype=str)
-        arrays[f"parseval_{q}"] = np.float64(r.parseval[q])
-    if r.erp_per_bin is not None:
-        arrays["erp_w_per_bin"], arrays["erp_w"] = r.erp_per_bin, r.erp_w
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    files["npz"] = str(atomic_write_bytes(out / "spectra.npz", buf.getvalue()))
+    files["npz"] = _write_spectra(out / "spectra.npz", arrays, r, r.channels)
     max_hz = cfg.max_order * 1.05 * float(np.max(r.mesh_hz))
     title = r.study.title if r.study is not None else scene.scene.name
     for q, amp in r.amplitudes.items():
@@ -108,21 +100,28 @@ def write(scene, outcome, out, previous=None) -> dict:
     return files
 
 
+def _write_spectra(path: Path, arrays: dict, res, channels: dict) -> str:
+    """``arrays`` plus the amplitudes, channel names and Parseval errors of ``res`` (steady
+    points or branch orbits) and its ERP where it has one, as a compressed npz."""
+    arrays = dict(arrays)
+    for q, amp in res.amplitudes.items():
+        arrays[f"amp_{q}"] = amp
+        arrays[f"channels_{q}"] = np.array(channels[q], dtype=str)
+        arrays[f"parseval_{q}"] = np.float64(res.parseval[q])
+    if res.erp_per_bin is not None:
+        arrays["erp_w_per_bin"], arrays["erp_w"] = res.erp_per_bin, res.erp_w
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    return str(atomic_write_bytes(path, buf.getvalue()))
+
+
 def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
     """``spectra_branch.npz`` and the DTE waterfall of branch 0's first pass (module
     docstring)."""
     b, cfg, files = r.branch, scene.nvh, {}
     arrays = {k: getattr(b, k) for k in ("rpm", "branch", "index", "stable", "n_periods",
                                           "closure", "first_pass", "order", "freq_hz")}
-    for q, amp in b.amplitudes.items():
-        arrays[f"amp_{q}"] = amp
-        arrays[f"channels_{q}"] = np.array(r.channels[q], dtype=str)
-        arrays[f"parseval_{q}"] = np.float64(b.parseval[q])
-    if b.erp_per_bin is not None:
-        arrays["erp_w_per_bin"], arrays["erp_w"] = b.erp_per_bin, b.erp_w
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    files["branch_npz"] = str(atomic_write_bytes(out / "spectra_branch.npz", buf.getvalue()))
+    files["branch_npz"] = _write_spectra(out / "spectra_branch.npz", arrays, b, r.channels)
     amp = b.amplitudes["dte"]
     sel = np.flatnonzero(b.first_pass)
     if amp.shape[1] and sel.size:
