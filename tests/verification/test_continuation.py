@@ -151,3 +151,60 @@ def test_stable_sweep_orbits_lie_on_stable_branch_segments(branches, fold_sweep)
         assert err < 1.0, (om, qs, cands)
         checked += 1
     assert checked > 30
+
+
+def _exact_pd(point, lo, hi):
+    """The exact PD of the period-1 branch between parameters lo and hi: bisection on
+    det(M + I) = prod(mu + 1) of the exact orbit (exact piecewise-linear solution)."""
+    ip = ImpactParams(**PAR)
+
+    def g(om):
+        ex = periodic_orbit(ip, om, point.u0)
+        assert ex.converged
+        return float(np.prod(ex.floquet + 1.0).real)
+
+    g_lo = g(lo)
+    assert np.sign(g_lo) != np.sign(g(hi))
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        if np.sign(g(mid)) == np.sign(g_lo):
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi)
+
+
+def _pd_checks(branch):
+    """(located, within, exact) per PD of the period-1 branch."""
+    pts = branch.points
+    out = []
+    for k, p in enumerate(pts):
+        if p.label == "PD":
+            lo, hi = sorted((pts[k - 1].param, pts[k + 1].param))
+            out.append((p.param, p.located_within, _exact_pd(p, lo, hi)))
+    return out
+
+
+def test_special_points_lie_within_their_reported_bracket(model, branches, monkeypatch):
+    """Every PD's reported ``located_within`` holds the exact crossing; where a crossing
+    changes no stability (here forced: every orbit counted unstable), one regula-falsi
+    orbit locates it and its wider bracket still holds the exact PD."""
+    from vibrogear.solvers import continuation as cont
+
+    exact = _pd_checks(branches[0])
+    assert len(exact) == 2
+    for p, within, ref in exact:
+        assert 0 < within < 1e-3 and abs(p - ref) <= within + 1e-9
+    monkeypatch.setattr(cont, "stability", lambda *a, **k: False)
+    p0 = 1.3
+    warm = integrate(model, p0, np.array([1.05, 0.0]), 0.0, 300 * 2 * np.pi / p0, options=OPT)
+    co = ContinuationOptions(param_min=0.45, param_max=1.3, ds=0.02, ds_max=0.05,
+                             period_doubling_branch=False)
+    res = continuation(PeriodicOrbitProblem(model, warm.u_end, p0, direction=-1),
+                       PseudoArclength(integration=OPT, tol=1e-9), co)
+    coarse = _pd_checks(res.branches[0])
+    assert len(coarse) == 2
+    for (p, within, ref), (_, within_exact, _) in zip(coarse, exact):
+        assert abs(p - ref) <= within + 1e-9
+        assert within > within_exact            # one orbit: a wider bracket
+    assert res.counters["flows"] < sum(b.counters["flows"] for b in branches[:1])

@@ -121,7 +121,11 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     wall = time.perf_counter() - t0
     branches = res.branches
     special = [{"label": s.label, study.param_name: float(s.param), "branch": s.branch,
-                "qmax": float(branches[s.branch].points[s.index].qmax)}
+                "qmax": float(branches[s.branch].points[s.index].qmax),
+                # the parameter interval known to hold the crossing (an NS / PD that changes
+                # no stability is located by one regula-falsi orbit only)
+                f"located_within_{study.param_name}":
+                    float(branches[s.branch].points[s.index].located_within)}
                for s in res.special_points]
     summary = {
         "status": "ok",

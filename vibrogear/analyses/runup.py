@@ -18,10 +18,12 @@ the figures.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ..models.contact_law import flank
+from ..pipeline.executors import run_units
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.ramp import RampResult, SpeedProfile, ramp
 from .order_tracking import Waterfall, order_tracks, waterfall
@@ -121,25 +123,53 @@ def _profile(cfg, study: Study, direction: str) -> SpeedProfile:
     return prof if direction == "up" else prof.reversed()
 
 
-def _one_run(study, scene, ctx, cfg, direction, rows, orders, teeth, opts) -> RunupRun:
+#: chunks between two progress ticks of a run
+_TICK_EVERY = 64
+
+
+def _ramp_unit(model, kw, unit, emit):
+    """One direction's ramp (a work unit of :func:`~vibrogear.pipeline.executors.run_units`:
+    up and down run on two cores): progress ticks, then the result, through ``emit``."""
+    direction, prof, u0 = unit
+    count = iter(range(1, 1 << 62))
+
+    def tick(t, p):
+        if next(count) % _TICK_EVERY == 0:
+            emit(("tick", direction, p))
+
+    emit(("done", direction, ramp(model, prof, u0, callback=tick, **kw)))
+
+
+def _ramps(study, ctx, cfg, rows, opts) -> dict:
+    """{direction: RampResult} of the section's directions, in parallel."""
     model = study.model
-    prof = _profile(cfg, study, direction)
-    est = int(np.ceil(np.trapz(prof.params, prof.times) * model.omega_per_param / (2 * np.pi)
-                      * cfg.chunks_per_period))
-    u0 = study.start(float(prof.params[0]))
-    every = 64
-    with ctx.progress(est // every, f"runup {direction}") as bar:
-        count = iter(range(1, 1 << 62))
+    units, est = [], 0
+    for d in cfg.directions:
+        prof = _profile(cfg, study, d)
+        est += int(np.ceil(np.trapz(prof.params, prof.times) * model.omega_per_param
+                           / (2 * np.pi) * cfg.chunks_per_period))
+        units.append((d, prof, study.start(float(prof.params[0]))))
+    kw = dict(options=opts, chunks_per_period=cfg.chunks_per_period,
+              samples_per_period=cfg.samples_per_period, midpoint=cfg.midpoint,
+              settle_periods=cfg.settle_periods, rows=rows)
+    got = {}
+    with ctx.progress(est // _TICK_EVERY, "runup " + " + ".join(cfg.directions)) as bar:
+        def on_result(_i, item):
+            kind, d, value = item
+            if kind == "tick":
+                bar.update(1, f"{d} {value:.5g} {study.param_unit}")
+            else:
+                got[d] = value
+        run_units(partial(_ramp_unit, model, kw), units, on_result=on_result)
+    for d in cfg.directions:
+        if not got[d].ok:
+            raise NumericalFailure(f"runup {d}: {got[d].message}")
+    return got
 
-        def tick(t, p):
-            if next(count) % every == 0:
-                bar.update(1, f"{p:.5g} {study.param_unit}")
 
-        r = ramp(model, prof, u0, options=opts, chunks_per_period=cfg.chunks_per_period,
-                 samples_per_period=cfg.samples_per_period, midpoint=cfg.midpoint,
-                 settle_periods=cfg.settle_periods, rows=rows, callback=tick)
-    if not r.ok:
-        raise NumericalFailure(f"runup {direction}: {r.message}")
+def _one_run(study, cfg, direction, r: RampResult, rows, orders, teeth) -> RunupRun:
+    model = study.model
+    prof = r.profile
     ct = model.contacts
     mon = [i for i, j in enumerate(rows) if j == model.monitor]
     first, lo, hi, losses = period_table(r, mon[0] if mon else None,
@@ -177,7 +207,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         raise NumericalFailure("runup: the model has no mesh contact to follow")
     names, orders, teeth = shaft_orders(scene, cfg.mesh_orders)
     opts = integration_options(scene, record=True, section=scene.runup)
-    runs = tuple(_one_run(study, scene, ctx, cfg, d, rows, orders, teeth, opts)
+    ramps = _ramps(study, ctx, cfg, rows, opts)
+    runs = tuple(_one_run(study, cfg, d, ramps[d], rows, orders, teeth)
                  for d in cfg.directions)
     ct = model.contacts
     mesh_names = tuple(ct.names[j] if ct.names else f"c{j}" for j in rows)

@@ -56,6 +56,8 @@ class PseudoArclength:
     quasi_newton: bool = True          # the corrector's Broyden stage (solvers/corrector.py)
     start_max_iter: int | None = None   # Newton iterations for the starting orbit
     #                                     (default: 3 x the options' max_corrector_iter)
+    split_columns: bool = True          # orbits with the monodromy on two cores where it
+    #                                     pays (solvers/split_flow.py; same numbers)
 
     def __post_init__(self):
         if not (0 < self.tol < 1 and self.param_scale > 0 and 0 < self.max_angle < np.pi
@@ -81,6 +83,8 @@ class BranchPoint:
     integration_error: float = 0.0      # the orbit's integrator error estimate
     liouville_det_error: float | None = None
     neutral: int = 0        # trivial multipliers 1 (orbit family of a free DOF), bordered out
+    located_within: float = 0.0     # special points: parameter width of the bracket that
+    #                                 holds the test function's zero (0: not a special point)
 
     @property
     def stable(self) -> bool:

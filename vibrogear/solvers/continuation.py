@@ -37,14 +37,15 @@ from typing import Callable
 import numpy as np
 
 from ..config.options import ContinuationOptions
+from ..pipeline.executors import blas_threads
 from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProblem,
                      PseudoArclength, SpecialPoint, stability_notes)
-from .floquet import (flip_vector, floquet_multipliers, liouville_error, stability,
-                      test_functions)
+from .floquet import flip_vector, liouville_error, stability, test_functions
 from .integrate import integrate
 from .corrector import (QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK,
                         CorrectorProblem, correct, tangent)
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
+from .split_flow import ColumnSplit
 from .status import Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "BranchPoint",
@@ -52,38 +53,45 @@ __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "Br
 
 log = logging.getLogger(__name__)
 
-#: where an NS changes no stability, it is located to this fraction of the step
-NS_COARSE = 1e-2
+#: regula-falsi steps for a crossing that changes no stability (an NS or PD on an orbit
+#: already unstable on both sides): one orbit near the linear interpolation of the test
+#: function, its bracket reported (``BranchPoint.located_within``); full location cost
+#: 5.5 orbits with the monodromy per special point on the two-stage branch (24 NS, 5 PD)
+COARSE_LOCATE_ITER = 1
 
 class _Stop(Exception):
     """The callback returned False."""
 
 
-def _point(prob: CorrectorProblem, z, f: PeriodicFlow, t, it, res, label="") -> BranchPoint:
+def _point(prob: CorrectorProblem, z, f: PeriodicFlow, t, it, res, label="",
+           within=0.0) -> BranchPoint:
     tr = f.trajectory
     p = float(z[-1] * prob.scale)
-    mu = floquet_multipliers(f.monodromy)
-    return BranchPoint(param=p, u0=z[:-1].copy(), floquet=mu, residual=res,
+    return BranchPoint(param=p, u0=z[:-1].copy(), floquet=f.multipliers(), residual=res,
                        qmin=tr.monitor_min, qmax=tr.monitor_max, impacts=tr.monitor_losses,
                        tangent=t.copy(), label=label, iterations=it,
                        integration_error=tr.error_estimate,
-                       liouville_det_error=liouville_error(prob.model, p, f.period, mu),
-                       neutral=prob.neutral(f))
+                       liouville_det_error=liouville_error(prob.model, p, f.period, f.multipliers()),
+                       neutral=prob.neutral(f), located_within=within)
 
 
-def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None, J0=None,
-            locate_tol=None):
+def _locate(prob, za, ta, ds_total, fa, fb, which, options, p_b, k_ref=None, J0=None,
+            max_iter=None):
     """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
-    and the next point (``fb``, s = ds_total) for the zero of test function ``which``;
-    ``J0``: point a's bordered Jacobian (the corrector's quasi-Newton start);
-    ``locate_tol``: instead of the method's."""
-    locate_tol = prob.method.locate_tol if locate_tol is None else locate_tol
+    and the next point (``fb``, s = ds_total, parameter ``p_b``) for the zero of test
+    function ``which``; ``J0``: point a's bordered Jacobian (the corrector's quasi-Newton
+    start); ``max_iter``: instead of the method's ``locate_iter``.  Returns
+    (z, flow, tangent, iterations, residual, within) of the last point computed, or None;
+    ``within``: the parameter width of the final interval that holds the zero, or where the
+    regula-falsi iterates settled first, their last change."""
+    locate_tol = prob.method.locate_tol
     lo, hi = 0.0, ds_total
     f_lo, f_hi = fa, fb
+    p_lo, p_hi = za[-1] * prob.scale, p_b
     best = None
     side = 0
     last = None
-    for _ in range(prob.method.locate_iter):
+    for _ in range(max_iter or prob.method.locate_iter):
         if f_hi != f_lo:
             mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         else:
@@ -95,23 +103,29 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options, k_ref=None, J0=None,
             break
         z, f, it, res = got
         t = tangent(prob.jac(f), ta)
-        val = test_functions(f.monodromy, t, k_ref or 0)[which]
-        best = (z, f, t, it, res)
+        val = test_functions(f.monodromy, t, k_ref or 0, f.multipliers())[which]
         if np.sign(val) == np.sign(f_lo):
-            lo, f_lo = mid, val
+            lo, f_lo, p_lo = mid, val, z[-1] * prob.scale
             if side == -1:
                 f_hi *= 0.5
             side = -1
         else:
-            hi, f_hi = mid, val
+            hi, f_hi, p_hi = mid, val, z[-1] * prob.scale
             if side == 1:
                 f_lo *= 0.5
             side = 1
+        p_mid = z[-1] * prob.scale
+        within = abs(p_hi - p_lo)
         # the bracket, or the located point itself, settled (1e-6 / locate_tol of the step)
-        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9 or (
-                last is not None and abs(mid - last) < locate_tol * ds_total):
+        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9:
+            best = (z, f, t, it, res, within)
             break
-        last = mid
+        if last is not None and abs(mid - last) < locate_tol * ds_total:
+            # the iterates settled: their last change measures the location
+            best = (z, f, t, it, res, min(within, abs(p_mid - p_last)))
+            break
+        best = (z, f, t, it, res, within)
+        last, p_last = mid, p_mid
     return best
 
 
@@ -125,7 +139,15 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
     period-doubled branch switched onto there.  ``callback(point)`` is called with every
     new point (special points included); returning False stops the run with status
     STOPPED_BY_CALLBACK, keeping the points so far.
+
+    One BLAS thread; orbits with the monodromy share their tangent's columns with a
+    second process where the model is big enough (:mod:`.split_flow`).
     """
+    with blas_threads(1), ColumnSplit(problem.model, method.split_columns) as split:
+        return _continuation(problem, method, options, callback, split)
+
+
+def _continuation(problem, method, options, callback, split) -> ContinuationResult:
     wall = time.perf_counter()
     model, n_periods = problem.model, problem.n_periods
     sh = shoot(model, problem.param, problem.u0, n_periods=n_periods,
@@ -143,13 +165,13 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
         # an even period: the branch can pass through the half-period orbit (a PD of it),
         # where an n-period orbit is also one of n / 2 periods: it has rejoined there
         branches = (_run_branch(model, z0, t0, method, options, n_periods, callback,
-                                doubled=n_periods % 2 == 0),)
+                                doubled=n_periods % 2 == 0, split=split),)
         first = branches[0]
         pd = [p for p in first.points if p.label == "PD"]
         if (options.period_doubling_branch and pd
                 and first.status != Status.STOPPED_BY_CALLBACK):
             branches += (_switch_period_doubling(model, pd[0], method, options, callback,
-                                                 n_periods),)
+                                                 n_periods, split),)
     special = tuple(SpecialPoint(p.label, p.param, b, i) for b, br in enumerate(branches)
                     for i, p in enumerate(br.points) if p.label)
     status = branches[0].status
@@ -161,7 +183,8 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
     counters = {"points": sum(len(b.points) for b in branches), "start_flows": sh.flows,
                 "flows": sh.flows + sum(b.counters.get("flows", 0) for b in branches),
                 "plain_flows": sum(b.counters.get("plain_flows", 0) for b in branches),
-                "rhs_calls": sh.rhs_calls + sum(b.counters.get("rhs_calls", 0) for b in branches)}
+                "rhs_calls": sh.rhs_calls + sum(b.counters.get("rhs_calls", 0) for b in branches),
+                "split_columns": split.active, "split_fallbacks": split.fallbacks}
     log.info("continuation: %s (%d points, %d flows)", message, counters["points"],
              counters["flows"])
     return ContinuationResult(branches=branches, special_points=special, status=status,
@@ -170,9 +193,9 @@ def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
 
 
 def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
-                doubled: bool = False) -> Branch:
+                doubled: bool = False, split=None) -> Branch:
     wall = time.perf_counter()
-    prob = CorrectorProblem(model, n_periods, method)
+    prob = CorrectorProblem(model, n_periods, method, split)
     pts: list[BranchPoint] = []
 
     def emit(point):
@@ -206,7 +229,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
     ds_min, ds_max = options.ds_min / scale, options.ds_max / scale
     n_points = 1
     k_prev = prob.neutral(f)
-    tests_prev = test_functions(f.monodromy, t, k_prev)
+    tests_prev = test_functions(f.monodromy, t, k_prev, f.multipliers())
     J = prob.jac(f)             # the last point's bordered Jacobian: the corrector's start
     qn_failed = 0               # successive failed correctors
     t_prev, ds_prev = None, ds
@@ -276,7 +299,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                                          f"period-{n_periods // 2} branch between param = "
                                          f"{p:.6g} and {p_new:.6g}")
             d_prev = d_new
-        tests = test_functions(f_new.monodromy, t_new, k_new)
+        tests = test_functions(f_new.monodromy, t_new, k_new, f_new.multipliers())
         labels = []
         for which in ("LP", "PD", "NS"):
             a, b = tests_prev[which], tests[which]
@@ -286,21 +309,21 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                 labels.append(which)
         if labels:
             which = labels[0]
-            # an NS on an orbit unstable on both sides (another multiplier already outside
-            # the unit circle) changes no stability: located to NS_COARSE of the step only
-            coarse = which == "NS" and not (stability(floquet_multipliers(f.monodromy),
-                                                      trivial=k_prev)
-                                            or stability(floquet_multipliers(f_new.monodromy),
-                                                         trivial=k_new))
+            # an NS or PD on an orbit unstable on both sides (another multiplier already
+            # outside the unit circle) changes no stability: one regula-falsi orbit (the
+            # first PD stays exact where the period-doubled branch starts from it)
+            coarse = (which == "NS" or (which == "PD" and not options.period_doubling_branch)
+                      ) and not (stability(f.multipliers(), trivial=k_prev)
+                                 or stability(f_new.multipliers(), trivial=k_new))
             loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
-                          k_prev, J if method.quasi_newton else None,
-                          NS_COARSE if coarse else None)
+                          p_new, k_prev, J if method.quasi_newton else None,
+                          COARSE_LOCATE_ITER if coarse else None)
             if loc is not None:
-                zl, fl, tl, itl, resl = loc
-                if not (which == "NS" and not test_functions(fl.monodromy, tl,
-                                                             k_new)["NS_valid"]):
+                zl, fl, tl, itl, resl, within = loc
+                if not (which == "NS" and not test_functions(fl.monodromy, tl, k_new,
+                                                             fl.multipliers())["NS_valid"]):
                     n_points += 1
-                    emit(_point(prob, zl, fl, tl, itl, resl, label=which))
+                    emit(_point(prob, zl, fl, tl, itl, resl, label=which, within=within))
         ds_used = ds
         qn = prob.quasi_newton_iterations
         if qn is not None and it == 0:
@@ -325,7 +348,7 @@ def _half_defect(model, z, scale, method, n_periods) -> np.ndarray:
 
 
 def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
-                            n_periods: int = 1) -> Branch:
+                            n_periods: int = 1, split=None) -> Branch:
     """Start the period-2n branch at a PD point of the period-n branch along the flip
     eigenvector."""
     scale = method.param_scale
@@ -335,7 +358,7 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
     t2 = np.concatenate([w, [0.0]])
     t2 = t2 - (t2 @ t1) * t1
     t2 /= np.linalg.norm(t2)
-    prob = CorrectorProblem(model, 2 * n_periods, method)
+    prob = CorrectorProblem(model, 2 * n_periods, method, split)
     z_pd = np.concatenate([pd.u0, [pd.param / scale]])
     ds0 = options.ds / scale
     for ds in (ds0, 0.3 * ds0, 0.1 * ds0, 3 * ds0):
@@ -351,7 +374,7 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
             if t @ (z - z_pd) < 0:
                 t = -t
             br = _run_branch(model, z, t, method, options, 2 * n_periods, callback,
-                             doubled=True)
+                             doubled=True, split=split)
             br.counters["switch_flows"] = prob.flows
             return br
     return Branch((), 2 * n_periods, Status.SWITCH_FAILED,

@@ -37,8 +37,9 @@ QUASI_NEWTON_GROW, QUASI_NEWTON_SHRINK = 5, 12
 class CorrectorProblem:
     """Evaluations of H and its Jacobian in z = (u0, p / scale), with counters."""
 
-    def __init__(self, model, n_periods, method: PseudoArclength):
+    def __init__(self, model, n_periods, method: PseudoArclength, split=None):
         self.model, self.n_periods, self.method = model, n_periods, method
+        self.split = split              # ColumnSplit: orbits with the monodromy on two cores
         self.scale = method.param_scale
         self.flows = 0
         self.plain_flows = 0            # orbits without the variational equations
@@ -51,7 +52,7 @@ class CorrectorProblem:
     def flow(self, z: np.ndarray) -> PeriodicFlow:
         self.flows += 1
         f = periodic_flow(self.model, z[-1] * self.scale, z[:-1], n_periods=self.n_periods,
-                          options=self.method.integration)
+                          options=self.method.integration, split=self.split)
         self.rhs_calls += f.trajectory.rhs_calls
         return f
 

@@ -103,8 +103,9 @@ def _fsal(y, K, Ys, CxS, CvS, kdS, cdS):
 
 #: the loop's scalar inputs, packed by :func:`loop_inputs`: floats (FLOATS) and integers (INTS)
 FLOATS = ("Om", "dOm", "dspin", "t0", "t1", "rtol", "atol", "h0", "hmax", "rec_t0")
-INTS = ("max_steps", "max_events", "variational", "mon", "ev_cap", "jacobian")
-#: jacobian: how the variational equations apply the Jacobian
+INTS = ("max_steps", "max_events", "variational", "mon", "ev_cap", "jacobian", "col0", "col1")
+#: jacobian: how the variational equations apply the Jacobian; col0, col1: the columns
+#: [col0, col1) of the tangent [d u / d u0 | d u / d p] (n + 1 in all) that the loop carries
 JAC_AUTO, JAC_LOOPS, JAC_BLAS = -1, 0, 1
 
 #: what the loop returns: status code, end time and state, tangent [d u / d u0 | d u / d p],
@@ -128,8 +129,8 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     of a LoopResult, as a tuple."""
     Om, dOm, dspin, t0, t1, rtol, atol, h0, hmax, rec_t0 = (
         fin[0], fin[1], fin[2], fin[3], fin[4], fin[5], fin[6], fin[7], fin[8], fin[9])
-    max_steps, max_events, variational, mon, ev_cap, jacobian = (
-        iin[0], iin[1], iin[2] != 0, iin[3], iin[4], iin[5])
+    max_steps, max_events, variational, mon, ev_cap, jacobian, col0, col1 = (
+        iin[0], iin[1], iin[2] != 0, iin[3], iin[4], iin[5], iin[6], iin[7])
     n = y0.shape[0]
     m = n // 2
     nc = A.C.shape[0]
@@ -148,11 +149,13 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     y1 = np.empty(n)
     mode = np.zeros(nc, np.int64)
     contact_modes(A, t0, Om, y0[:m], mode)
-    ncol = n + 1
+    ncol = col1 - col0
     Phi = np.zeros((n, ncol))
+    pcol = n - col0 if col0 <= n < col1 else -1     # the parameter column, if carried
     if variational:
-        for i in range(n):
-            Phi[i, i] = 1.0
+        for c in range(ncol):
+            if col0 + c < n:
+                Phi[col0 + c, c] = 1.0
     KP = np.empty((6, n, ncol)) if variational else np.empty((1, 1, 1))   # stages 0..5
     Ph = np.empty((n, ncol)) if variational else np.empty((1, 1))
     W = np.empty((3 * r + 1, ncol)) if variational else np.empty((1, 1))   # jac_times workspace
@@ -250,7 +253,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
                 monitor_extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, qk, ext)
         if variational and h_used > 0.0:
             variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS,
-                             cs, sn, dfp, tmp, W, WS, use_blas)
+                             cs, sn, dfp, tmp, W, WS, use_blas, pcol)
         t = t_new
         for i in range(n):
             y[i] = y1[i]
@@ -284,7 +287,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
                     if abs(rate) < 1e-14:
                         status = _GRAZING
                         break
-                    saltation(A, j, t, Om, dOm, rate, K[0], K[6], Phi, cs, sn)
+                    saltation(A, j, t, Om, dOm, rate, K[0], K[6], Phi, cs, sn, pcol)
             if status != 0:
                 break
             Ys[0, :] = y

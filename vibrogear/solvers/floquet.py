@@ -125,10 +125,14 @@ def stability(multipliers: np.ndarray, margin: float = NEUTRAL_MARGIN, trivial: 
     return bool(np.all(np.abs(mu) < 1.0 - margin))
 
 
-def test_functions(monodromy: np.ndarray, tangent: np.ndarray, trivial: int = 0) -> dict:
+def test_functions(monodromy: np.ndarray, tangent: np.ndarray, trivial: int = 0,
+                   multipliers: np.ndarray | None = None) -> dict:
     """LP / PD / NS test values (see the module docstring); the ``trivial`` multipliers 1
-    of an orbit family are left out (they would flip the NS product at round-off)."""
-    mu, _ = split_trivial(floquet_multipliers(monodromy), trivial)
+    of an orbit family are left out (they would flip the NS product at round-off).
+    ``multipliers``: the monodromy's, where already computed."""
+    if multipliers is None:
+        multipliers = floquet_multipliers(monodromy)
+    mu, _ = split_trivial(multipliers, trivial)
     scale = max(1.0, float(np.max(np.abs(mu))))
     is_real = np.abs(mu.imag) <= _IMAG_TOL * scale
     real = mu.real[is_real]

@@ -38,6 +38,9 @@ class Trajectory:
     f_end: np.ndarray           # u' at t_end
     monodromy: np.ndarray | None = None   # d u_end / d u0
     dparam: np.ndarray | None = None      # d u_end / d param at fixed t_end
+    #: with ``integrate(..., columns=(c0, c1))``: those columns of [monodromy | dparam] only
+    #: (monodromy and dparam are then None)
+    tangent_columns: np.ndarray | None = None
     wall_time: float = 0.0
     #: sum over the accepted steps of the RMS norm of the embedded 4th-order local error
     #: estimate (state units): a bound-like estimate of the global error of the embedded
@@ -71,7 +74,7 @@ def _initial_step(model: ReducedModel, param: float, span: float, rtol: float) -
 def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
               t_eval=None, options: IntegrationOptions = IntegrationOptions(),
               variational: bool = False, record_from: float | None = None,
-              jacobian: str = "auto") -> Trajectory:
+              jacobian: str = "auto", columns: tuple[int, int] | None = None) -> Trajectory:
     """Integrate u' = f(t, u; param) from (t0, u0) to t1.
 
     ``t_eval``: sorted times for dense output.  ``variational``: also integrate the
@@ -80,7 +83,10 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     losses of the monitored contact are recorded (default t0).  ``jacobian``: how the
     variational equations apply the Jacobian, "auto" (BLAS from
     :data:`~vibrogear.solvers.variational.BLAS_MIN_WORK` on), "blas" or "loops" (the same
-    products up to round-off).
+    products up to round-off).  ``columns`` = (c0, c1): with ``variational``, integrate
+    only the columns [c0, c1) of the tangent [d u / d u0 | d u / d param] (n + 1 columns),
+    returned in ``tangent_columns``: the state and its steps do not depend on which
+    columns ride along (:mod:`.split_flow` shares them between two processes).
     """
     wall = time.perf_counter()
     if jacobian not in _JACOBIAN:
@@ -90,6 +96,10 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         raise ValueError(f"u0 must have {model.n_states} entries")
     if not t1 > t0:
         raise ValueError("t1 must be greater than t0")
+    n = model.n_states
+    c0, c1 = (0, n + 1) if columns is None else (int(columns[0]), int(columns[1]))
+    if not 0 <= c0 < c1 <= n + 1:
+        raise ValueError(f"columns must satisfy 0 <= c0 < c1 <= {n + 1}, not {columns}")
     t_eval = np.ascontiguousarray(np.zeros(0) if t_eval is None else t_eval, dtype=float)
     if t_eval.size and (np.any(np.diff(t_eval) < 0) or t_eval[0] < t0 or t_eval[-1] > t1):
         raise ValueError("t_eval must be sorted and inside [t0, t1]")
@@ -105,7 +115,7 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
                            atol=options.atol, h0=h0, hmax=hmax, rec_t0=rec,
                            max_steps=options.max_steps, max_events=options.max_events_per_step,
                            variational=variational, mon=mon, ev_cap=options.event_log,
-                           jacobian=_JACOBIAN[jacobian])
+                           jacobian=_JACOBIAN[jacobian], col0=c0, col1=c1)
     res = LoopResult._make(dopri_loop(arrs, u0, t_eval, fin, iin))
     code, t_end, y, Phi, u_eval, cnt = res.status, res.t, res.y, res.Phi, res.u_eval, res.counters
     status = from_code(code)
@@ -113,7 +123,7 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         status = Status.NONFINITE
     nev = int(cnt[3])
     keep = min(nev, options.event_log)
-    n = model.n_states
+    whole = variational and columns is None
     return Trajectory(
         t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=status,
         message=status.message + (f" at t = {t_end:.6g}" if status else ""),
@@ -122,7 +132,8 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         event_modes=res.ev_m[:keep], monitor_min=float(res.mon_min),
         monitor_max=float(res.mon_max), monitor_losses=int(cnt[4]),
         final_modes=res.mode, f_end=res.f_end,
-        monodromy=Phi[:, :n].copy() if variational else None,
-        dparam=Phi[:, n].copy() if variational else None,
+        monodromy=Phi[:, :n].copy() if whole else None,
+        dparam=Phi[:, n].copy() if whole else None,
+        tangent_columns=Phi if variational and not whole else None,
         wall_time=time.perf_counter() - wall, error_estimate=float(res.err_sum),
     )

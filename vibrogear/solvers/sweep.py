@@ -193,7 +193,10 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
             return False
         return None
 
-    run_units(partial(_walk_unit, model, kw), todo, workers=workers, on_result=on_result)
+    # a unit's cost: its points still to compute (a resumed sweep's part-done units are
+    # shorter; the longest go first, the short ones fill the end)
+    run_units(partial(_walk_unit, model, kw), todo, workers=workers, on_result=on_result,
+              costs=[len(u[1]) - len(u[4]) for u in todo])
     if under_mpi() and not is_root():
         return broadcast(None)                  # rank 0's result, identical everywhere
     records = [r for d, idx in layout for i in idx

@@ -43,9 +43,10 @@ def _stage_input(s, h, Phi, KP, Ph):
 
 @njit(cache=True)
 def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS, cs, sn,
-                     dfp, tmp, W, WS, use_blas):
-    """Advance Phi = [d u / d u0, d u / d param] with the stages of the accepted step
-    (stage data Ys, kdS, cdS of the state's step; stage 6 is not needed: b_6 = 0)."""
+                     dfp, tmp, W, WS, use_blas, pcol):
+    """Advance Phi (columns of [d u / d u0, d u / d param]; ``pcol``: the index of the
+    parameter column in Phi, -1 if Phi does not hold it) with the stages of the accepted
+    step (stage data Ys, kdS, cdS of the state's step; stage 6 is not needed: b_6 = 0)."""
     n = Phi.shape[0]
     for s in range(6):
         _stage_input(s, h_used, Phi, KP, Ph)
@@ -53,11 +54,13 @@ def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, c
             jac_times_blas(Ph, mode, A, kdS[s], cdS[s], KP[s], WS)
         else:
             jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], W)
-        ts = t + DP_C[s] * h_used
-        harmonics(ts, Om, cs, sn)
-        accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp, tmp)
-        for i in range(n):
-            KP[s, i, n] += dfp[i]
+        if pcol >= 0:
+            ts = t + DP_C[s] * h_used
+            harmonics(ts, Om, cs, sn)
+            accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp,
+                         tmp)
+            for i in range(n):
+                KP[s, i, pcol] += dfp[i]
     for i in range(n):
         pir = Phi[i]
         for k in range(6):
@@ -67,9 +70,10 @@ def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, c
 
 
 @njit(cache=True, _nrt=False)
-def saltation(A, j, t, Om, dOm, rate, f_new, f_old, Phi, cs, sn):
+def saltation(A, j, t, Om, dOm, rate, f_new, f_old, Phi, cs, sn, pcol):
     """Phi += (f+ - f-) (c_j . Phi_x + d h / d param e_param) / rate at a switch of contact j
-    (switching function h = c_j . x - e_j(t; Om) - gap, rate = dh/dt)."""
+    (switching function h = c_j . x - e_j(t; Om) - gap, rate = dh/dt); ``pcol``: the
+    parameter column of Phi (-1: none)."""
     m = A.w2.shape[0]
     n = Phi.shape[0]
     ncol = Phi.shape[1]
@@ -84,7 +88,7 @@ def saltation(A, j, t, Om, dOm, rate, f_new, f_old, Phi, cs, sn):
         g = 0.0
         for i in range(m):
             g += A.C[j, i] * Phi[i, c]
-        if c == n:
+        if c == pcol:
             g += dh
         g /= rate
         for i in range(n):
