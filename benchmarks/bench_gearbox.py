@@ -62,6 +62,22 @@ def two_stage_case(n: int = 700, level: str = "count"):
     return gm, st.u0, params
 
 
+def two_stage_short_case(n: int = 3):
+    """(ReducedModel, settled state, speeds) of configs/two_stage.toml at the scenes' level
+    (frequency criterion, m = 146) at 2400 rpm: the equal-accuracy ladder of
+    bench_gearbox_integrator.py on a window short enough that the chaotic rattle has not
+    yet diverged (``--periods 4 --record-periods 2``)."""
+    from vibrogear.solvers.integrate import IntegrationOptions, integrate
+
+    gm, u0, _ = two_stage_case(3, "frequency")
+    model = gm.reduced
+    p0 = 2400.0        # chaotic rattle (the reduction study's speed)
+    settled = integrate(model, p0, u0, 0.0, 150 * model.excitation_period(p0),
+                        options=IntegrationOptions(rtol=1e-8, atol=1e-14)).u_end
+    # speeds 1 rpm apart: each point starts in the settled motion (no new transient)
+    return model, settled, p0 + np.arange(n, dtype=float)
+
+
 def gear_pair_case(n: int = 3):
     """(ReducedModel, static state, speeds) of configs/gear_pair.toml (periodic, regular
     points: the equal-accuracy ladder of bench_gearbox_integrator.py --model
