@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
-.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox nvh map map-gear-pair runup runup-gear-pair bench-runup
+.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 
 setup: $(STAMP)
@@ -85,6 +85,12 @@ housing-dynamics: $(STAMP)
 ## two_stage: sweep speed vs scipy RK45 + dense numpy RHS; orbit + monodromy time
 bench-gearbox: $(STAMP)
 	$(PY) benchmarks/bench_gearbox.py
+
+## two_stage right-hand side against its multiply-add floor; scipy at equal accuracy (1 period)
+bench-rhs: $(STAMP)
+	$(PY) benchmarks/bench_rhs_floor.py
+	$(PY) benchmarks/bench_gearbox_integrator.py --model bench_gearbox:two_stage_short_case \
+	  --periods 1 --record-periods 1 --out benchmarks/results/bench_gearbox_equal_accuracy_two_stage.json
 
 ## impact-pair figures (paper Figs 4-8)
 figures: fig4 fig5 fig7

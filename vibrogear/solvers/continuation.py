@@ -7,8 +7,11 @@ variational equations first, :mod:`.corrector`), adaptive step.  Floquet multipl
 every point; test functions locate folds (LP: the parameter component of the
 tangent changes sign), period doublings (PD: det(M + I) changes sign) and
 Neimark-Sacker points (NS: prod_{i<j}(mu_i mu_j - 1) changes sign with a complex
-pair on the unit circle), each located by bisection in arclength; where the stable orbit
-ends at an NS (onto a torus) the branch's message says so.  At the first PD the solver
+pair on the unit circle), each located by regula falsi in arclength; a crossing that
+changes no stability (the orbit unstable on both sides) by one orbit only, and every
+special point reports the parameter interval that holds its crossing
+(``located_within``); where the stable orbit ends at an NS (onto a torus) the branch's
+message says so.  At the first PD the solver
 switches onto the period-2n branch (the shooting problem over 2nT, started along the flip
 eigenvector, orthogonal to the period-n tangent) and continues it until it rejoins the
 period-n branch (or leaves the range); a PD on that branch (the next step of a cascade) is
