@@ -6,7 +6,7 @@ depend on the state alone.  So a second process integrates the same trajectory c
 the upper columns while this one carries the lower ones: the same steps (checked: the
 step count and the end state must agree bit for bit, else the orbit is integrated here
 whole), each core half the variational work.  On the two-stage gearbox (292 states) the
-variational work is ~99 % of an orbit with the monodromy (2 ms without, 0.14 s with).
+variational work is ~99 % of an orbit with the monodromy (2 ms without, 0.17 s with).
 
 Used by the continuation (every converged point needs its monodromy) when the model is
 big enough to pay for the messages and a second core is free; never under ``mpirun``
@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import signal
 from dataclasses import replace
 
 import numpy as np
@@ -25,13 +26,17 @@ from .integrate import Trajectory, integrate
 
 __all__ = ["ColumnSplit", "SPLIT_MIN_STATES"]
 
-#: split from this many states on (measured: two-stage gearbox, 292 states, one orbit with
-#: the monodromy 0.143 -> 0.08 s; the gear pair, 68 states, 3 ms per orbit: messages cost
-#: more than they save)
-SPLIT_MIN_STATES = 160
+#: split from this many states on.  One orbit with the monodromy at rtol 1e-6, whole /
+#: split, measured in one run each: two-stage gearbox (292 states) 0.174 / 0.106 s,
+#: single-stage (160) 71 / 50 ms, gear pair (68) 14.4 / 13.0 ms (the messages and the
+#: trajectory computed twice eat most of the gain)
+SPLIT_MIN_STATES = 100
+
 
 def _serve(model, conn):
-    """The worker: integrate the requested columns until the parent sends None."""
+    """The worker: integrate the requested columns until the parent sends None or goes
+    away.  Ctrl-C is the parent's to handle (it closes the pipe)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
     with blas_threads(1):
         while True:
@@ -47,7 +52,10 @@ def _serve(model, conn):
                                columns=(c0, c1))
                 conn.send((tr.tangent_columns, tr.steps, tr.u_end, tr.status))
             except Exception as exc:        # noqa: BLE001  the parent integrates whole
-                conn.send(exc)
+                try:
+                    conn.send(exc)
+                except OSError:             # the parent is gone
+                    break
 
 
 class ColumnSplit:
