@@ -11,11 +11,11 @@ pair on the unit circle), each located by regula falsi in arclength; a crossing 
 changes no stability (the orbit unstable on both sides) by one orbit only, and every
 special point reports the parameter interval that holds its crossing
 (``located_within``); where the stable orbit ends at an NS (onto a torus) the branch's
-message says so.  At the first PD the solver
-switches onto the period-2n branch (the shooting problem over 2nT, started along the flip
-eigenvector, orthogonal to the period-n tangent) and continues it until it rejoins the
-period-n branch (or leaves the range); a PD on that branch (the next step of a cascade) is
-labelled and the branch goes on through it: the period-2n orbits beyond it exist, unstable.
+message says so.  At the first PD the solver switches onto the period-2n branch (the
+shooting problem over 2nT, started along the flip eigenvector, orthogonal to the
+period-n tangent) and continues it until it rejoins the period-n branch (or leaves the
+range); a PD on that branch (the next step of a cascade) is labelled and the branch goes
+on through it: the period-2n orbits beyond it exist, unstable.
 
 Orbit families (a free gear that touches nothing): the k neutral directions V of the
 orbit (:meth:`.shooting.PeriodicFlow.neutral`) are bordered out of the augmented system,
@@ -62,6 +62,7 @@ log = logging.getLogger(__name__)
 #: 5.5 orbits with the monodromy per special point on the two-stage branch (24 NS, 5 PD)
 COARSE_LOCATE_ITER = 1
 
+
 class _Stop(Exception):
     """The callback returned False."""
 
@@ -70,11 +71,12 @@ def _point(prob: CorrectorProblem, z, f: PeriodicFlow, t, it, res, label="",
            within=0.0) -> BranchPoint:
     tr = f.trajectory
     p = float(z[-1] * prob.scale)
-    return BranchPoint(param=p, u0=z[:-1].copy(), floquet=f.multipliers(), residual=res,
+    mu = f.multipliers()
+    return BranchPoint(param=p, u0=z[:-1].copy(), floquet=mu, residual=res,
                        qmin=tr.monitor_min, qmax=tr.monitor_max, impacts=tr.monitor_losses,
                        tangent=t.copy(), label=label, iterations=it,
                        integration_error=tr.error_estimate,
-                       liouville_det_error=liouville_error(prob.model, p, f.period, f.multipliers()),
+                       liouville_det_error=liouville_error(prob.model, p, f.period, mu),
                        neutral=prob.neutral(f), located_within=within)
 
 
