@@ -4,7 +4,8 @@ multiply-add floor, measured on this machine in one run (issue 11 item 4).
 Three compiled drivers on the same states (sampled along 10 periods of the settled
 rattle, m = 146, frequency level), best of ``--repeats`` CPU times per call:
 
-* ``rhs``: the full right-hand side (:func:`vibrogear.solvers.kernels.accel`);
+* ``rhs``: the full right-hand side (:func:`vibrogear.solvers.kernels.accel`, through
+  bench_gearbox's driver);
 * ``linear_algebra``: its multiply-adds alone, through the same compiled helpers on the
   same arrays: the modal diagonal, the projections c_j . x, c_j . v of every row of G,
   the low-rank coupling P^T (Kc P x + Bc P v), and one axpy of G's row per contact in
@@ -38,24 +39,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path[:0] = [str(ROOT), str(HERE)]
 
-from vibrogear.solvers.kernels import (FAST, accel, contact_modes, project_coupling,  # noqa: E402
+from vibrogear.solvers.kernels import (FAST, contact_modes, project_coupling,  # noqa: E402
                                        row_axpy, rows_project, scatter_coupling)
-
-
-@njit(cache=True)
-def _drive_rhs(A, Om, Y, modes, n_calls):
-    n = Y.shape[1]
-    m = n // 2
-    nc, H, r = A.C.shape[0], A.Fc.shape[0], A.P.shape[0]
-    cs, sn, out = np.empty(H), np.empty(H), np.empty(n)
-    Cx, Cv, kd, cd = np.empty(nc), np.empty(nc), np.empty(nc), np.empty(nc)
-    tmp = np.empty(2 * r + 1)
-    s = 0.0
-    for k in range(n_calls):
-        j = k % Y.shape[0]
-        accel(1e-3 * j, Y[j], modes[j], A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp)
-        s += out[m]
-    return s
 
 
 @njit(cache=True, fastmath=FAST)
@@ -131,7 +116,7 @@ def main(argv=None) -> dict:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/bench_rhs_floor.json"))
     a = ap.parse_args(argv)
-    from bench_gearbox import two_stage_short_case
+    from bench_gearbox import _drive_rhs, two_stage_short_case
     from vibrogear.solvers.integrate import IntegrationOptions, integrate
     from vibrogear.solvers.kernels import model_arrays
 
@@ -147,7 +132,7 @@ def main(argv=None) -> dict:
     for k in range(Y.shape[0]):
         contact_modes(A, 1e-3 * k, Om, Y[k, :m], modes[k])
     calls = a.calls
-    rhs = _best(_drive_rhs, A, Om, Y, modes, calls, repeats=a.repeats) / calls
+    rhs = _best(_drive_rhs, A, Om, Y, calls, repeats=a.repeats) / calls
     lin = _best(_drive_linear, A, Y, modes, calls, repeats=a.repeats) / calls
     macs = _macs(A, modes)
     nvec = int(round(macs))

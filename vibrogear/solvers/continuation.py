@@ -95,7 +95,7 @@ def _locate(prob, za, ta, ds_total, fa, fb, which, options, p_b, k_ref=None, J0=
     p_lo, p_hi = za[-1] * prob.scale, p_b
     best = None
     side = 0
-    last = None
+    last = p_last = None
     for _ in range(max_iter or prob.method.locate_iter):
         if f_hi != f_lo:
             mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
