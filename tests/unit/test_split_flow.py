@@ -97,3 +97,20 @@ def test_continuation_traces_the_same_branch_with_the_split(monkeypatch):
     assert len(a.points) == len(b.points) == 40
     np.testing.assert_allclose(a.array("param"), b.array("param"), rtol=1e-10)
     assert [p.label for p in a.points] == [p.label for p in b.points]
+
+
+def test_a_dead_worker_falls_back_to_the_whole_orbit(case, monkeypatch):
+    """The worker killed between two orbits: the orbit is integrated here, whole, and the
+    split is dropped for the rest of the run (no hang, no exception)."""
+    model, p, u, T = case
+    monkeypatch.setattr(split_flow, "SPLIT_MIN_STATES", 0)
+    whole = integrate(model, p, u, 0.0, T, options=OPTS, variational=True)
+    with ColumnSplit(model) as split:
+        split.proc.kill()
+        split.proc.join()
+        tr = split.integrate(p, u, T, OPTS)
+        assert split.fallbacks == 1 and split.proc is None
+        again = split.integrate(p, u, T, OPTS)
+    for got in (tr, again):
+        assert np.array_equal(got.monodromy, whole.monodromy)
+        assert np.array_equal(got.dparam, whole.dparam)

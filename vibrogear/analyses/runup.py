@@ -129,15 +129,15 @@ _TICK_EVERY = 64
 
 def _ramp_unit(model, kw, unit, emit):
     """One direction's ramp (a work unit of :func:`~vibrogear.pipeline.executors.run_units`:
-    up and down run on two cores): progress ticks, then the result, through ``emit``."""
+    up and down run on two cores): progress ticks through ``emit``; returns the result."""
     direction, prof, u0 = unit
     count = iter(range(1, 1 << 62))
 
     def tick(t, p):
         if next(count) % _TICK_EVERY == 0:
-            emit(("tick", direction, p))
+            emit((direction, p))
 
-    emit(("done", direction, ramp(model, prof, u0, callback=tick, **kw)))
+    return ramp(model, prof, u0, callback=tick, **kw)
 
 
 def _ramps(study, ctx, cfg, rows, opts) -> dict:
@@ -152,15 +152,12 @@ def _ramps(study, ctx, cfg, rows, opts) -> dict:
     kw = dict(options=opts, chunks_per_period=cfg.chunks_per_period,
               samples_per_period=cfg.samples_per_period, midpoint=cfg.midpoint,
               settle_periods=cfg.settle_periods, rows=rows)
-    got = {}
     with ctx.progress(est // _TICK_EVERY, "runup " + " + ".join(cfg.directions)) as bar:
         def on_result(_i, item):
-            kind, d, value = item
-            if kind == "tick":
-                bar.update(1, f"{d} {value:.5g} {study.param_unit}")
-            else:
-                got[d] = value
-        run_units(partial(_ramp_unit, model, kw), units, on_result=on_result)
+            bar.update(1, f"{item[0]} {item[1]:.5g} {study.param_unit}")
+        # every rank (under mpirun) gets the same list of results
+        got = dict(zip(cfg.directions, run_units(partial(_ramp_unit, model, kw), units,
+                                                 on_result=on_result)))
     for d in cfg.directions:
         if not got[d].ok:
             raise NumericalFailure(f"runup {d}: {got[d].message}")

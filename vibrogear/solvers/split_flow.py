@@ -84,6 +84,10 @@ class ColumnSplit:
         return self
 
     def __exit__(self, *exc):
+        self._stop()
+        return False
+
+    def _stop(self):
         if self.proc is not None:
             try:
                 self.conn.send(None)
@@ -94,7 +98,6 @@ class ColumnSplit:
                 self.proc.kill()
             self.conn.close()
             self.proc = self.conn = None
-        return False
 
     def _whole(self, param, u0, t1, options) -> Trajectory:
         return integrate(self.model, param, u0, 0.0, t1, options=options, variational=True)
@@ -104,12 +107,21 @@ class ColumnSplit:
             return self._whole(param, u0, t1, options)
         n = self.model.n_states
         u0 = np.ascontiguousarray(u0, dtype=float)
-        self.conn.send((param, u0, t1, options, self.half, n + 1))
+        try:
+            self.conn.send((param, u0, t1, options, self.half, n + 1))
+        except OSError:                     # the worker is gone: the rest here, whole
+            self._stop()
+            self.fallbacks += 1
+            return self._whole(param, u0, t1, options)
         try:
             low = integrate(self.model, param, u0, 0.0, t1, options=options,
                             variational=True, columns=(0, self.half))
         finally:
-            got = self.conn.recv()       # always: the next request must find the pipe empty
+            try:
+                got = self.conn.recv()      # always: the next request must find it empty
+            except (EOFError, OSError) as exc:
+                got = exc
+                self._stop()
         if isinstance(got, Exception):
             self.fallbacks += 1
             return self._whole(param, u0, t1, options)
