@@ -57,6 +57,11 @@ class Study:
     gearbox: object = None               # GearboxModel of a gearbox study
 
     @property
+    def energy_unit(self) -> str:
+        """Unit of the contact metrics' impact energies (``rattle_<mesh>``)."""
+        return "J" if self.length_unit == "m" else "model units"
+
+    @property
     def param_name(self) -> str:
         return self.parameter.name
 
@@ -191,6 +196,7 @@ def _gearbox_study(scene) -> Study:
                  parameter=scene.parameter,
                  monitor=Monitor(contact=r.monitor, label=f"{name} mesh deformation", unit="um",
                                  scale=1e6, lines=(-back * 1e6,), zero_line=True),
-                 length_unit="m", time_unit_s=1.0 / gm.omega_ref, force_unit_n=gm.omega_ref ** 2,
+                 length_unit=r.length_unit, time_unit_s=r.time_unit_s,
+                 force_unit_n=r.force_unit_n,
                  rate_unit=gm.omega_ref, contact_groups=groups, balance_arclength=True,
                  strict_start=True, gearbox=gm)

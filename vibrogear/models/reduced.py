@@ -103,6 +103,11 @@ class ReducedModel:
     name: str = "model"
     param_name: str = "Omega"
     state_names: tuple[str, ...] = field(default=())
+    #: units of the model's variables: one model time unit in s, one force unit in N, and
+    #: the displacement unit ("m"; "" for a nondimensional model such as the impact pair)
+    time_unit_s: float = 1.0
+    force_unit_n: float = 1.0
+    length_unit: str = ""
 
     def __post_init__(self):
         m = self.omega2.shape[0]

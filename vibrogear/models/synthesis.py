@@ -195,4 +195,6 @@ def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None,
                         contacts=cset, omega_per_param=omega_per_param,
                         spin_per_param=spin_per_param, monitor=monitor, name=name,
                         param_name=param_name,
-                        state_names=names + tuple(f"d/dt {n}" for n in names))
+                        state_names=names + tuple(f"d/dt {n}" for n in names),
+                        time_unit_s=1.0 / omega_ref, force_unit_n=omega_ref ** 2,
+                        length_unit="m")

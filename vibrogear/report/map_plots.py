@@ -115,7 +115,8 @@ def plot_value_map(arrays, key, path, *, label: str, title: str = "", log: bool 
     return save_figure(fig, Path(path), formats=("png",), tight=False)[0]
 
 
-def plot_map_figures(arrays, meshes, out, *, title: str = "") -> dict:
+def plot_map_figures(arrays, meshes, out, *, title: str = "",
+                     energy_unit: str = "model units") -> dict:
     """Every figure of a map into ``out``; returns {name: path}."""
     out = Path(out)
     files = {"class_png": plot_class_map(arrays, out / "map_class", title=title)}
@@ -125,7 +126,7 @@ def plot_map_figures(arrays, meshes, out, *, title: str = "") -> dict:
             label=f"{m}: contact onsets per mesh period (both flanks)", title=title)
         files[f"rattle_{m}_png"] = plot_value_map(
             arrays, f"rattle_{m}", out / f"map_rattle_{m}", log=True,
-            label=f"{m}: impact energy per period [model units]", title=title)
+            label=f"{m}: impact energy per period [{energy_unit}]", title=title)
         files[f"max_force_{m}_png"] = plot_value_map(
             arrays, f"max_force_{m}", out / f"map_max_force_{m}",
             label=f"{m}: largest mesh force [N]", title=title)

@@ -11,7 +11,7 @@ and, with ``[map] curves = true``, ``map_curves.csv``.
   ``qmax`` [m, monitored mesh deformation], ``status``, ``ok``, ``wall_time`` [s];
 * per mesh ``<m>``: ``impacts_<m>`` (drive + back flank onsets per mesh period),
   ``impacts_drive_<m>``, ``impacts_back_<m>``, ``rattle_<m>`` (impact energy per period,
-  model units), ``contact_fraction_<m>``, ``max_force_<m>`` [N, largest |mesh force|];
+  J), ``contact_fraction_<m>``, ``max_force_<m>`` [N, largest |mesh force|];
   per bearing: ``unloaded_<bearing>`` (rolling elements out of contact, mean);
 * curves: ``curve_label`` (curves,), ``curve_start`` (curves + 1,) offsets into
   ``curve_rpm`` / ``curve_torque`` / ``curve_twist`` (points of all curves, concatenated).
@@ -115,6 +115,8 @@ def write(scene, outcome, out, previous=None) -> dict:
         files["curves_csv"] = str(atomic_write_bytes(out / "map_curves.csv",
                                                      _curves_csv(res.curves)))
     title = res.study.title if res.study is not None else scene.scene.name
-    for name, path in plot_map_figures(arrays, res.meshes, out, title=title).items():
+    unit = res.study.energy_unit if res.study is not None else "model units"
+    for name, path in plot_map_figures(arrays, res.meshes, out, title=title,
+                                       energy_unit=unit).items():
         files[name] = str(path)
     return files

@@ -82,7 +82,7 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
                      deformation_label: str = "monitored deformation",
                      zero_line: bool = True, bounds=None, title: str | None = None,
                      branches: dict | None = None, formats=("png", "svg"),
-                     dpi: int = 150) -> list[Path]:
+                     dpi: int = 150, energy_unit: str = "model units") -> list[Path]:
     """Draw the bifurcation diagram of ``data`` (a SweepResult or the dict of a read
     ``sweep.npz``) to ``path`` with each suffix in ``formats``; returns the paths.
 
@@ -133,7 +133,7 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
                 axr.semilogy(param[sel], v[sel], _STYLE[d]["marker"], ms=3.5,
                              color=f"C{(2 * i + (d == 'down')) % 10}", lw=0,
                              label=f"{g} {d}")
-        axr.set_ylabel("rattle energy per\nperiod [model units]", fontsize=8)
+        axr.set_ylabel(f"rattle energy per\nperiod [{energy_unit}]", fontsize=8)
         axr.grid(alpha=0.3, which="both")
         axr.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
                    borderaxespad=0.0)

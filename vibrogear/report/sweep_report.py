@@ -37,7 +37,8 @@ def draw_bifurcation(data: dict, study, path, branches: dict | None = None) -> l
         title += "\nsweep points with the continuation branches"
     return plot_bifurcation(data, path, param_label=study.param_label,
                             deformation_label=mon.axis_label(), zero_line=mon.zero_line,
-                            bounds=lines, title=title, branches=branches)
+                            bounds=lines, title=title, branches=branches,
+                            energy_unit=study.energy_unit)
 
 
 def write(scene, outcome, out, previous=None) -> dict:

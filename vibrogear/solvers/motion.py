@@ -27,11 +27,13 @@ located contact events (exact switch times) and the contact law's modes:
   gearbox's: the mesh period of its first mesh; other meshes are counted per that
   period too);
 * ``impact_velocity_rms_<g>`` / ``impact_velocity_max_<g>``: RMS and largest normal
-  approach speed |delta'| at those onsets (model units: deformation per model time);
+  approach speed |delta'| at those onsets, in the model's length unit per second (m/s for
+  a gearbox; ``ReducedModel.time_unit_s``);
 * ``contact_fraction_<g>``: fraction of the time in contact (mode != 0);
 * ``rattle_<g>``: impact energy per period, sum over onsets of m_eff v^2 / 2 divided by
   P, with m_eff = 1 / (c . c) the effective mass of the contact direction c in the
-  model's mass-normalised modal coordinates (model units);
+  model's mass-normalised modal coordinates, converted with the model's force unit
+  (energy = force x length: J for a gearbox; model units for a nondimensional model);
 * ``unloaded_<bearing>``: mean number of its rolling elements out of contact.
 
 Each metric has an ``_err`` companion: the standard error of its mean over up to 8
@@ -119,6 +121,8 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
     P = (t1 - t0) / period
     out = {}
     c2 = np.sum(model.contacts.directions ** 2, axis=1)
+    per_s = 1.0 / model.time_unit_s          # approach speeds per second, not per model time
+    joule = model.force_unit_n               # model energy (force x length) -> J
     for key, (kind, idx) in groups.items():
         if kind == "mesh":
             c = int(idx[0])
@@ -126,14 +130,14 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
             drive = mine & (md == 1)
             back = mine & (md == -1)
             onset = drive | back
-            v = speed[onset]
+            v = speed[onset] * per_s
             out[f"impacts_drive_{key}"] = float(np.sum(drive) / P)
             out[f"impacts_back_{key}"] = float(np.sum(back) / P)
             out[f"impact_velocity_rms_{key}"] = float(np.sqrt(np.mean(v ** 2))) if v.size \
                 else empty
             out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else empty
             out[f"contact_fraction_{key}"] = _fraction(int(mode0[c]), t[mine], md[mine], t0, t1)
-            out[f"rattle_{key}"] = float(np.sum(0.5 * v ** 2 / c2[c]) / P)
+            out[f"rattle_{key}"] = float(np.sum(0.5 * speed[onset] ** 2 / c2[c]) * joule / P)
         else:
             out[f"unloaded_{key}"] = float(sum(
                 1.0 - _fraction(int(mode0[c]), t[j == c], md[j == c], t0, t1) for c in idx))

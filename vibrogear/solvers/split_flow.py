@@ -17,6 +17,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import signal
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -76,6 +77,11 @@ class ColumnSplit:
 
     def __enter__(self):
         if self.active:
+            if threading.current_thread() is threading.main_thread():
+                # Python ignores SIGPIPE (a write to a dead worker's pipe raises); PETSc,
+                # once the housing FE has initialised it in this process, catches it and
+                # aborts: ignore it again
+                signal.signal(signal.SIGPIPE, signal.SIG_IGN)
             ctx = mp.get_context("fork")
             self.conn, child = ctx.Pipe()
             self.proc = ctx.Process(target=_serve, args=(self.model, child), daemon=True)
@@ -108,6 +114,8 @@ class ColumnSplit:
         n = self.model.n_states
         u0 = np.ascontiguousarray(u0, dtype=float)
         try:
+            if not self.proc.is_alive():
+                raise BrokenPipeError("the column worker has died")
             self.conn.send((param, u0, t1, options, self.half, n + 1))
         except OSError:                     # the worker is gone: the rest here, whole
             self._stop()
