@@ -25,7 +25,8 @@ arclength row.  The k trivial multipliers 1 are stored per point (``neutral``) a
 out of stability and the test functions.  Where k changes between two points a free
 coordinate has started (or stopped) touching a contact: the branch ends there as a
 grazing (GRAZING_END), as it does when the steps shrink below ds_min on an orbit whose
-integration failed on a grazing switch.
+integration failed on a grazing switch, or where the last orbits' contact switches
+differ (a contact interval appears or vanishes: :func:`.special_points.grazing_note`).
 
 Call shape (BifurcationKit's): ``continuation(problem, method, options, callback)`` ->
 :class:`~.branch.ContinuationResult`, with the problem, method and result types in
@@ -48,6 +49,7 @@ from .integrate import integrate
 from .corrector import (QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK,
                         CorrectorProblem, correct, tangent)
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
+from .special_points import COARSE_LOCATE_ITER, grazing_note, locate, switch_counts
 from .split_flow import ColumnSplit
 from .status import Status
 
@@ -55,12 +57,6 @@ __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "Br
            "Branch", "SpecialPoint", "ContinuationResult", "continuation"]
 
 log = logging.getLogger(__name__)
-
-#: regula-falsi steps for a crossing that changes no stability (an NS or PD on an orbit
-#: already unstable on both sides): one orbit near the linear interpolation of the test
-#: function, its bracket reported (``BranchPoint.located_within``); full location cost
-#: 5.5 orbits with the monodromy per special point on the two-stage branch (24 NS, 5 PD)
-COARSE_LOCATE_ITER = 1
 
 
 class _Stop(Exception):
@@ -78,60 +74,6 @@ def _point(prob: CorrectorProblem, z, f: PeriodicFlow, t, it, res, label="",
                        integration_error=tr.error_estimate,
                        liouville_det_error=liouville_error(prob.model, p, f.period, mu),
                        neutral=prob.neutral(f), located_within=within)
-
-
-def _locate(prob, za, ta, ds_total, fa, fb, which, options, p_b, k_ref=None, J0=None,
-            max_iter=None):
-    """Regula falsi (Illinois) in arclength between point a (test value ``fa``, s = 0)
-    and the next point (``fb``, s = ds_total, parameter ``p_b``) for the zero of test
-    function ``which``; ``J0``: point a's bordered Jacobian (the corrector's quasi-Newton
-    start); ``max_iter``: instead of the method's ``locate_iter``.  Returns
-    (z, flow, tangent, iterations, residual, within) of the last point computed, or None;
-    ``within``: the parameter width of the final interval that holds the zero, or where the
-    regula-falsi iterates settled first, their last change."""
-    locate_tol = prob.method.locate_tol
-    lo, hi = 0.0, ds_total
-    f_lo, f_hi = fa, fb
-    p_lo, p_hi = za[-1] * prob.scale, p_b
-    best = None
-    side = 0
-    last = p_last = None
-    for _ in range(max_iter or prob.method.locate_iter):
-        if f_hi != f_lo:
-            mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
-        else:
-            mid = 0.5 * (lo + hi)
-        if not lo < mid < hi:
-            mid = 0.5 * (lo + hi)
-        got = correct(prob, za + mid * ta, ta, options.max_corrector_iter, k_ref, J0)
-        if got is None:
-            break
-        z, f, it, res = got
-        t = tangent(prob.jac(f), ta)
-        val = test_functions(f.monodromy, t, k_ref or 0, f.multipliers())[which]
-        if np.sign(val) == np.sign(f_lo):
-            lo, f_lo, p_lo = mid, val, z[-1] * prob.scale
-            if side == -1:
-                f_hi *= 0.5
-            side = -1
-        else:
-            hi, f_hi, p_hi = mid, val, z[-1] * prob.scale
-            if side == 1:
-                f_lo *= 0.5
-            side = 1
-        p_mid = z[-1] * prob.scale
-        within = abs(p_hi - p_lo)
-        # the bracket, or the located point itself, settled (1e-6 / locate_tol of the step)
-        if hi - lo < 1e-6 * ds_total or abs(val) < 1e-9:
-            best = (z, f, t, it, res, within)
-            break
-        if last is not None and abs(mid - last) < locate_tol * ds_total:
-            # the iterates settled: their last change measures the location
-            best = (z, f, t, it, res, min(within, abs(p_mid - p_last)))
-            break
-        best = (z, f, t, it, res, within)
-        last, p_last = mid, p_mid
-    return best
 
 
 def continuation(problem: PeriodicOrbitProblem, method: PseudoArclength,
@@ -239,6 +181,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
     qn_failed = 0               # successive failed correctors
     t_prev, ds_prev = None, ds
     d_prev = _half_defect(model, z, scale, method, n_periods) if doubled else None
+    # contact switches per contact of the last two accepted orbits: a change is a grazing
+    sw_before = sw_last = switch_counts(model, f.trajectory)
     # a start on the range's end may lie an ulp outside it: only a point beyond the range
     # by more than round-off ends the branch
     slack = 1e-9 * (abs(options.param_max) + abs(options.param_min))
@@ -282,6 +226,15 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                            == Status.GRAZING else "a contact of the free coordinate closes")
                     return Status.GRAZING_END, (f"{Status.GRAZING_END.message}: {why} "
                                                 f"beyond {model.param_name} = {p:.6g}")
+                tried = prob.last_orbit
+                why = grazing_note(model, sw_before, sw_last) or (
+                    "" if tried is None else grazing_note(model, sw_last,
+                                                          switch_counts(model, tried)))
+                if why:
+                    # the steps shrank where a contact interval appears or vanishes: the
+                    # flow is not differentiable there (a grazing bifurcation)
+                    return Status.GRAZING_END, (f"{Status.GRAZING_END.message}: {why} near "
+                                                f"{model.param_name} = {p:.6g}")
                 return Status.DS_TOO_SMALL, f"{Status.DS_TOO_SMALL.message} at param = {p:.6g}"
             continue
         k_new = prob.neutral(f_new)
@@ -320,7 +273,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             coarse = (which == "NS" or (which == "PD" and not options.period_doubling_branch)
                       ) and not (stability(f.multipliers(), trivial=k_prev)
                                  or stability(f_new.multipliers(), trivial=k_new))
-            loc = _locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
+            loc = locate(prob, z, t, ds, tests_prev[which], tests[which], which, options,
                           p_new, k_prev, J if method.quasi_newton else None,
                           COARSE_LOCATE_ITER if coarse else None)
             if loc is not None:
@@ -339,6 +292,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         ds = max(ds, ds_min)
         t_prev, ds_prev = t, ds_used
         z, f, t, tests_prev, k_prev, J = z_new, f_new, t_new, tests, k_new, J_new
+        sw_before, sw_last = sw_last, switch_counts(model, f.trajectory)
         n_points += 1
         emit(_point(prob, z, f, t, it, res))
 

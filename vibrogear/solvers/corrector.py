@@ -47,6 +47,7 @@ class CorrectorProblem:
         self.secant_rejected = False          # the last corrector refused by its secant
         self.rhs_calls = 0
         self.last_failure = None        # Status of the last failed integration
+        self.last_orbit = None          # Trajectory of the last orbit integrated
         self.rejected = {"angle": 0, "corrector": 0}    # rejected steps by reason
 
     def flow(self, z: np.ndarray) -> PeriodicFlow:
@@ -54,6 +55,7 @@ class CorrectorProblem:
         f = periodic_flow(self.model, z[-1] * self.scale, z[:-1], n_periods=self.n_periods,
                           options=self.method.integration, split=self.split)
         self.rhs_calls += f.trajectory.rhs_calls
+        self.last_orbit = f.trajectory
         return f
 
     def plain(self, z: np.ndarray):
@@ -62,6 +64,7 @@ class CorrectorProblem:
         tr = periodic_residual(self.model, z[-1] * self.scale, z[:-1],
                                n_periods=self.n_periods, options=self.method.integration)
         self.rhs_calls += tr.rhs_calls
+        self.last_orbit = tr
         return tr
 
     def neutral(self, f: PeriodicFlow) -> int:
