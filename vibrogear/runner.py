@@ -24,6 +24,7 @@ from . import __version__
 from .config import Scene
 from .pipeline.files import atomic_write_text
 from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
+from .report.html_report import write_html_report
 
 __all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure",
            "is_interrupt"]
@@ -179,11 +180,14 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             summary["status"] = "interrupted"
             failure = exc
         summary["wall_time_s"][name] = time.perf_counter() - t0
+        if study is not None and study.notes:
+            summary["notes"] = list(study.notes)
         write_summary(ctx.out, summary)
         if failure is not None:
             break
     summary["wall_time_s"]["total"] = time.perf_counter() - t_all
     write_summary(ctx.out, summary)
+    write_html_report(ctx.out, summary)     # report.html, also after a failure
     if failure is not None:
         raise failure
     return summary

@@ -34,7 +34,7 @@ from ..pipeline.executors import run_units, under_mpi
 from ..solvers.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from .continuation import starting_orbit
 from .load_scaling import LoadScaling
-from .study import Study, start_state
+from .study import Study, integration_options, start_state
 
 __all__ = ["Curve", "LoadBifurcations", "BifurcationCurves", "locate_bifurcations",
            "join_curves", "curves_for_map", "windows_around", "LABELS"]
@@ -263,7 +263,8 @@ def curves_for_map(study: Study, scene, scaling: LoadScaling, scales) -> Bifurca
     steps = dict(ds=cfg.curve_ds, ds_min=min(1e-3, cfg.curve_ds), ds_max=cfg.curve_ds_max,
                  max_points=cfg.curve_max_points)
     loads = locate_bifurcations(study.model, scaling, scales, (cfg.rpm_min, cfg.rpm_max),
-                                margin=cfg.curve_margin, integration=scene.integration,
+                                margin=cfg.curve_margin,
+                                integration=integration_options(scene, study=study),
                                 tol=scene.shooting.tol, steps=steps,
                                 transient_periods=cfg.curve_transient_periods,
                                 period_tol=cfg.period_tol, workers=cfg.workers)

@@ -86,7 +86,7 @@ def starting_orbit(model, p0: float, u_static, *, transient_periods: int, option
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.continuation
     model = study.model
-    opts = integration_options(scene, section=scene.continuation)
+    opts = integration_options(scene, section=scene.continuation, study=study)
     options = cfg.options()
     lo, hi = options.param_min, options.param_max
     p0 = hi if cfg.start == "max" else lo

@@ -90,7 +90,7 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)
     kw = dict(directions=("up",), transient_periods=cfg.transient_periods, record_periods=1,
-              max_period=1, options=integration_options(scene, record=True),
+              max_period=1, options=integration_options(scene, record=True, study=study),
               u0=study.start(rpm[0]), workers=1, lyapunov=False)
     if ctx is None:
         res = sweep(study.model, rpm, **kw)
@@ -181,7 +181,7 @@ def branch_spectra(study: Study, scene, continuation, mesh, bearings, smap
     period from each point's u0 with ``samples_per_period`` samples per excitation period
     (module docstring).  None when every point failed."""
     cfg = scene.nvh
-    S, opts = cfg.samples_per_period, integration_options(scene, record=True)
+    S, opts = cfg.samples_per_period, integration_options(scene, record=True, study=study)
     pts = [(b, i, br.n_periods, pt) for b, br in enumerate(continuation.branches)
            for i, pt in enumerate(br.points)]
     N = int(np.lcm.reduce([n for _, _, n, _ in pts])) if pts else 1
@@ -231,7 +231,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     rpm, states0, source = steady_points(study, scene, previous, ctx)
     t_settle = time.perf_counter() - t_start
     R, S = cfg.record_periods, cfg.samples_per_period
-    opts = integration_options(scene, record=True)
+    opts = integration_options(scene, record=True, study=study)
     mesh = study.contact_groups.get("mesh", np.zeros(0, int))
     bearings = _bearings(study)
     smap, note = surface_map(gm)

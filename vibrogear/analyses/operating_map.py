@@ -226,7 +226,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     scales = (scaling.scale_of_twist(values) if cfg.load_kind == "twist"
               else scaling.scale_of_torque(values))
     rpm = cfg.speeds()
-    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg)
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
+                                study=study)
     total = len(cfg.directions) * rpm.size * scales.size
     with ctx.progress(total, "map") as bar:
         res = compute_map(study, scaling, rpm, scales, cfg.sweep_options(), opts, out=ctx.out,

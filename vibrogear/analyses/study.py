@@ -21,6 +21,7 @@ from ..pipeline.outcome import NumericalFailure
 from ..pipeline.resume import fingerprint
 
 __all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state",
+           "within_limit", "lowest_param",
            "tolerances_for", "rtol_given", "ACCURACY_RULE", "ATOL_PER_RTOL"]
 
 
@@ -55,6 +56,10 @@ class Study:
     balance_arclength: bool = False      # scale the parameter by range/|u| in the arclength
     strict_start: bool = True            # no static equilibrium is a failure (else start at 0)
     gearbox: object = None               # GearboxModel of a gearbox study
+    #: what the run changed and why (tightened tolerances): summary.json "notes"
+    notes: list = field(default_factory=list, compare=False)
+    #: (param, requested rtol) -> RtolLimit, measured once per study (:func:`within_limit`)
+    rtol_limits: dict = field(default_factory=dict, compare=False)
 
     @property
     def energy_unit(self) -> str:
@@ -128,7 +133,7 @@ def rtol_given(scene) -> bool:
 
 
 def integration_options(scene, *, record: bool = False, period_tol: float | None = None,
-                        section=None) -> IntegrationOptions:
+                        section=None, study: "Study | None" = None) -> IntegrationOptions:
     """The integrator's options of one analysis: the one rule, in this order.
 
     1. ``section.rtol`` where the analysis's own section has one and it is set ([continuation],
@@ -142,6 +147,11 @@ def integration_options(scene, *, record: bool = False, period_tol: float | None
        error alone must not make a periodic point look not periodic).
     3. Otherwise the [integration] section as written (shooting and continuation without
        their own rtol; an explicit [integration] rtol wins over the accuracy rule)."""
+    opts = _requested_options(scene, record, period_tol, section)
+    return opts if study is None else within_limit(study, scene, opts)
+
+
+def _requested_options(scene, record, period_tol, section) -> IntegrationOptions:
     opts = scene.integration
     own = getattr(section, "rtol", None)
     if own is not None:
@@ -155,6 +165,52 @@ def integration_options(scene, *, record: bool = False, period_tol: float | None
     rtol, _ = tolerances_for(acc)
     rtol = rtol if period_tol is None else min(rtol, period_tol)
     return dataclasses.replace(opts, rtol=rtol, atol=ATOL_PER_RTOL * rtol)
+
+
+#: requested rtols at or below this are used as asked (no probe): the probe's ladder and the
+#: checks after every run (solvers/trust.py) cover them
+RTOL_PROBE_FROM = 1e-5
+_SECTIONS = ("time_response", "sweep", "continuation", "map", "runup", "nvh",
+             "reduction_accuracy")
+_PARAM_KEYS = ("param_min", "param", "rpm_start", "rpm_end")
+
+
+def lowest_param(scene) -> float | None:
+    """The lowest parameter value any of the scene's sections asks for (the most demanding
+    for the integrator: the excitation lies lowest under the fastest master mode)."""
+    values = []
+    for name in _SECTIONS:
+        sec = getattr(scene, name, None)
+        for key in _PARAM_KEYS:
+            v = getattr(sec, key, None) if sec is not None else None
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0:
+                values.append(float(v))
+    return min(values) if values else None
+
+
+def within_limit(study: "Study", scene, opts: IntegrationOptions) -> IntegrationOptions:
+    """``opts`` with rtol no looser than the loosest this model can use (measured once per
+    study by :func:`vibrogear.solvers.rtol_limit.loosest_rtol` at the scene's lowest
+    parameter); a tightened rtol is noted in ``study.notes`` (summary.json "notes")."""
+    if opts.rtol <= RTOL_PROBE_FROM:
+        return opts
+    param = lowest_param(scene)
+    if param is None:
+        return opts
+    from ..solvers.rtol_limit import loosest_rtol
+
+    key = (param, opts.rtol)
+    limit = study.rtol_limits.get(key)
+    if limit is None:
+        limit = study.rtol_limits[key] = loosest_rtol(study.model, param, study.start(param),
+                                                      up_to=opts.rtol, options=opts)
+    if limit.rtol is None or limit.rtol >= opts.rtol:
+        return opts
+    note = (f"rtol {opts.rtol:g} tightened to {limit.rtol:g}: "
+            f"{limit.describe(study.param_name)}")
+    if note not in study.notes:
+        study.notes.append(note)
+    return dataclasses.replace(opts, rtol=limit.rtol, atol=opts.atol * limit.rtol / opts.rtol)
 
 
 def build_study(scene) -> Study:

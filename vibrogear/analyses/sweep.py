@@ -87,7 +87,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.sweep
     lo, hi = param_range(cfg)
     params = np.linspace(lo, hi, cfg.n_points)
-    opts = integration_options(scene, record=True, period_tol=cfg.period_tol)
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, study=study)
     total = len(cfg.directions) * params.size
     with ctx.progress(total, "sweep") as bar:
         res, store, resumed = resumable_sweep(

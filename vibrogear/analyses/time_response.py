@@ -43,7 +43,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     T = model.excitation_period(param)
     n = int(round(cfg.periods * cfg.samples_per_period))
     t_eval = np.linspace(0.0, cfg.periods * T, n + 1)
-    opts = integration_options(scene, record=True)
+    opts = integration_options(scene, record=True, study=study)
     tr = integrate(model, param, study.start(param), 0.0, cfg.periods * T, t_eval=t_eval,
                    options=opts)
     if not tr.ok:
@@ -69,6 +69,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                                float(delta[j, half].max())] for j in primary},
         "contact_losses_second_half": losses,
         "error_estimate": {"accumulated_local_error": tr.error_estimate,
+                           "relative_to_state": tr.relative_error,
                            "rtol": opts.rtol, "atol": opts.atol},
     }
     return AnalysisOutcome(summary=summary, result=result)

@@ -68,6 +68,14 @@ class IntegrationOptions:
     max_step_periods: float = spec(0.125, gt=0.0, doc="largest step as a fraction of the "
                                    "excitation period")
     event_log: int = spec(10_000, ge=0, doc="event times kept (all are counted)")
+    max_error: float = spec(0.01, gt=0.0, doc="a run whose accumulated error estimate per "
+                            "excitation period exceeds this fraction of the solution's size "
+                            "is INACCURATE")
+    max_deformation: float = spec(10.0, gt=1.0, doc="a run in which a contact deforms more "
+                                  "than this many times its physical scale (gap + static "
+                                  "deflection + kinematic error) is DIVERGED")
+    max_events_per_period: float = spec(16.0, gt=0.0, doc="a run with more contact events "
+                                        "per contact and excitation period is INACCURATE")
 
     def __post_init__(self):
         check_fields(self)

@@ -12,6 +12,7 @@ from ..models.reduced import ReducedModel
 from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, LoopResult, dopri_loop, loop_inputs
 from .kernels import model_arrays
 from .status import Status, from_code
+from .trust import assess
 
 __all__ = ["IntegrationOptions", "Trajectory", "integrate"]
 
@@ -47,6 +48,10 @@ class Trajectory:
     #: solution when errors do not grow along the flow (the 5th-order solution that is
     #: propagated is usually more accurate); 0 for an empty run
     error_estimate: float = 0.0
+    #: error_estimate / the solution's size (RMS of the larger of start and end state); the
+    #: run is INACCURATE above ``options.max_error`` (solvers/trust.py); NaN where the loop
+    #: failed
+    relative_error: float = float("nan")
 
     @property
     def ok(self) -> bool:
@@ -119,14 +124,20 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     res = LoopResult._make(dopri_loop(arrs, u0, t_eval, fin, iin))
     code, t_end, y, Phi, u_eval, cnt = res.status, res.t, res.y, res.Phi, res.u_eval, res.counters
     status = from_code(code)
+    message = status.message + (f" at t = {t_end:.6g}" if status else "")
+    rel = float("nan")
     if status == Status.OK and not np.all(np.isfinite(y)):
         status = Status.NONFINITE
+        message = status.message
+    elif status == Status.OK:
+        status, message, rel = assess(model, param, u0, y, u_eval, t0, t1, float(res.err_sum),
+                                      int(cnt[3]), (float(res.mon_min), float(res.mon_max)),
+                                      options)
     nev = int(cnt[3])
     keep = min(nev, options.event_log)
     whole = variational and columns is None
     return Trajectory(
-        t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=status,
-        message=status.message + (f" at t = {t_end:.6g}" if status else ""),
+        t=t_eval, u=u_eval, t_end=float(t_end), u_end=y, status=status, message=message,
         steps=int(cnt[0]), rejected=int(cnt[1]), rhs_calls=int(cnt[2]), events=nev,
         event_times=res.ev_t[:keep], event_contacts=res.ev_j[:keep],
         event_modes=res.ev_m[:keep], monitor_min=float(res.mon_min),
@@ -136,4 +147,5 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         dparam=Phi[:, n].copy() if whole else None,
         tangent_columns=Phi if variational and not whole else None,
         wall_time=time.perf_counter() - wall, error_estimate=float(res.err_sum),
+        relative_error=rel,
     )

@@ -23,6 +23,8 @@ class Status(IntEnum):
     CHATTERING = -3
     STEP_TOO_SMALL = -4
     GRAZING = -5
+    DIVERGED = -6               # checked after the loop (solvers/trust.py)
+    INACCURATE = -7
     BAD_PARAMETER = -10
     # ---- solvers above the integrator
     PARTIAL = 1                 # a sweep: some points failed (the others are kept)
@@ -61,6 +63,9 @@ MESSAGES = {
                        "contact)",
     Status.STEP_TOO_SMALL: "step size underflow",
     Status.GRAZING: "grazing switch with a jumping vector field: saltation undefined",
+    Status.DIVERGED: "diverged (the state left its physical bounds)",
+    Status.INACCURATE: "inaccurate (the error estimate or the contact events show the "
+                       "tolerance is too loose for this model)",
     Status.BAD_PARAMETER: "excitation frequency must be finite and > 0",
     Status.PARTIAL: "some points failed",
     Status.STOPPED_BY_CALLBACK: "stopped by the callback",
