@@ -181,6 +181,8 @@ def test_time_response_that_fails_its_checks_exits_1_naming_the_tolerance(tmp_pa
                    "--set", "integration.max_error=1e-9", "--set", "time_response.periods=20")
     assert r.returncode == 1, r.stderr
     assert "inaccurate" in r.stderr and "rtol" in r.stderr
+    # and the tolerance that would do, measured (here none: max_error 1e-9 fails every rung)
+    assert "is accurate" in r.stderr or "no rtol down to" in r.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed"
 

@@ -15,6 +15,8 @@ from ..models.contact_law import flank
 from ..solvers.contact_eval import contact_history
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrate import integrate
+from ..solvers.rtol_limit import loosest_rtol
+from ..solvers.status import Status
 from .study import Study, integration_options
 
 __all__ = ["TimeResponseResult", "run"]
@@ -47,7 +49,12 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     tr = integrate(model, param, study.start(param), 0.0, cfg.periods * T, t_eval=t_eval,
                    options=opts)
     if not tr.ok:
-        raise NumericalFailure(f"time response at {study.param_name} = {param:g}: {tr.message}")
+        hint = ""
+        if tr.status in (Status.DIVERGED, Status.INACCURATE):
+            lim = loosest_rtol(model, param, study.start(param), up_to=opts.rtol, options=opts)
+            hint = f"; {lim.describe(study.param_name)}"
+        raise NumericalFailure(f"time response at {study.param_name} = {param:g}: "
+                               f"{tr.message}{hint}")
     delta, ddot, force = contact_history(model, param, tr.t, tr.u)
     result = TimeResponseResult(study=study, param=param, t=tr.t, u=tr.u, delta=delta,
                                 delta_dot=ddot * study.rate_unit,

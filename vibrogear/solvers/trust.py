@@ -136,17 +136,19 @@ def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
     """(status, message, relative error estimate) of a run the loop finished: OK, or
     DIVERGED / INACCURATE with the evidence and the tolerance to tighten."""
     ct = model.contacts
-    size = max(float(np.sqrt(np.mean(u0 * u0))), float(np.sqrt(np.mean(u_end * u_end))))
+    n = u0.shape[0]
+    size = np.sqrt(max(float(u0 @ u0), float(u_end @ u_end)) / n)
     rel = error_estimate / (size + options.atol)
     if ct.count:
         m = model.n_modes
         bound = options.max_deformation * deformation_scale(model)
-        states = u_end[None, :m] if u_eval.size == 0 else np.vstack([u_eval[:, :m], u_end[:m]])
-        worst = np.max(np.abs(states @ ct.directions.T), axis=0)
-        te = np.sum(np.hypot(ct.error_cos, ct.error_sin), axis=1)
-        if np.all(np.isfinite(monitor_range)):     # the monitored extrema see between samples
-            seen = max(abs(monitor_range[0]), abs(monitor_range[1])) - te[model.monitor]
-            worst[model.monitor] = max(worst[model.monitor], seen)
+        worst = np.abs(ct.directions @ u_end[:m])
+        if u_eval.size:
+            worst = np.maximum(worst, np.max(np.abs(u_eval[:, :m] @ ct.directions.T), axis=0))
+        lo, hi = monitor_range
+        if lo > -np.inf and hi < np.inf:           # the monitored extrema see between samples
+            te = float(np.sum(np.hypot(ct.error_cos[model.monitor], ct.error_sin[model.monitor])))
+            worst[model.monitor] = max(worst[model.monitor], max(abs(lo), abs(hi)) - te)
         over = np.flatnonzero((worst > bound) & (bound > 0.0))      # inf bound: none
         if over.size:
             j = int(over[np.argmax(worst[over] / bound[over])])
