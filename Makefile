@@ -26,6 +26,10 @@ test: $(STAMP)
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
 
+## only the tests that start mpirun themselves (2 ranks; also part of `make test`)
+test-mpi: $(STAMP)
+	$(PY) -m pytest -m mpi
+
 ## regression tier: rewrite tests/regression/golden/*.json from fresh runs; review the diff
 golden: $(STAMP)
 	$(PY) tests/regression/regenerate.py

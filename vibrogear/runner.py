@@ -11,7 +11,6 @@ from __future__ import annotations
 import importlib
 import inspect
 import json
-import math
 import platform
 import sys
 import time
@@ -22,7 +21,7 @@ from typing import Any, Callable
 
 from . import __version__
 from .config import Scene
-from .pipeline.files import atomic_write_text
+from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from .report.html_report import write_html_report
 
@@ -46,21 +45,24 @@ ANALYSIS_TABLE: dict[tuple[str, str], Entry] = {
     ("impact_pair", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
     ("impact_pair", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
     ("impact_pair", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
-    ("impact_pair", "report"): Entry(f"{_V}.impact_report:run_report"),
-    ("impact_pair", "critical_damping"): Entry(f"{_V}.critical_damping:run_critical_damping"),
-    ("gearbox", "modes"): Entry(f"{_V}.gearbox_modes:run", None, True),
+    ("impact_pair", "report"): Entry(f"{_V}.impact_report:run_report", f"{_R}.precision_report:write"),
+    ("impact_pair", "critical_damping"): Entry(f"{_V}.critical_damping:run_critical_damping",
+                                                 f"{_R}.critical_damping_report:write"),
+    ("gearbox", "modes"): Entry(f"{_V}.gearbox_modes:run", f"{_R}.gearbox_modes_report:write", True),
     ("gearbox", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
     ("gearbox", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
     ("gearbox", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
-    ("gearbox", "reduction_accuracy"): Entry(f"{_V}.reduction_accuracy:run_reduction_accuracy", None, True),
+    ("gearbox", "reduction_accuracy"): Entry(f"{_V}.reduction_accuracy:run_reduction_accuracy",
+                                                 f"{_R}.reduction_report:write", True),
     ("gearbox", "nvh"): Entry(f"{_V}.nvh:run", f"{_R}.nvh_report:write", True),
     ("gearbox", "map"): Entry(f"{_V}.operating_map:run", f"{_R}.map_report:write", True),
     ("gearbox", "runup"): Entry(f"{_V}.runup:run", f"{_R}.runup_report:write", True),
-    ("rotor", "modes"): Entry(f"{_V}.rotor:run_modes"),
-    ("rotor", "campbell"): Entry(f"{_V}.rotor:run_campbell"),
-    ("housing", "modes"): Entry(f"{_V}.housing:run_modes"),
-    ("housing", "housing_sweep"): Entry(f"{_V}.housing_sweep:run_sweep"),
-    ("housing", "housing_convergence"): Entry(f"{_V}.housing_study:run_convergence"),
+    ("rotor", "modes"): Entry(f"{_V}.rotor:run_modes", f"{_R}.rotor_report:write_modes"),
+    ("rotor", "campbell"): Entry(f"{_V}.rotor:run_campbell", f"{_R}.rotor_report:write_campbell"),
+    ("housing", "modes"): Entry(f"{_V}.housing:run_modes", f"{_R}.housing_report:write_modes"),
+    ("housing", "housing_sweep"): Entry(f"{_V}.housing_sweep:run_sweep", f"{_R}.housing_report:write_sweep"),
+    ("housing", "housing_convergence"): Entry(f"{_V}.housing_study:run_convergence",
+                                                    f"{_R}.housing_report:write_convergence"),
 }
 
 
@@ -81,23 +83,10 @@ def resolve(scene: Scene) -> list[tuple[str, Entry]]:
     return plan
 
 
-def _finite_json(obj: Any) -> Any:
-    """Replace non-finite floats by None so summary.json never holds NaN/inf."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {str(k): _finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite_json(v) for v in obj]
-    if hasattr(obj, "item") and hasattr(obj, "dtype"):
-        return _finite_json(obj.item())
-    return obj
-
-
 def write_summary(out: Path, summary: dict) -> None:
     if not is_root_process():
         return  # under mpirun only rank 0 writes files
-    atomic_write_text(out / "summary.json", json.dumps(_finite_json(summary), indent=2))
+    atomic_write_text(out / "summary.json", json.dumps(finite_json(summary), indent=2))
 
 
 def _as_outcome(value) -> AnalysisOutcome:

@@ -25,15 +25,15 @@ from typing import Callable
 import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
-from ..pipeline.outcome import NumericalFailure, RunContext
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem, PseudoArclength,
                                     continuation)
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium
 from ..solvers.status import Status
 
-__all__ = ["FoldScan", "CriticalDampingResult", "fold_scan", "critical_zeta",
-           "run_critical_damping"]
+__all__ = ["FoldScan", "CriticalDampingResult", "CriticalDampingFigures", "fold_scan",
+           "critical_zeta", "run_critical_damping"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,15 @@ class CriticalDampingResult:
     def fold_gap(self) -> float:
         f = self.folds_at_bracket
         return float(max(f) - min(f)) if len(f) >= 2 else float("nan")
+
+
+@dataclass(frozen=True, eq=False)
+class CriticalDampingFigures:
+    """What :mod:`vibrogear.report.critical_damping_report` draws: the bisection's result,
+    the extra fold scans between zeta_lo and the cusp, and the figure title."""
+    result: CriticalDampingResult
+    extra_scans: tuple
+    title: str
 
 
 def _start_state(model, omega: float, periods: int, options: IntegrationOptions) -> np.ndarray:
@@ -159,11 +168,10 @@ def critical_zeta(cfg_impact_pair, options: ContinuationOptions,
         continuations=len(scans), scans=scans, wall_time=time.perf_counter() - wall)
 
 
-def run_critical_damping(scene, ctx: RunContext) -> dict:
-    """Runner entry: ``critical_damping.json`` and ``critical_damping.png/.svg``."""
-    import json
-
-    from ..report.critical_damping_plots import plot_fold_cusp
+def run_critical_damping(scene, ctx: RunContext) -> AnalysisOutcome:
+    """Runner entry: the critical zeta and the fold curves; the summary is also written
+    as ``critical_damping.json``, with ``critical_damping.png/.svg``, by
+    :mod:`vibrogear.report.critical_damping_report`."""
     from .study import integration_options
 
     cfg = scene.critical_damping
@@ -204,18 +212,7 @@ def run_critical_damping(scene, ctx: RunContext) -> dict:
                            "extrapolation_minus_bisection": res.zeta_extrapolated
                            - res.zeta_critical},
     }
-    (ctx.out / "critical_damping.json").write_text(json.dumps(_finite(out), indent=2))
     title = (f"{scene.scene.name}: kappa={c.kappa:g}, f_m={c.f_m:g}, f_p={c.f_p:g}, "
              f"b_r={c.b_r:g}")
-    plot_fold_cusp(res, ctx.out / "critical_damping", title=title, extra_scans=extra)
-    return out
-
-
-def _finite(obj):
-    if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    return obj
+    return AnalysisOutcome(summary=out, result=CriticalDampingFigures(
+        result=res, extra_scans=tuple(extra), title=title))

@@ -15,10 +15,30 @@ import time
 
 import numpy as np
 
-from ..pipeline.outcome import RunContext
+from ..pipeline.outcome import AnalysisOutcome, RunContext
 from .sweep import param_range
 
-__all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL"]
+__all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL", "GearboxModesResult"]
+
+
+@dataclasses.dataclass(frozen=True, eq=False)
+class GearboxModesResult:
+    """What :mod:`vibrogear.report.gearbox_modes_report` writes: the elastic modes
+    (``f_hz``, ``fd_hz``, ``zeta``), the dominant-subsystem shares (``shares``: subsystems x
+    modes, rows in ``names`` order), the mesh strain-energy shares (``mesh``: meshes x
+    modes, rows in ``mesh_names`` order) and the speed range of the resonance map."""
+    f_hz: np.ndarray
+    fd_hz: np.ndarray
+    zeta: np.ndarray
+    names: tuple[str, ...]
+    shares: np.ndarray
+    mesh: np.ndarray
+    mesh_names: tuple[str, ...]
+    mesh_teeth: int
+    rpm: float
+    rpm_lo: float
+    rpm_hi: float
+    title: str
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
 RIGID_TOL = 1e-7
@@ -55,10 +75,10 @@ def linearisation_model(model, x0):
     return dataclasses.replace(model, contacts=dataclasses.replace(ct, gap_hi=gap_hi))
 
 
-def run(study, scene, ctx: RunContext) -> dict:
+def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     """Modes of the reduced model linearised at the static state (mesh strain-energy share
-    per mode, resonance speeds of the mesh orders)."""
-    from ..report.gearbox_plots import plot_resonance_map, write_modes_csv
+    per mode, resonance speeds of the mesh orders); the files (``modes.csv``,
+    ``resonance_map.png/.svg``) are written by :mod:`vibrogear.report.gearbox_modes_report`."""
     from ..solvers.linear import linear_modes
 
     gm = study.gearbox
@@ -79,8 +99,6 @@ def run(study, scene, ctx: RunContext) -> dict:
     zeta = lm.damping_ratio[elastic]
     shares, names = _subsystem_shares(gm, lm.vectors[:, elastic])
     mesh = _mesh_energy(gm, model, lm, u0)[:, elastic]
-    write_modes_csv(ctx.out / "modes.csv", f_hz, fd_hz, zeta, names, shares, mesh,
-                    [c.name for c in gm.contacts if c.kind == "mesh"])
     if scene.sweep is not None:
         lo, hi = param_range(scene.sweep)
     elif rpm > 0:
@@ -88,14 +106,18 @@ def run(study, scene, ctx: RunContext) -> dict:
     else:            # at rest: the speeds up to the 1x resonance of the highest mode listed
         lo, hi = 0.0, 1.1 * 60.0 * float(f_hz.max(initial=1.0)) / gm.mesh_teeth
     crit = _resonance_speeds(gm, f_hz, mesh, lo, hi)
-    plot_resonance_map(ctx.out / "resonance_map", f_hz, mesh, gm.mesh_teeth, lo, hi,
-                       title=study.title + f", linearised at {rpm:g} rpm")
-    return {"status": "ok", "rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
+    result = GearboxModesResult(
+        f_hz=f_hz, fd_hz=fd_hz, zeta=zeta, names=tuple(names), shares=shares, mesh=mesh,
+        mesh_names=tuple(c.name for c in gm.contacts if c.kind == "mesh"),
+        mesh_teeth=gm.mesh_teeth, rpm=rpm, rpm_lo=lo, rpm_hi=hi,
+        title=study.title + f", linearised at {rpm:g} rpm")
+    summary = {"status": "ok", "rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
             "resonance_speeds_rpm": crit, "wall_s": wall,
             "mesh_stiffness": gm.mesh_stiffness_summary(),
             "build_timings_s": gm.timings,
             "error_estimate": {"note": "linearised reduced model; see reduction_accuracy"}}
+    return AnalysisOutcome(summary=summary, result=result)
 
 
 def _subsystem_shares(gm, vectors):

@@ -1,20 +1,18 @@
-"""Runner glue for housing scenes: ``modes`` (master modes + coupling values + outputs).
+"""Runner glue for housing scenes: ``modes`` (master modes + coupling values).
 
-Under ``mpirun`` every rank computes, only rank 0 writes files.
+Under ``mpirun`` every rank computes; the files (:mod:`vibrogear.report.housing_report`)
+are written by rank 0 only.
 """
 from __future__ import annotations
 
-import csv
 import os
 import resource
-import shutil
-from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.outcome import NumericalFailure
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
 
-__all__ = ["run_modes", "is_root", "compute_modes", "modes_summary", "write_modes_outputs"]
+__all__ = ["run_modes", "is_root", "compute_modes", "modes_summary"]
 
 
 def is_root() -> bool:
@@ -31,47 +29,6 @@ def compute_modes(cfg, *, cache: bool = True):
         return housing_modes(cfg, cache=cache)
     except (MeshingError, HousingSolveError) as exc:
         raise NumericalFailure(f"housing: {exc}") from None
-
-
-def _dominant(res) -> list[str]:
-    v = res.preview_values
-    out = []
-    for i in range(res.n_modes):
-        if v.ndim == 3 and i < v.shape[-1] and len(v):
-            out.append("xyz"[int(np.argmax(np.sqrt((v[:, :, i] ** 2).mean(axis=0))))])
-        else:
-            out.append("")
-    return out
-
-
-def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
-    """modes.csv, housing_modes.npz (coupling data), shapes XDMF, PNG of the first modes."""
-    out.mkdir(parents=True, exist_ok=True)
-    files = {}
-    dom = _dominant(res)
-    with (out / "modes.csv").open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["index", "frequency_hz", "damping_ratio", "residual", "dominant_direction"])
-        for i, f in enumerate(res.freqs_hz):
-            w.writerow([i + 1, f"{f:.8g}", f"{res.damping_ratios[i]:.6g}", f"{res.residuals[i]:.3e}", dom[i]])
-    files["modes"] = "modes.csv"
-    np.savez(out / "housing_modes.npz", freqs_hz=res.freqs_hz, bore_values=res.bore_values,
-             bore_points=res.bore_points, bore_centers=res.bore_centers, bore_axes=res.bore_axes,
-             bore_center_values=res.bore_center_values, bore_n_points=np.array(res.bore_n_points),
-             bore_names=np.array(res.bore_names), beta=res.beta, n_dofs=res.n_dofs)
-    files["coupling"] = "housing_modes.npz"
-    if res.shapes_path is not None and Path(res.shapes_path).is_file():
-        src = Path(res.shapes_path)
-        for ext in (".xdmf", ".h5"):
-            s = src.with_suffix(ext)
-            if s.is_file():
-                shutil.copyfile(s, out / f"mode_shapes{ext}")
-        files["shapes"] = "mode_shapes.xdmf"
-    if plot and res.n_modes and len(res.preview_points):
-        from ..report.housing_plots import plot_mode_previews
-        plot_mode_previews(res, out / "housing_modes.png")
-        files["plot"] = "housing_modes.png"
-    return files
 
 
 def _expected_mass(res, cfg) -> float | None:
@@ -116,11 +73,8 @@ def modes_summary(res, cfg) -> dict:
     }
 
 
-def run_modes(scene, ctx) -> dict:
-    """``modes`` analysis of a housing scene."""
+def run_modes(scene, ctx) -> AnalysisOutcome:
+    """``modes`` analysis of a housing scene (its result: the housing modes)."""
     cfg = scene.housing
     res = compute_modes(cfg, cache=True)
-    summary = modes_summary(res, cfg)
-    if is_root():
-        summary["files"] = write_modes_outputs(res, ctx.out)
-    return summary
+    return AnalysisOutcome(summary=modes_summary(res, cfg), result=res)

@@ -2,18 +2,31 @@
 
 P2 meshes at the configured size factors give a Richardson-extrapolated reference per mode
 (observed order fitted from the three finest levels); P1 and P2 runs are then placed on an
-error / DOF / wall-time chart, and the cheapest run within ``target_error`` is named.
+error / DOF / wall-time chart, and the cheapest run within ``target_error`` is named.  The
+files (``housing_convergence.csv``, ``housing_error_vs_time.png``) are written by
+:mod:`vibrogear.report.housing_report`.
 """
 from __future__ import annotations
 
-import csv
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from .housing import compute_modes, is_root
+from ..pipeline.outcome import AnalysisOutcome
+from .housing import compute_modes
 
-__all__ = ["observed_order", "richardson", "run_convergence", "with_mesh"]
+__all__ = ["observed_order", "richardson", "run_convergence", "with_mesh",
+           "HousingConvergenceResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class HousingConvergenceResult:
+    """One row (dict: degree, size, n_dofs, freqs, fe_seconds, rel_errors, max_rel_error,
+    ...) per run, the number of frequencies compared and the target error."""
+    rows: tuple
+    n_freqs: int
+    target_error: float
 
 
 def observed_order(f: np.ndarray, h: np.ndarray) -> np.ndarray:
@@ -81,7 +94,7 @@ def _fe_seconds(res) -> float:
     return sum(t.get(k, 0.0) for k in ("meshing", "mesh_read", "assembly", "eigensolve", "postprocess"))
 
 
-def run_convergence(scene, ctx) -> dict:
+def run_convergence(scene, ctx) -> AnalysisOutcome:
     """Error vs DOF vs wall time for P1 and P2; Richardson reference from P2."""
     opts = scene.housing_convergence
     cfg = scene.housing
@@ -113,18 +126,7 @@ def run_convergence(scene, ctx) -> dict:
     best = min(ok, key=lambda r: r["fe_seconds"]) if ok else None
     table = [{k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in r.items()
               if k not in ("freqs", "rel_errors")} for r in rows]
-    if is_root():
-        ctx.out.mkdir(parents=True, exist_ok=True)
-        with (ctx.out / "housing_convergence.csv").open("w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(["degree", "size_m", "n_dofs", "fe_seconds", "max_rel_error"] +
-                       [f"f{j + 1}_hz" for j in range(n)])
-            for r in rows:
-                w.writerow([r["degree"], f"{r['size']:.5g}", r["n_dofs"], f"{r['fe_seconds']:.3f}",
-                            f"{r['max_rel_error']:.4e}"] + [f"{f:.6g}" for f in r["freqs"]])
-        from ..report.housing_plots import plot_error_vs_time
-        plot_error_vs_time(rows, ctx.out / "housing_error_vs_time.png", target=opts.target_error)
-    return {
+    summary = {
         "status": "ok",
         "observed_order_p2": [float(x) if math.isfinite(x) else None for x in p],
         "order_used": p_common,
@@ -136,3 +138,5 @@ def run_convergence(scene, ctx) -> dict:
          "fe_seconds": best["fe_seconds"], "max_rel_error": best["max_rel_error"]},
         "target_error": opts.target_error,
     }
+    return AnalysisOutcome(summary=summary, result=HousingConvergenceResult(
+        rows=tuple(rows), n_freqs=n, target_error=opts.target_error))

@@ -5,25 +5,35 @@ housing cache.  Every finished point is appended to ``housing_sweep_points.jsonl
 (a :class:`~vibrogear.pipeline.resume.PartialStore`), so a killed sweep resumes where it
 stopped, and only a run of the same housing, parameter, values, frequency count and version
 does (:func:`sweep_signature`); otherwise the file is set aside.  ``housing_sweep.csv`` and
-``housing_sweep.png`` are written at the end.
+``housing_sweep.png`` are written at the end by :mod:`vibrogear.report.housing_report`
+(only when every point succeeded; the finished points stay in the resume file).
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
-import csv
 import multiprocessing as mp
 import os
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..pipeline.outcome import NumericalFailure
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
 from ..pipeline.resume import PartialStore
 from .housing import is_root
 
-__all__ = ["run_sweep", "sweep_point", "sweep_signature"]
+__all__ = ["run_sweep", "sweep_point", "sweep_signature", "HousingSweepResult"]
 
 POINTS_FILE = "housing_sweep_points.jsonl"
+
+
+@dataclass(frozen=True, eq=False)
+class HousingSweepResult:
+    """The swept ``parameter``, one row (dict: value, n_dofs, ...) per point and the first
+    frequencies per point (``freqs``: points x n_freqs, NaN where a point has fewer)."""
+    parameter: str
+    rows: tuple
+    freqs: np.ndarray
 
 
 def sweep_point(housing: dict, n_freqs: int) -> dict:
@@ -55,7 +65,7 @@ def sweep_signature(scene) -> dict:
             "settings": {"parameter": opts.parameter, "n_freqs": opts.n_freqs}}
 
 
-def run_sweep(scene, ctx) -> dict:
+def run_sweep(scene, ctx) -> AnalysisOutcome:
     from ..config.base import as_data
 
     opts = scene.housing_sweep
@@ -92,17 +102,12 @@ def run_sweep(scene, ctx) -> dict:
     freqs = np.full((len(rows), n), np.nan)
     for i, r in enumerate(rows):
         freqs[i, :len(r["freqs_hz"])] = r["freqs_hz"][:n]
-    with (ctx.out / "housing_sweep.csv").open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow([opts.parameter, "n_dofs"] + [f"f{j + 1}_hz" for j in range(n)])
-        for r, fr in zip(rows, freqs):
-            w.writerow([f"{r['value']:.6g}", r["n_dofs"]] + [f"{x:.6g}" for x in fr])
-    from ..report.housing_plots import plot_sweep
-    plot_sweep(opts.parameter, [r["value"] for r in rows], freqs, ctx.out / "housing_sweep.png")
     if failures:
         raise NumericalFailure(f"housing_sweep: {len(failures)} point(s) failed, first: "
                                f"{opts.parameter}={failures[0]['value']:g}: {failures[0]['message']}")
-    return {"status": "ok", "parameter": opts.parameter, "values": [r["value"] for r in rows],
-            "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
-            "points_computed": len(todo), "points_resumed": len(values) - len(todo),
-            "resume": store.note, "seconds": time.perf_counter() - t0}
+    summary = {"status": "ok", "parameter": opts.parameter, "values": [r["value"] for r in rows],
+               "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
+               "points_computed": len(todo), "points_resumed": len(values) - len(todo),
+               "resume": store.note, "seconds": time.perf_counter() - t0}
+    return AnalysisOutcome(summary=summary, result=HousingSweepResult(
+        parameter=opts.parameter, rows=tuple(rows), freqs=freqs))

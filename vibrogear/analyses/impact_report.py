@@ -13,24 +13,26 @@ solvers):
   residual, error of u0 against the exact periodic orbit, error of the Floquet multipliers,
   Newton iterations and wall time.
 
-Files: ``work_precision.csv``, ``shooting_precision.csv``, ``work_precision.png/.svg``,
-``shooting_precision.png/.svg``; the numbers are returned for ``summary.json``.
+The files (``work_precision.csv``, ``shooting_precision.csv``, ``work_precision.png/.svg``,
+``shooting_precision.png/.svg``) are written by :mod:`vibrogear.report.precision_report`;
+the numbers are returned for ``summary.json``.
 """
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
-from ..pipeline.outcome import NumericalFailure, RunContext
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrate import IntegrationOptions, integrate
 from ..solvers.shooting import shoot
 from ..solvers.static import static_equilibrium
 from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow, periodic_orbit
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",
-           "ATOL_PER_RTOL", "SAMPLES_PER_PERIOD"]
+           "ATOL_PER_RTOL", "SAMPLES_PER_PERIOD", "PrecisionResult"]
 
 #: atol = rtol * ATOL_PER_RTOL in both studies
 ATOL_PER_RTOL = 1e-2
@@ -45,6 +47,17 @@ WP_COLUMNS = ("rtol", "atol", "error", "error_end", "steps", "rejected", "rhs_ca
               "wall_s")
 SH_COLUMNS = ("tol", "rtol", "residual", "u0_error", "floquet_error", "iterations",
               "converged", "rhs_calls", "wall_s")
+
+
+@dataclass(frozen=True, eq=False)
+class PrecisionResult:
+    """The work-precision (``wp``, columns ``WP_COLUMNS``) and shooting-precision (``sh``,
+    columns ``SH_COLUMNS``) tables, the fitted ``slopes`` and the figure titles."""
+    wp: dict
+    sh: dict
+    slopes: dict
+    wp_title: str
+    sh_title: str
 
 
 def fit_slope(x, y) -> float:
@@ -124,10 +137,7 @@ def _table_json(table: dict, columns) -> dict:
     return {c: [v.item() for v in np.asarray(table[c])] for c in columns}
 
 
-def run_report(scene, ctx: RunContext) -> dict:
-    from ..report.precision_plots import (plot_shooting_precision, plot_work_precision,
-                                          write_table)
-
+def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.report
     c = scene.impact_pair
     model = impact_pair_from_config(c)
@@ -167,17 +177,13 @@ def run_report(scene, ctx: RunContext) -> dict:
     tols = sorted(cfg.shooting_tols, reverse=True)
     sh = shooting_precision(model, omega, guess, orbit, tols, repeats=cfg.repeats)
 
-    # ---- files
-    write_table(ctx.out / "work_precision.csv", wp, WP_COLUMNS)
-    write_table(ctx.out / "shooting_precision.csv", sh, SH_COLUMNS)
     title = (f"{scene.scene.name}: zeta={c.zeta:g}, kappa={c.kappa:g}, f_m={c.f_m:g}, "
              f"f_p={c.f_p:g}, b_r={c.b_r:g}, Omega={omega:g}")
-    plot_work_precision(wp, slopes, ctx.out / "work_precision",
-                        title=title + f", {cfg.periods:g} periods")
-    plot_shooting_precision(sh, ctx.out / "shooting_precision", title=title)
+    result = PrecisionResult(wp=wp, sh=sh, slopes=dict(slopes),
+                             wp_title=title + f", {cfg.periods:g} periods", sh_title=title)
 
     err = wp["error"]
-    return {
+    summary = {
         "status": "ok",
         "omega": omega, "periods": cfg.periods, "samples": int(t_eval.size),
         "repeats": cfg.repeats, "atol_per_rtol": ATOL_PER_RTOL,
@@ -195,3 +201,4 @@ def run_report(scene, ctx: RunContext) -> dict:
                            "shooting_u0_error_at_min_tol": float(sh["u0_error"][-1]),
                            "reference": "closed-form exact flow (vibrogear.verification)"},
     }
+    return AnalysisOutcome(summary=summary, result=result)

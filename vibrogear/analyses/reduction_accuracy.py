@@ -25,15 +25,27 @@ The full model's modes (the costly part: all housing DOF) are cached like the ho
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
-from ..pipeline.outcome import NumericalFailure, RunContext
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from .study import integration_options
 from .study import start_state as _model_start
 
-__all__ = ["run_reduction_accuracy", "full_linear_model", "reduced_linear_modes"]
+__all__ = ["run_reduction_accuracy", "full_linear_model", "reduced_linear_modes",
+           "ReductionAccuracyResult"]
+
+
+@dataclass(frozen=True, eq=False)
+class ReductionAccuracyResult:
+    """One row (dict) per count level (``rows``) and per frequency-criterion level
+    (``extra``), with the full-vs-reduced mode ``pairs``; what
+    :mod:`vibrogear.report.reduction_report` writes."""
+    rows: tuple
+    extra: tuple
+    title: str
 
 
 def _physical_vector_full(vec, offsets, hous_T, n_shafts) -> sp.csc_matrix:
@@ -279,13 +291,12 @@ def _level_row(gm, scene, cfg, f_full, v_full, row):
     return row, delta
 
 
-def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
+def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
     """The count levels of [reduction_accuracy], then (``frequency_level``) the level of
     the frequency criterion with and without the static correction
     (:mod:`vibrogear.models.master_level`), each against the full model and, for the
     response, against the largest count level."""
     from ..models.gearbox import build_gearbox
-    from ..report.reduction_plots import plot_reduction_study, write_reduction_tables
 
     cfg = scene.reduction_accuracy
     t0 = time.perf_counter()
@@ -343,12 +354,12 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
                                          abs(delta.min() - ref.min())) / scale)
     if all(r_["status"] != "ok" for r_ in rows):
         raise NumericalFailure("reduction study: no level integrated successfully")
-    write_reduction_tables(ctx.out, rows, extra)
-    plot_reduction_study(ctx.out / "reduction_accuracy", rows + extra,
-                         title=f"{scene.scene.name}: reduction levels at {cfg.rpm:g} rpm")
+    result = ReductionAccuracyResult(
+        rows=tuple(rows), extra=tuple(extra),
+        title=f"{scene.scene.name}: reduction levels at {cfg.rpm:g} rpm")
     largest = rows[-1]
     strip = lambda r_: {k: v for k, v in r_.items() if k != "pairs"}  # noqa: E731
-    return {"status": "ok", "rpm": cfg.rpm, "f_max_hz": cfg.f_max_hz,
+    summary = {"status": "ok", "rpm": cfg.rpm, "f_max_hz": cfg.f_max_hz,
             "levels": [strip(r_) for r_ in rows],
             "frequency_levels": [strip(r_) for r_ in extra],
             "full_model": full,
@@ -363,3 +374,4 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> dict:
                                "statistics_error_bar_second_largest":
                                    rows[-2]["statistics_error_bar"] if len(rows) > 1
                                    else None}}
+    return AnalysisOutcome(summary=summary, result=result)

@@ -12,6 +12,12 @@ speed.  Against the instantaneous speed the analysis returns, per direction:
   the driving shaft;
 * the waterfall (spectrogram) of the monitored mesh deformation.
 
+The inertia torque of the acceleration (``[runup] inertia_torque``, default true) is
+applied through :meth:`~vibrogear.models.gearbox.GearboxModel.inertia_force`;
+``inertia_torque = "both"`` also runs each direction without it (run key
+``<direction>_no_inertia``) and the summary compares the two (``inertia_effect``: peak
+upper envelope of the monitored mesh and its speed, with and without).
+
 The report (:mod:`vibrogear.report.runup_report`) writes ``runup.npz``, ``runup.csv`` and
 the figures.
 """
@@ -30,7 +36,7 @@ from .order_tracking import Waterfall, order_tracks, waterfall
 from .study import Study, integration_options
 
 __all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table",
-           "jump_speed"]
+           "jump_speed", "run_key", "inertia_effect"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +53,13 @@ class RunupRun:
     waterfall_rpm: np.ndarray   # (segments,) speed at the segment centres
     ramp: RampResult            # the solver's result (counters, status)
     jump: dict | None = None    # jump_speed of the monitored mesh's upper envelope
+    inertia_torque: bool = True  # run with the inertia torque of the acceleration
+    key: str = ""               # run_key: the direction, "<direction>_no_inertia" in "both"
+
+    @property
+    def main(self) -> bool:
+        """The direction's main run (the other one of inertia_torque = "both" is not)."""
+        return self.key in ("", self.direction)
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,6 +130,23 @@ def jump_speed(rpm, q, smooth: int = 20) -> dict | None:
     return {"rpm": float(rpm[k + smooth // 2]), "before": float(a), "after": float(b)}
 
 
+def run_key(cfg, direction: str, inertia: bool) -> str:
+    """The run's name in the files: the direction; ``<direction>_no_inertia`` for the run
+    without the inertia torque when ``inertia_torque = "both"``."""
+    return direction if inertia or cfg.inertia_torque != "both" else f"{direction}_no_inertia"
+
+
+def inertia_effect(with_: "RunupRun", without: "RunupRun", mesh: int) -> dict:
+    """Peak of the upper envelope of mesh ``mesh`` and the speed where it lies, with and
+    without the inertia torque; the change of the peak [%] and the speed shift."""
+    i, j = int(np.argmax(with_.env_max[mesh])), int(np.argmax(without.env_max[mesh]))
+    a, b = float(with_.env_max[mesh, i]), float(without.env_max[mesh, j])
+    return {"peak_with": a, "peak_without": b,
+            "peak_change_percent": 100.0 * (a - b) / abs(b) if b else None,
+            "rpm_at_peak_with": float(with_.rpm[i]), "rpm_at_peak_without": float(without.rpm[j]),
+            "peak_speed_shift": float(with_.rpm[i] - without.rpm[j])}
+
+
 def _profile(cfg, study: Study, direction: str) -> SpeedProfile:
     times, rpm = cfg.profile()
     prof = SpeedProfile.of(times, rpm, study.time_unit_s)
@@ -130,41 +160,52 @@ _TICK_EVERY = 64
 def _ramp_unit(model, kw, unit, emit):
     """One direction's ramp (a work unit of :func:`~vibrogear.pipeline.executors.run_units`:
     up and down run on two cores): progress ticks through ``emit``; returns the result."""
-    direction, prof, u0 = unit
+    key, prof, u0, force = unit
     count = iter(range(1, 1 << 62))
 
     def tick(t, p):
         if next(count) % _TICK_EVERY == 0:
-            emit((direction, p))
+            emit((key, p))
 
-    return ramp(model, prof, u0, callback=tick, **kw)
+    return ramp(model, prof, u0, callback=tick, inertia_force=force, **kw)
 
 
 def _ramps(study, ctx, cfg, rows, opts) -> dict:
-    """{direction: RampResult} of the section's directions, in parallel."""
+    """{(direction, inertia): RampResult} of the section's directions and inertia variants
+    (``inertia_torque = "both"``: with and without), in parallel."""
     model = study.model
-    units, est = [], 0
+    force = None
+    if any(cfg.inertia_variants):
+        gb = study.gearbox
+        force = gb.inertia_force() if gb is not None and gb.rigid_inertia is not None \
+            else np.zeros(model.n_modes)          # no rotating train: no inertia torque
+    units, keys, est = [], [], 0
     for d in cfg.directions:
         prof = _profile(cfg, study, d)
-        est += int(np.ceil(np.trapz(prof.params, prof.times) * model.omega_per_param
-                           / (2 * np.pi) * cfg.chunks_per_period))
-        units.append((d, prof, study.start(float(prof.params[0]))))
+        n = int(np.ceil(np.trapz(prof.params, prof.times) * model.omega_per_param
+                        / (2 * np.pi) * cfg.chunks_per_period))
+        u0 = study.start(float(prof.params[0]))
+        for inertia in cfg.inertia_variants:
+            est += n
+            keys.append((d, inertia))
+            units.append((run_key(cfg, d, inertia), prof, u0, force if inertia else None))
     kw = dict(options=opts, chunks_per_period=cfg.chunks_per_period,
               samples_per_period=cfg.samples_per_period, midpoint=cfg.midpoint,
               settle_periods=cfg.settle_periods, rows=rows)
-    with ctx.progress(est // _TICK_EVERY, "runup " + " + ".join(cfg.directions)) as bar:
+    with ctx.progress(est // _TICK_EVERY, "runup " + " + ".join(u[0] for u in units)) as bar:
         def on_result(_i, item):
             bar.update(1, f"{item[0]} {item[1]:.5g} {study.param_unit}")
         # every rank (under mpirun) gets the same list of results
-        got = dict(zip(cfg.directions, run_units(partial(_ramp_unit, model, kw), units,
-                                                 on_result=on_result)))
-    for d in cfg.directions:
-        if not got[d].ok:
-            raise NumericalFailure(f"runup {d}: {got[d].message}")
+        got = dict(zip(keys, run_units(partial(_ramp_unit, model, kw), units,
+                                       on_result=on_result)))
+    for (d, inertia), r in got.items():
+        if not r.ok:
+            raise NumericalFailure(f"runup {run_key(cfg, d, inertia)}: {r.message}")
     return got
 
 
-def _one_run(study, cfg, direction, r: RampResult, rows, orders, teeth) -> RunupRun:
+def _one_run(study, cfg, key, r: RampResult, rows, orders, teeth) -> RunupRun:
+    direction, inertia = key
     model = study.model
     prof = r.profile
     ct = model.contacts
@@ -192,7 +233,8 @@ def _one_run(study, cfg, direction, r: RampResult, rows, orders, teeth) -> Runup
     return RunupRun(direction=direction, time_s=t_s[first], rpm=rpm, env_min=scale * lo,
                     env_max=scale * hi, losses=losses, tracks=tracks, track_rpm=track_rpm,
                     waterfall=wf, waterfall_rpm=wf_rpm, ramp=r,
-                    jump=jump_speed(rpm, scale * hi[wi]))
+                    jump=jump_speed(rpm, scale * hi[wi]), inertia_torque=inertia,
+                    key=run_key(cfg, direction, inertia))
 
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
@@ -203,20 +245,21 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     if rows.size == 0:
         raise NumericalFailure("runup: the model has no mesh contact to follow")
     names, orders, teeth = shaft_orders(scene, cfg.mesh_orders)
-    opts = integration_options(scene, record=True, section=scene.runup)
+    opts = integration_options(scene, record=True, section=scene.runup, study=study)
     ramps = _ramps(study, ctx, cfg, rows, opts)
-    runs = tuple(_one_run(study, cfg, d, ramps[d], rows, orders, teeth)
-                 for d in cfg.directions)
+    runs = tuple(_one_run(study, cfg, k, r, rows, orders, teeth) for k, r in ramps.items())
     ct = model.contacts
     mesh_names = tuple(ct.names[j] if ct.names else f"c{j}" for j in rows)
     summary = {"status": "ok", "directions": list(cfg.directions),
                "rpm_range": list(cfg.rpm_range), "meshes": list(mesh_names),
                "orders": dict(zip(names, map(float, orders))),
-               "rtol": opts.rtol, "atol": opts.atol, "runs": {}}
+               "rtol": opts.rtol, "atol": opts.atol, "inertia_torque": cfg.inertia_torque,
+               "runs": {}}
     for run_ in runs:
         r = run_.ramp
         P = run_.rpm.size
-        summary["runs"][run_.direction] = {
+        summary["runs"][run_.key] = {
+            "direction": run_.direction, "inertia_torque": run_.inertia_torque,
             "duration_s": r.profile.duration * study.time_unit_s, "mesh_periods": P,
             "chunks": r.chunks, "steps": r.steps, "rejected": r.rejected,
             "rhs_calls": r.rhs_calls, "events": r.events, "solver_wall_s": r.wall_time,
@@ -229,6 +272,12 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                "chunks_per_period": r.chunks_per_period,
                                "midpoint": r.midpoint},
         }
+    if cfg.inertia_torque == "both":
+        wi = next((i for i, j in enumerate(rows) if j == model.monitor), 0)
+        by = {(r.direction, r.inertia_torque): r for r in runs}
+        summary["inertia_effect"] = {
+            "mesh": mesh_names[wi], "unit": study.monitor.unit,
+            **{d: inertia_effect(by[d, True], by[d, False], wi) for d in cfg.directions}}
     return AnalysisOutcome(summary=summary, result=RunupResult(
         study=study, mesh_names=mesh_names, order_names=names, orders=orders, runs=runs,
         teeth=teeth))

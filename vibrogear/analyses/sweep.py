@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.motion import CHAOTIC, MOTION_LEGEND
@@ -172,8 +173,7 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
 # ---------------------------------------------------------------- partial-file records
 
 def _num(x):
-    x = float(x)
-    return x if math.isfinite(x) else None
+    return finite_json(float(x))
 
 
 def _arr(a):

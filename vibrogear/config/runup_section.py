@@ -5,6 +5,9 @@ The driving speed is either a ramp (``rpm_start``, ``rpm_end``, ``rate`` in rpm/
 starts from the static equilibrium at the start speed, held ``settle_periods`` mesh periods
 at that speed (not recorded).  ``directions = ["up", "down"]`` also runs the profile
 backwards (rpm_end -> rpm_start), from the static equilibrium at its own start speed.
+``inertia_torque`` (default true) applies the inertia torque of the acceleration (the
+d'Alembert force of the accelerating rigid rotation of the gear train, -M r dOmega/dt);
+``"both"`` runs each direction with and without it (``<d>`` and ``<d>_no_inertia``).
 """
 from __future__ import annotations
 
@@ -37,12 +40,18 @@ class RunupConfig:
     mesh_orders: tuple[int, ...] = spec((1, 2, 3), min_len=1, max_len=10, ge=1, le=100,
                                         doc="harmonics of each mesh frequency tracked")
     spectrogram_s: float = spec(0.05, gt=0.0, doc="waterfall: segment length [s]")
+    inertia_torque: bool | str = spec(True, doc="apply the inertia torque of the "
+                                      "acceleration (true / false), or \"both\": each "
+                                      "direction with and without it")
     rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for the run "
                               "(atol = 1e-6 rtol); default: the [integration] section's where "
                               "given, else the rtol the [sweep] accuracy asks for")
 
     def validate(self, path: str) -> None:
         p = f"{path}." if path else ""
+        if isinstance(self.inertia_torque, str) and self.inertia_torque != "both":
+            raise ConfigError(f"{p}inertia_torque", f"expected true, false or \"both\", got "
+                              f"{self.inertia_torque!r}")
         given = [k for k in _RAMP if getattr(self, k) is not None]
         if self.table is not None and given:
             raise ConfigError(f"{p}table", f"give either the ramp ({', '.join(_RAMP)}) or a "
@@ -81,6 +90,12 @@ class RunupConfig:
             return tuple(t for t, _ in self.table), tuple(r for _, r in self.table)
         duration = abs(self.rpm_end - self.rpm_start) / self.rate
         return (0.0, duration), (self.rpm_start, self.rpm_end)
+
+    @property
+    def inertia_variants(self) -> tuple[bool, ...]:
+        """With / without the inertia torque: the runs of each direction (the first is the
+        main one)."""
+        return (True, False) if self.inertia_torque == "both" else (bool(self.inertia_torque),)
 
     @property
     def rpm_range(self) -> tuple[float, float]:

@@ -43,7 +43,8 @@ from .iso6336 import MeshStiffness, involute, inverse_involute, mesh_stiffness
 from .master_level import (coupling_loads, excitation_frequencies_hz, highest_speed,
                            shaft_master_modes)
 from .rotor import build_rotor_model
-from .synthesis import ContactLaw, LinearLink, PhysicalVector, Subsystem, synthesize
+from .synthesis import (ContactLaw, LinearLink, PhysicalVector, Subsystem, modal_projection,
+                        synthesize)
 
 __all__ = ["GearboxModel", "build_gearbox", "external_couplings", "check_layout", "OMEGA_REF", "RPM",
            "housing_to_rotor", "iso_mesh_stiffness", "gravity_load"]
@@ -71,10 +72,19 @@ class GearboxModel:
     timings: dict = field(default_factory=dict)
     blocks: tuple = ()                    # LinearBlock (cross-coupled bearing terms)
     mesh_stiffness: tuple = ()            # per mesh: user / ISO 6336 / used values (dicts)
+    #: (m,) Phi^T M r, r the rigid rotation of the train (1 on the driving shaft's torsion
+    #: DOF, the speed ratios elsewhere, a free gear its own; 0 on the housing): an
+    #: acceleration alpha [rad/s^2] of the driving shaft adds the force -rigid_inertia alpha
+    rigid_inertia: np.ndarray | None = None
 
     @property
     def time_unit_s(self) -> float:
         return 1.0 / self.omega_ref
+
+    def inertia_force(self) -> np.ndarray:
+        """-rigid_inertia alpha in model units per unit d rpm / d tau (the ``inertia_force``
+        of :func:`~vibrogear.solvers.ramp.ramp`): alpha = RPM omega_ref d rpm / d tau."""
+        return -self.rigid_inertia * (RPM / self.omega_ref)
 
     def mesh_frequency_hz(self, rpm: float) -> float:
         return self.mesh_teeth * rpm / 60.0
@@ -219,6 +229,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     if housing_sub is not None:
         subsystems.append(housing_sub)
     t_modes = time.perf_counter() - t_couple
+    inertia = _rigid_inertia(cfg, subsystems, rotors, shaft_p, gear_p, free_dof)
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
@@ -230,7 +241,21 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
                         housing=hm, timings={"shafts_s": t_shafts - t0 + t_modes,
                                              "housing_s": t_housing - t_shafts,
                                              "synthesis_s": t_end - t_housing - t_modes},
-                        blocks=tuple(blocks), mesh_stiffness=tuple(records))
+                        blocks=tuple(blocks), mesh_stiffness=tuple(records),
+                        rigid_inertia=inertia)
+
+
+def _rigid_inertia(cfg, subsystems, rotors, shaft_p, gear_p, free_dof) -> np.ndarray:
+    """Phi^T M r (:attr:`GearboxModel.rigid_inertia`) from the shafts' M and master modes."""
+    forces = {}
+    for i, rotor in enumerate(rotors):
+        r = np.zeros(rotor.n_dofs)
+        r[[rotor.dof(n, "psi") for n in range(rotor.n_nodes)]] = shaft_p[i]
+        for k, g in enumerate(cfg.gears):
+            if g.free and cfg.shaft_index(g.shaft, "") == i:
+                r[free_dof[k]] = gear_p[k]
+        forces[i] = rotor.M @ r
+    return modal_projection(subsystems, forces)
 
 
 def _gear_psi(rotor, node, k, free_dof) -> int:

@@ -30,7 +30,7 @@ import scipy.linalg as sla
 from .reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 
 __all__ = ["PhysicalVector", "Subsystem", "ContactLaw", "LinearLink", "LinearBlock",
-           "modal_vector", "synthesize", "subsystem_offsets"]
+           "modal_vector", "modal_projection", "synthesize", "subsystem_offsets"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,6 +114,16 @@ def modal_vector(vec: PhysicalVector, subsystems, offsets=None) -> np.ndarray:
     for s, idx, val in vec.parts:
         d[offsets[s]:offsets[s + 1]] += val @ subsystems[s].vectors[idx, :]
     return d
+
+
+def modal_projection(subsystems, forces: dict) -> np.ndarray:
+    """sum_s V_s^T f_s: the modal force of the physical forces ``forces`` {subsystem index:
+    (n_coupling_dofs,) vector over its coupling DOF}; zero on the other subsystems."""
+    offsets = subsystem_offsets(subsystems)
+    out = np.zeros(offsets[-1])
+    for s, f in forces.items():
+        out[offsets[s]:offsets[s + 1]] = subsystems[s].vectors.T @ np.asarray(f, dtype=float)
+    return out
 
 
 def _harmonics(laws, name: str, H: int) -> np.ndarray:

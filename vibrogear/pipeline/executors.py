@@ -29,25 +29,12 @@ import queue as _queue
 import signal
 import traceback
 
+from .units_base import UnitError, _comm, _deliver, _run_serial, _transportable
+
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers", "blas_threads"]
 
 log = logging.getLogger(__name__)
-
-
-class UnitError(RuntimeError):
-    """A work unit raised an exception (``unit``: its index; ``remote``: the traceback
-    text from the worker; ``original``: the exception when it could be transported)."""
-
-    def __init__(self, unit: int, remote: str, original: BaseException | None = None):
-        self.unit = unit
-        self.remote = remote
-        self.original = original
-        super().__init__(f"work unit {unit} failed:\n{remote}")
-
-
-class _Stop(Exception):
-    """Raised inside ``emit`` to abandon the current unit (stop requested)."""
 
 
 def under_mpi() -> bool:
@@ -57,11 +44,6 @@ def under_mpi() -> bool:
         return int(size) > 1
     except ValueError:
         return False
-
-
-def _comm():
-    from mpi4py import MPI
-    return MPI.COMM_WORLD
 
 
 def is_root() -> bool:
@@ -127,25 +109,6 @@ def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=No
     return _run_serial(fn, units, on_result)
 
 
-def _deliver(on_result, i, item) -> bool:
-    return on_result is None or on_result(i, item) is not False
-
-
-# ---------------------------------------------------------------- serial
-
-def _run_serial(fn, units, on_result) -> list:
-    results: list = [None] * len(units)
-    for i, unit in enumerate(units):
-        def emit(item, i=i):
-            if not _deliver(on_result, i, item):
-                raise _Stop
-        try:
-            results[i] = fn(unit, emit)
-        except _Stop:
-            break
-    return results
-
-
 # ---------------------------------------------------------------- processes
 
 def _die_with_parent() -> None:
@@ -155,14 +118,6 @@ def _die_with_parent() -> None:
         libc.prctl(1, signal.SIGKILL)           # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
-
-
-def _transportable(exc: BaseException):
-    import pickle
-    try:
-        return pickle.loads(pickle.dumps(exc))
-    except Exception:
-        return None
 
 
 def _process_worker(fn, units, tasks, results, parent_pid) -> None:

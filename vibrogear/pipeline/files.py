@@ -1,14 +1,19 @@
 """Atomic file writes: every output file appears whole or not at all."""
 from __future__ import annotations
 
+import csv
 import errno
+import io
+import math
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 from ..config.base import ConfigError
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "check_output_dir"]
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "finite_json",
+           "check_output_dir"]
 
 
 def atomic_write_bytes(path, data: bytes) -> Path:
@@ -31,6 +36,31 @@ def atomic_write_bytes(path, data: bytes) -> Path:
 
 def atomic_write_text(path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_csv(path, header, rows) -> Path:
+    """Write a CSV file (``csv`` module dialect, CRLF line ends) atomically: ``header`` is
+    the first row (none when None), then ``rows``."""
+    buf = io.StringIO()
+    w = csv.writer(buf)
+    if header is not None:
+        w.writerow(header)
+    w.writerows(rows)
+    return atomic_write_text(path, buf.getvalue())
+
+
+def finite_json(obj: Any) -> Any:
+    """``obj`` made JSON-safe: non-finite floats become None (JSON has no NaN/inf), numpy
+    scalars become Python numbers, tuples become lists and dict keys strings."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k): finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [finite_json(v) for v in obj]
+    if hasattr(obj, "item") and hasattr(obj, "dtype"):
+        return finite_json(obj.item())
+    return obj
 
 
 def check_output_dir(path, what: str = "--out") -> Path:

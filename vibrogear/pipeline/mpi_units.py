@@ -10,7 +10,7 @@ import os
 import time
 import traceback
 
-from .executors import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable
+from .units_base import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable
 
 __all__ = ["run_mpi"]
 

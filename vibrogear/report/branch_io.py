@@ -1,4 +1,4 @@
-"""Write continuation branches as ``branch.npz`` / ``branch.csv`` (DESIGN.md).
+"""Write continuation branches as ``branch.npz`` / ``branch.csv``.
 
 ``neutral`` is the number of trivial multipliers 1 of a point (an orbit family: a free gear
 touching nothing); ``max_abs_multiplier`` is over the other, nontrivial multipliers (the

@@ -10,44 +10,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
-from .branch_io import branch_arrays, write_branches
-from .branch_plots import plot_branches
+from .bifurcation_figures import display_arrays, plot_branch_figures, plot_combined
+from .branch_io import write_branches
 from .sweep_io import read_sweep_npz, sweep_arrays
-from .sweep_report import display_arrays, draw_bifurcation
 
 __all__ = ["write", "plot_branch_figures", "plot_combined"]
-
-
-def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
-    """Both branch figures; ``sweep``: a sweep analysis' result to overlay (or
-    ``sweep_data``: its arrays in display units)."""
-    study = result.study
-    mon = study.monitor
-    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
-                            mon.scale, ("qmin", "qmax"))
-    sw = sweep_data if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
-    lines = tuple(mon.lines)
-    if mon.zero_line:
-        near = bool(lines) and np.nanmin(arrays["qmin"], initial=0.0) < 0.5 * min(lines)
-        lines = (0.0,) + (lines if near else ())
-    paths = []
-    for q, lab in (("qmax", "max"), ("qmin", "min")):
-        paths += plot_branches(arrays, Path(out) / f"branch_{lab}", quantity=q,
-                               ylabel=mon.axis_label(lab), xlabel=study.param_label,
-                               title=study.title, sweep=sw, bounds=lines)
-    return paths
-
-
-def plot_combined(result, out, sweep_data: dict) -> list[Path]:
-    """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
-    branches of ``result`` overlaid."""
-    study = result.study
-    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
-                            study.monitor.scale, ("qmin", "qmax"))
-    return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
-                            branches=arrays)
 
 
 def _sweep_of(previous, out, study):

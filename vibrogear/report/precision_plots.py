@@ -11,11 +11,11 @@ Matplotlib ``Figure`` objects with the Agg canvas: no pyplot state.
 """
 from __future__ import annotations
 
-import csv
 from pathlib import Path
 
 import numpy as np
 
+from ..pipeline.files import atomic_write_csv
 from .figure import new_figure, save_figure
 
 __all__ = ["write_table", "plot_work_precision", "plot_shooting_precision",
@@ -23,15 +23,9 @@ __all__ = ["write_table", "plot_work_precision", "plot_shooting_precision",
 
 
 def write_table(path, table: dict, columns) -> Path:
-    """Write the named columns of ``table`` (equal-length arrays) as CSV."""
-    path = Path(path)
+    """Write the named columns of ``table`` (equal-length arrays) as CSV (atomically)."""
     cols = [np.asarray(table[c]) for c in columns]
-    with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(columns)
-        for row in zip(*cols):
-            w.writerow([_fmt(v) for v in row])
-    return path
+    return atomic_write_csv(Path(path), columns, [[_fmt(v) for v in row] for row in zip(*cols)])
 
 
 def _fmt(v) -> str:

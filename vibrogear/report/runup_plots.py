@@ -9,6 +9,19 @@ __all__ = ["plot_envelopes", "plot_orders", "plot_waterfall"]
 
 _RUN_STYLE = {"up": dict(color="tab:blue", label="run-up"),
               "down": dict(color="tab:red", label="run-down")}
+#: the run without the inertia torque next to the main one (inertia_torque = "both")
+_NO_INERTIA = {"up": dict(color="tab:cyan", label="run-up, no inertia torque"),
+               "down": dict(color="tab:orange", label="run-down, no inertia torque")}
+
+
+def _style(r) -> dict:
+    if getattr(r, "main", True):
+        return {**_RUN_STYLE.get(r.direction, {}), "zorder": 2}
+    return {**_NO_INERTIA.get(r.direction, {}), "ls": "--", "zorder": 1}
+
+
+def _main_runs(result) -> list:
+    return [r for r in result.runs if getattr(r, "main", True)]
 
 
 def _steady(ax, sweep, branch, unit_label):
@@ -37,7 +50,8 @@ def _steady(ax, sweep, branch, unit_label):
 
 def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
     """Per mesh: the envelope (min and max per mesh period) against the speed for each
-    direction; on the monitored mesh, the steady-state sweep and branches overlaid."""
+    run (with inertia_torque = "both" the runs without the inertia torque dashed); on the
+    monitored mesh, the steady-state sweep and branches overlaid."""
     study = result.study
     n = len(result.mesh_names)
     fig = new_figure((9.0, 3.6 * n))
@@ -46,14 +60,15 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
     for i, name in enumerate(result.mesh_names):
         ax = fig.add_subplot(n, 1, i + 1)
         for r in result.runs:
-            st = _RUN_STYLE.get(r.direction, {})
-            ax.plot(r.rpm, r.env_max[i], lw=0.7, color=st.get("color"), label=st.get("label"))
-            ax.plot(r.rpm, r.env_min[i], lw=0.7, color=st.get("color"))
+            st = _style(r)
+            kw = dict(lw=0.7, ls=st.get("ls", "-"), color=st.get("color"), zorder=st["zorder"])
+            ax.plot(r.rpm, r.env_max[i], label=st.get("label"), **kw)
+            ax.plot(r.rpm, r.env_min[i], **kw)
         if name == mon_name:
             _steady(ax, sweep, branch, study.monitor.unit)
-            for r in result.runs:
+            for r in _main_runs(result):
                 if r.jump is not None:
-                    st = _RUN_STYLE.get(r.direction, {})
+                    st = _style(r)
                     ax.axvline(r.jump["rpm"], color=st.get("color"), lw=0.8, ls=":")
                     ax.annotate(f"{st.get('label', r.direction)} jump {r.jump['rpm']:.1f}",
                                 (r.jump["rpm"], 1.0), xycoords=("data", "axes fraction"),
@@ -70,28 +85,35 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="best")
     rates = ", ".join(f"{r.direction}: {abs(np.ptp(r.rpm)) / max(np.ptp(r.time_s), 1e-30):.4g} "
-                      f"{study.param_unit}/s" for r in result.runs)
-    fig.axes[0].set_title(f"{study.title}\nenvelope per mesh period ({rates})", fontsize=9)
+                      f"{study.param_unit}/s" for r in _main_runs(result))
+    both = len(_main_runs(result)) < len(result.runs)
+    inertia = ("with and without (dashed) the inertia torque" if both else
+               "with the inertia torque" if all(getattr(r, "inertia_torque", False)
+                                                for r in result.runs)
+               else "without the inertia torque")
+    fig.axes[0].set_title(f"{study.title}\nenvelope per mesh period ({rates}; {inertia})",
+                          fontsize=9)
     out = save_figure(fig, path, formats=("png",))
     return out
 
 
 def plot_orders(result, path) -> list:
     """Per mesh: amplitude of each tracked order against the speed (run-up solid,
-    run-down dashed)."""
+    run-down dashed; the main runs, with the inertia torque where "both")."""
     study = result.study
     n = len(result.mesh_names)
     fig = new_figure((9.0, 3.6 * n))
     colors = [f"C{k % 10}" for k in range(len(result.order_names))]
     for i, name in enumerate(result.mesh_names):
         ax = fig.add_subplot(n, 1, i + 1)
-        for r in result.runs:
+        runs = _main_runs(result)
+        for r in runs:
             ls = "-" if r.direction == "up" else "--"
             tr = r.tracks[name]
             for k, oname in enumerate(result.order_names):
                 ax.semilogy(r.track_rpm, np.maximum(tr.amplitude[k], 1e-30), ls, lw=1.0,
                             color=colors[k],
-                            label=f"{oname} ({result.orders[k]:.4g})" if r is result.runs[0]
+                            label=f"{oname} ({result.orders[k]:.4g})" if r is runs[0]
                             else None)
         ax.set_xlabel(study.param_label)
         ax.set_ylabel(f"{name} order amplitude [{study.monitor.unit}]")
@@ -107,7 +129,7 @@ def plot_waterfall(result, path) -> list:
     """Per direction: amplitude spectrum (dB) of the monitored mesh deformation against
     speed and frequency, with the order lines f = order x speed / 60 drawn."""
     study = result.study
-    runs = result.runs
+    runs = _main_runs(result)
     fig = new_figure((9.0, 4.2 * len(runs)))
     for i, r in enumerate(runs):
         ax = fig.add_subplot(len(runs), 1, i + 1)

@@ -1,13 +1,17 @@
 """Files and figures of a run-up / run-down (``vibrogear runup``).
 
-* ``runup.npz``: per direction ``<d>`` (``up``, ``down``), per mesh period:
+* ``runup.npz``: per run ``<d>`` (the direction ``up``, ``down``; with ``[runup]
+  inertia_torque = "both"`` also ``up_no_inertia``, ``down_no_inertia``: the same run
+  without the inertia torque of the acceleration), per mesh period:
   ``<d>_time`` [s], ``<d>_rpm`` (mean speed over the period), ``<d>_env_min_<mesh>`` /
   ``<d>_env_max_<mesh>`` (deformation envelope, display unit), ``<d>_losses_<mesh>``
   (contact losses); per order-tracking window: ``<d>_track_rpm`` and
   ``<d>_order_<mesh>_<order>`` (amplitude of that order of the mesh's deformation, display
   unit); and ``orders`` / ``order_names`` (orders per driving-shaft revolution), ``meshes``,
-  ``unit``.
-* ``runup.csv``: the per-period scalars, one row per direction and mesh period.
+  ``unit``, ``directions``, ``runs`` (the run names ``<d>``) and ``inertia_torque`` (per
+  run: applied or not).
+* ``runup.csv``: the per-period scalars, one row per run and mesh period (the run's
+  direction and whether the inertia torque was applied).
 * ``runup_envelope.png``, ``runup_orders.png``, ``runup_waterfall.png``
   (:mod:`vibrogear.report.runup_plots`); the envelope figure overlays the steady state:
   the sweep's extrema and the continuation branches, from the analyses run before in the
@@ -33,9 +37,11 @@ def runup_arrays(result) -> dict:
     """The arrays of ``runup.npz`` (see the module docstring)."""
     out = {"meshes": np.array(result.mesh_names), "order_names": np.array(result.order_names),
            "orders": np.asarray(result.orders, float), "unit": np.array(result.study.monitor.unit),
-           "directions": np.array([r.direction for r in result.runs])}
+           "directions": np.array(list(dict.fromkeys(r.direction for r in result.runs))),
+           "runs": np.array([r.key or r.direction for r in result.runs]),
+           "inertia_torque": np.array([r.inertia_torque for r in result.runs], dtype=bool)}
     for r in result.runs:
-        d = r.direction
+        d = r.key or r.direction
         out[f"{d}_time"] = r.time_s
         out[f"{d}_rpm"] = r.rpm
         out[f"{d}_track_rpm"] = r.track_rpm
@@ -52,13 +58,14 @@ def runup_arrays(result) -> dict:
 def _csv(result) -> bytes:
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
-    cols = ["direction", "period", "time_s", "rpm"]
+    cols = ["direction", "inertia_torque", "period", "time_s", "rpm"]
     for n in result.mesh_names:
         cols += [f"env_min_{n}", f"env_max_{n}", f"losses_{n}"]
     w.writerow(cols)
     for r in result.runs:
         for k in range(r.rpm.size):
-            row = [r.direction, k, repr(float(r.time_s[k])), repr(float(r.rpm[k]))]
+            row = [r.direction, str(r.inertia_torque).lower(), k, repr(float(r.time_s[k])),
+                   repr(float(r.rpm[k]))]
             for i in range(len(result.mesh_names)):
                 row += [repr(float(r.env_min[i, k])), repr(float(r.env_max[i, k])),
                         int(r.losses[i, k])]

@@ -1,6 +1,6 @@
 """Files of a sweep: ``sweep.npz``, ``sweep.csv`` and the append-as-you-go partial file.
 
-* ``sweep.npz`` (DESIGN.md): ``param``, ``direction`` ("up"/"down"), ``qmin``, ``qmax``,
+* ``sweep.npz``: ``param``, ``direction`` ("up"/"down"), ``qmin``, ``qmax``,
   ``poincare`` (points x samples), ``period_n`` (0 = not periodic), ``impacts`` (contact
   losses per excitation period), plus ``index``, ``status``, ``ok``, ``defect``,
   ``clusters``, ``u_end`` and the scalar error estimates; the motion class with its

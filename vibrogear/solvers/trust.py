@@ -32,6 +32,7 @@ the model can use is found by :func:`vibrogear.solvers.rtol_limit.loosest_rtol`.
 """
 from __future__ import annotations
 
+import math
 import weakref
 
 import numpy as np
@@ -146,7 +147,7 @@ def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
         if u_eval.size:
             worst = np.maximum(worst, np.max(np.abs(u_eval[:, :m] @ ct.directions.T), axis=0))
         lo, hi = monitor_range
-        if lo > -np.inf and hi < np.inf:           # the monitored extrema see between samples
+        if math.isfinite(lo) and math.isfinite(hi):  # the monitored extrema see between samples
             te = float(np.sum(np.hypot(ct.error_cos[model.monitor], ct.error_sin[model.monitor])))
             worst[model.monitor] = max(worst[model.monitor], max(abs(lo), abs(hi)) - te)
         over = np.flatnonzero((worst > bound) & (bound > 0.0))      # inf bound: none

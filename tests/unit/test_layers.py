@@ -1,0 +1,205 @@
+"""The package's layers, checked on every module's imports.
+
+The layer order is written once, in ``LAYERS`` below, and ``docs/architecture.md`` states the
+same table (checked here too).  A module may import modules of its own layer and of any lower
+layer, never of a higher one.  Every ``import`` statement counts, also those inside functions
+(lazy imports) and under ``TYPE_CHECKING``.  Imports that break the order today are listed in
+``KNOWN_EXCEPTIONS`` with their reason; an exception that no longer occurs fails the test too,
+so the list (and the doc) stays true.  No two modules may import each other, directly or
+through others (no import circles), whatever their layers.
+"""
+from __future__ import annotations
+
+import ast
+import re
+from collections import defaultdict
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+PKG = ROOT / "vibrogear"
+ARCH = ROOT / "docs" / "architecture.md"
+
+#: layer of each part of the package (a folder ``name/`` or a top-level ``name.py``), lowest
+#: first.  Equal numbers share a layer.  docs/architecture.md, section "Layers", has this table.
+LAYERS = {
+    "__init__.py": 0,       # the version
+    "verification/": 0,     # exact references: share no code with what they check
+    "config/": 1,
+    "cache.py": 2,
+    "geometry/": 3,
+    "models/": 4,
+    "pipeline/": 5,
+    "solvers/": 6,
+    "analyses/": 7,
+    "report/": 8,
+    "runner.py": 9,
+    "cli.py": 10,
+}
+
+#: (importing module, imported module): why the import is allowed.  Empty: the 9 upward
+#: imports (analyses -> report) that existed went away when every analysis got its report
+#: writer.  An entry here must name its reason and appear in docs/architecture.md.
+KNOWN_EXCEPTIONS: dict[tuple[str, str], str] = {}
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    return {_module_name(p): p for p in sorted(PKG.rglob("*.py"))}
+
+
+def _exists(name: str) -> bool:
+    rel = Path(*name.split("."))
+    return (ROOT / rel.with_suffix(".py")).is_file() or (ROOT / rel / "__init__.py").is_file()
+
+
+def _imports(name: str, path: Path) -> list[tuple[str, int]]:
+    """(imported vibrogear module, line) for every import statement of the module, the
+    relative ones resolved; ``from pkg import sub`` counts as an import of ``pkg.sub`` where
+    ``sub`` is a module, else of ``pkg``."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            out += [(a.name, node.lineno) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            for a in node.names:
+                sub = f"{target}.{a.name}"
+                out.append((sub if _exists(sub) else target, node.lineno))
+    return [(t, line) for t, line in out if t == "vibrogear" or t.startswith("vibrogear.")]
+
+
+def _part(module: str) -> str:
+    """The LAYERS key of a module name."""
+    parts = module.split(".")
+    if len(parts) == 1:
+        return "__init__.py"
+    return f"{parts[1]}/" if (PKG / parts[1]).is_dir() else f"{parts[1]}.py"
+
+
+def _edges() -> dict[tuple[str, str], list[int]]:
+    edges: dict[tuple[str, str], list[int]] = defaultdict(list)
+    for name, path in _modules().items():
+        for target, line in _imports(name, path):
+            if target != name:
+                edges[(name, target)].append(line)
+    return edges
+
+
+def test_every_part_of_the_package_has_a_layer():
+    parts = {_part(m) for m in _modules()}
+    missing = sorted(parts - set(LAYERS))
+    assert not missing, (f"{missing}: in no layer; add to LAYERS here and to the 'Layers' "
+                         f"table of docs/architecture.md")
+    stale = sorted(set(LAYERS) - parts)
+    assert not stale, f"{stale}: in LAYERS but not in the package"
+
+
+def test_imports_keep_the_layer_order():
+    upward = {}
+    for (a, b), lines in _edges().items():
+        if LAYERS[_part(b)] > LAYERS[_part(a)]:
+            upward[(a, b)] = lines
+    new = {k: v for k, v in upward.items() if k not in KNOWN_EXCEPTIONS}
+    assert not new, "imports from a higher layer (module -> imported, lines):\n" + "\n".join(
+        f"  {a} -> {b} (line {', '.join(map(str, v))}): {_part(a)} is layer "
+        f"{LAYERS[_part(a)]}, {_part(b)} is layer {LAYERS[_part(b)]}"
+        for (a, b), v in sorted(new.items()))
+    gone = sorted(set(KNOWN_EXCEPTIONS) - set(upward))
+    assert not gone, (f"{gone}: no longer imported; remove from KNOWN_EXCEPTIONS and from "
+                      f"docs/architecture.md")
+
+
+def _circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components with more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    found = []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on.add(root)
+        while work:
+            v, it = work[-1]
+            for w in it:
+                if w not in index:
+                    index[w] = low[w] = len(index)
+                    stack.append(w)
+                    on.add(w)
+                    work.append((w, iter(sorted(graph.get(w, ())))))
+                    break
+                if w in on:
+                    low[v] = min(low[v], index[w])
+            else:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[v])
+                if low[v] == index[v]:
+                    comp = []
+                    while True:
+                        w = stack.pop()
+                        on.discard(w)
+                        comp.append(w)
+                        if w == v:
+                            break
+                    if len(comp) > 1:
+                        found.append(sorted(comp))
+    return found
+
+
+def test_circle_finder_finds_a_circle():
+    assert _circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_no_import_circles():
+    graph: dict[str, set[str]] = defaultdict(set)
+    for a, b in _edges():
+        graph[a].add(b)
+        graph.setdefault(b, set())
+    assert _circles(graph) == []
+
+
+def _arch_section(title: str) -> str:
+    text = ARCH.read_text()
+    m = re.search(rf"^## {re.escape(title)}\n(.*?)(?=^## |\Z)", text, re.S | re.M)
+    assert m, f"docs/architecture.md has no section '## {title}'"
+    return m.group(1)
+
+
+def test_architecture_doc_states_the_same_layers():
+    stated = {}
+    for line in _arch_section("Layers").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.lstrip().startswith("|") and cells[0].isdigit():
+            for name in re.findall(r"`([^`]+)`", cells[1]):
+                stated[name.removeprefix("vibrogear/")] = int(cells[0])
+    assert stated == LAYERS
+
+
+def test_architecture_doc_names_every_module():
+    """Every module with code (empty package markers aside) has its line in the module list,
+    and every module listed exists."""
+    section = _arch_section("Modules")
+    listed = re.findall(r"^- `([\w/]+\.py)`", section, re.M)
+    assert len(listed) == len(set(listed)), "a module is listed twice"
+    have = {str(p.relative_to(PKG)) for p in PKG.rglob("*.py")
+            if p.name != "__init__.py" or p.read_text().strip()}
+    assert sorted(have - set(listed)) == [], "modules missing from docs/architecture.md"
+    assert sorted(set(listed) - have) == [], "docs/architecture.md lists modules that do not exist"

@@ -1,0 +1,74 @@
+"""The figures a sweep and a continuation share: the bifurcation diagram of sweep arrays
+(optionally with branches overlaid), the branch figures ``branch_max`` / ``branch_min``
+(optionally with sweep points overlaid) and ``bifurcation_branches`` (both in one figure).
+Both writers, :mod:`.sweep_report` and :mod:`.branch_report`, draw through this module, so
+whichever of the two runs second draws the combined figure without importing the other."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .branch_io import branch_arrays
+from .branch_plots import plot_branches
+from .sweep_io import sweep_arrays
+from .sweep_plots import plot_bifurcation
+
+__all__ = ["display_arrays", "draw_bifurcation", "plot_branch_figures", "plot_combined"]
+
+
+def display_arrays(data: dict, scale: float, keys=("qmin", "qmax", "poincare")) -> dict:
+    """A copy of ``data`` with the monitored-quantity arrays in display units."""
+    out = dict(data)
+    for k in keys:
+        if k in out:
+            out[k] = np.asarray(data[k], dtype=float) * scale
+    return out
+
+
+def draw_bifurcation(data: dict, study, path, branches: dict | None = None) -> list[Path]:
+    """The bifurcation diagram of sweep arrays ``data`` (display units) to ``path``, with
+    continuation branch arrays (display units) overlaid when given."""
+    mon = study.monitor
+    lines = mon.lines
+    if mon.zero_line and lines:      # the back-flank line only when the motion nears it
+        near = np.nanmin(data["qmin"], initial=0.0) < 0.5 * min(lines)
+        lines = lines if near else ()
+    below = ": below 0 the mesh is interrupted" if mon.zero_line else ""
+    title = study.title + below
+    if branches is not None:
+        title += "\nsweep points with the continuation branches"
+    return plot_bifurcation(data, path, param_label=study.param_label,
+                            deformation_label=mon.axis_label(), zero_line=mon.zero_line,
+                            bounds=lines, title=title, branches=branches,
+                            energy_unit=study.energy_unit)
+
+
+def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
+    """Both branch figures; ``sweep``: a sweep analysis' result to overlay (or
+    ``sweep_data``: its arrays in display units)."""
+    study = result.study
+    mon = study.monitor
+    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+                            mon.scale, ("qmin", "qmax"))
+    sw = sweep_data if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
+    lines = tuple(mon.lines)
+    if mon.zero_line:
+        near = bool(lines) and np.nanmin(arrays["qmin"], initial=0.0) < 0.5 * min(lines)
+        lines = (0.0,) + (lines if near else ())
+    paths = []
+    for q, lab in (("qmax", "max"), ("qmin", "min")):
+        paths += plot_branches(arrays, Path(out) / f"branch_{lab}", quantity=q,
+                               ylabel=mon.axis_label(lab), xlabel=study.param_label,
+                               title=study.title, sweep=sw, bounds=lines)
+    return paths
+
+
+def plot_combined(result, out, sweep_data: dict) -> list[Path]:
+    """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
+    branches of ``result`` overlaid."""
+    study = result.study
+    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+                            study.monitor.scale, ("qmin", "qmax"))
+    return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
+                            branches=arrays)

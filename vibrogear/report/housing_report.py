@@ -1,0 +1,115 @@
+"""Files and figures of the housing analyses.
+
+* ``write_modes`` (:mod:`vibrogear.analyses.housing`, ``modes``): ``modes.csv``,
+  ``housing_modes.npz`` (the coupling data), ``mode_shapes.xdmf/.h5`` (when shapes were
+  written) and ``housing_modes.png`` (previews of the first modes);
+* ``write_sweep`` (:mod:`vibrogear.analyses.housing_sweep`): ``housing_sweep.csv`` and
+  ``housing_sweep.png``;
+* ``write_convergence`` (:mod:`vibrogear.analyses.housing_study`):
+  ``housing_convergence.csv`` and ``housing_error_vs_time.png``.
+
+``write_modes`` returns ``{role: file name}`` as listed in ``summary.json``.
+"""
+from __future__ import annotations
+
+import io
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..pipeline.files import atomic_write_bytes, atomic_write_csv
+
+__all__ = ["write_modes", "write_sweep", "write_convergence", "write_modes_outputs"]
+
+
+def _dominant(res) -> list[str]:
+    v = res.preview_values
+    out = []
+    for i in range(res.n_modes):
+        if v.ndim == 3 and i < v.shape[-1] and len(v):
+            out.append("xyz"[int(np.argmax(np.sqrt((v[:, :, i] ** 2).mean(axis=0))))])
+        else:
+            out.append("")
+    return out
+
+
+def _atomic_copy(src: Path, dst: Path) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp", dir=dst.parent)
+    os.close(fd)
+    try:
+        shutil.copyfile(src, tmp)
+        os.replace(tmp, dst)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
+    """modes.csv, housing_modes.npz (coupling data), shapes XDMF, PNG of the first modes."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    files = {}
+    dom = _dominant(res)
+    atomic_write_csv(out / "modes.csv",
+                     ["index", "frequency_hz", "damping_ratio", "residual", "dominant_direction"],
+                     [[i + 1, f"{f:.8g}", f"{res.damping_ratios[i]:.6g}",
+                       f"{res.residuals[i]:.3e}", dom[i]] for i, f in enumerate(res.freqs_hz)])
+    files["modes"] = "modes.csv"
+    buf = io.BytesIO()
+    np.savez(buf, freqs_hz=res.freqs_hz, bore_values=res.bore_values,
+             bore_points=res.bore_points, bore_centers=res.bore_centers, bore_axes=res.bore_axes,
+             bore_center_values=res.bore_center_values, bore_n_points=np.array(res.bore_n_points),
+             bore_names=np.array(res.bore_names), beta=res.beta, n_dofs=res.n_dofs)
+    atomic_write_bytes(out / "housing_modes.npz", buf.getvalue())
+    files["coupling"] = "housing_modes.npz"
+    if res.shapes_path is not None and Path(res.shapes_path).is_file():
+        src = Path(res.shapes_path)
+        for ext in (".xdmf", ".h5"):
+            s = src.with_suffix(ext)
+            if s.is_file():
+                _atomic_copy(s, out / f"mode_shapes{ext}")
+        files["shapes"] = "mode_shapes.xdmf"
+    if plot and res.n_modes and len(res.preview_points):
+        from .housing_plots import plot_mode_previews
+        plot_mode_previews(res, out / "housing_modes.png")
+        files["plot"] = "housing_modes.png"
+    return files
+
+
+def write_modes(scene, outcome, out, previous=None) -> dict[str, str]:
+    return write_modes_outputs(outcome.result, Path(out))
+
+
+def write_sweep(scene, outcome, out, previous=None) -> dict[str, str]:
+    """``housing_sweep.csv`` and ``.png``."""
+    from .housing_plots import plot_sweep
+
+    r = outcome.result
+    out = Path(out)
+    n = r.freqs.shape[1]
+    atomic_write_csv(out / "housing_sweep.csv",
+                     [r.parameter, "n_dofs"] + [f"f{j + 1}_hz" for j in range(n)],
+                     [[f"{row['value']:.6g}", row["n_dofs"]] + [f"{x:.6g}" for x in fr]
+                      for row, fr in zip(r.rows, r.freqs)])
+    plot_sweep(r.parameter, [row["value"] for row in r.rows], r.freqs, out / "housing_sweep.png")
+    return {"csv": "housing_sweep.csv", "plot": "housing_sweep.png"}
+
+
+def write_convergence(scene, outcome, out, previous=None) -> dict[str, str]:
+    """``housing_convergence.csv`` and ``housing_error_vs_time.png``."""
+    from .housing_plots import plot_error_vs_time
+
+    r = outcome.result
+    out = Path(out)
+    atomic_write_csv(out / "housing_convergence.csv",
+                     ["degree", "size_m", "n_dofs", "fe_seconds", "max_rel_error"] +
+                     [f"f{j + 1}_hz" for j in range(r.n_freqs)],
+                     [[row["degree"], f"{row['size']:.5g}", row["n_dofs"],
+                       f"{row['fe_seconds']:.3f}", f"{row['max_rel_error']:.4e}"] +
+                      [f"{f:.6g}" for f in row["freqs"]] for row in r.rows])
+    plot_error_vs_time(list(r.rows), out / "housing_error_vs_time.png", target=r.target_error)
+    return {"csv": "housing_convergence.csv", "plot": "housing_error_vs_time.png"}

@@ -1,0 +1,29 @@
+"""Files and figures of the impact pair's ``report`` analysis (work-precision against the
+exact solution, :mod:`vibrogear.analyses.impact_report`).
+
+* ``work_precision.csv``, ``work_precision.png/.svg``: integrator error against rtol and
+  work;
+* ``shooting_precision.csv``, ``shooting_precision.png/.svg``: shooting error against its
+  tolerance and work.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..analyses.impact_report import SH_COLUMNS, WP_COLUMNS
+from .precision_plots import plot_shooting_precision, plot_work_precision, write_table
+
+__all__ = ["write"]
+
+
+def write(scene, outcome, out, previous=None) -> dict:
+    r = outcome.result
+    out = Path(out)
+    files = {"work_precision_csv": str(write_table(out / "work_precision.csv", r.wp, WP_COLUMNS)),
+             "shooting_precision_csv": str(write_table(out / "shooting_precision.csv", r.sh,
+                                                       SH_COLUMNS))}
+    plot_work_precision(r.wp, r.slopes, out / "work_precision", title=r.wp_title)
+    plot_shooting_precision(r.sh, out / "shooting_precision", title=r.sh_title)
+    files["work_precision_png"] = str(out / "work_precision.png")
+    files["shooting_precision_png"] = str(out / "shooting_precision.png")
+    return files
