@@ -146,7 +146,10 @@ def integration_options(scene, *, record: bool = False, period_tol: float | None
        no looser than ``period_tol`` where given (the Poincare-sample tolerance: integration
        error alone must not make a periodic point look not periodic).
     3. Otherwise the [integration] section as written (shooting and continuation without
-       their own rtol; an explicit [integration] rtol wins over the accuracy rule)."""
+       their own rtol; an explicit [integration] rtol wins over the accuracy rule).
+
+    With ``study``, the rtol so chosen is then held to the loosest the model can use
+    (:func:`within_limit`: measured, tightened with a note in summary.json)."""
     opts = _requested_options(scene, record, period_tol, section)
     return opts if study is None else within_limit(study, scene, opts)
 
