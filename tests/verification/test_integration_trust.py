@@ -198,3 +198,11 @@ def test_a_loose_rtol_is_tightened_to_the_measured_limit_with_a_note(tmp_path):
     assert note.startswith("rtol 0.1 tightened to ")
     used = summary["results"]["time_response"]["error_estimate"]["rtol"]
     assert used < 0.1 and f"tightened to {used:g}" in note
+
+
+def test_an_rtol_between_rungs_that_passes_is_kept():
+    """The rtol asked for is the probe's last rung: 3.9e-4 (the accuracy rule's, between the
+    rungs 3e-4 and 1e-3) passes on gear_pair and is kept, not rounded down to 3e-4."""
+    st = _study("gear_pair.toml")
+    lim = loosest_rtol(st.model, 4500.0, st.start(4500.0), up_to=3.9e-4)
+    assert lim.rtol == 3.9e-4 and lim.failed_rtol is None

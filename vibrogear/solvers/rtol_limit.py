@@ -71,8 +71,9 @@ def _run(model, param, u0, T, periods, rtol, base):
 def loosest_rtol(model: ReducedModel, param: float, u0, *, periods: int = 20,
                  accuracy: float = 1e-2, up_to: float = LADDER[-1],
                  options: IntegrationOptions = IntegrationOptions()) -> RtolLimit:
-    """Measure the loosest rtol of :data:`LADDER` (at most ``up_to``) that stays accurate
-    over ``periods`` excitation periods from ``u0`` at ``param`` (see the module doc)."""
+    """Measure the loosest rtol of :data:`LADDER` below ``up_to``, and ``up_to`` itself as
+    the last rung, that stays accurate over ``periods`` excitation periods from ``u0`` at
+    ``param`` (see the module doc)."""
     wall = time.perf_counter()
     base = {k: getattr(options, k) for k in ("max_steps", "max_events_per_step",
                                              "max_step_periods", "event_log", "max_error",
@@ -85,7 +86,7 @@ def loosest_rtol(model: ReducedModel, param: float, u0, *, periods: int = 20,
     lo, hi = ref.monitor_min, ref.monitor_max
     spread = max(hi - lo, 1e-3 * max(abs(lo), abs(hi)), 1e-300)
     best, failed, reason = None, None, ""
-    for rtol in (r for r in LADDER if r <= up_to):
+    for rtol in [r for r in LADDER if r < up_to] + [up_to]:   # the rtol asked for last
         tr = _run(model, param, u0, T, periods, rtol, base)
         err = max(abs(tr.monitor_min - lo), abs(tr.monitor_max - hi)) / spread
         if not tr.ok:
