@@ -40,15 +40,18 @@ def _text(path: Path) -> str | None:
     return data.decode("utf-8", errors="replace")
 
 
-def test_no_project_file_cites_outside_the_repository():
-    hits = []
-    for path in _files(PROJECT):
+def _lines(paths):
+    """(path, line number, line) of every text file among ``paths``."""
+    for path in paths:
         text = _text(path)
-        if text is None:
-            continue
-        for i, line in enumerate(text.splitlines(), 1):
-            if OUTSIDE.search(line):
-                hits.append(f"{path.relative_to(ROOT)}:{i}: {line.strip()[:100]}")
+        if text is not None:
+            for i, line in enumerate(text.splitlines(), 1):
+                yield path, i, line
+
+
+def test_no_project_file_cites_outside_the_repository():
+    hits = [f"{path.relative_to(ROOT)}:{i}: {line.strip()[:100]}"
+            for path, i, line in _lines(_files(PROJECT)) if OUTSIDE.search(line)]
     assert not hits, "cites outside the repository:\n" + "\n".join(hits)
 
 
@@ -60,15 +63,11 @@ _PATH = re.compile(r"(?<![\w/.<-])((?:vibrogear|tests|benchmarks|configs|docs|sc
 
 def test_cited_repository_paths_exist():
     missing = []
-    for path in _files(DOCS):
-        text = _text(path)
-        if text is None:
-            continue
-        for i, line in enumerate(text.splitlines(), 1):
-            for m in _PATH.finditer(line):
-                cited = m.group(1)
-                found = any(any(base.glob(cited)) if "*" in cited else (base / cited).exists()
-                            for base in (ROOT, ROOT / "vibrogear"))
-                if not found:
-                    missing.append(f"{path.relative_to(ROOT)}:{i}: {cited}")
+    for path, i, line in _lines(_files(DOCS)):
+        for m in _PATH.finditer(line):
+            cited = m.group(1)
+            found = any(any(base.glob(cited)) if "*" in cited else (base / cited).exists()
+                        for base in (ROOT, ROOT / "vibrogear"))
+            if not found:
+                missing.append(f"{path.relative_to(ROOT)}:{i}: {cited}")
     assert not missing, "cited paths that do not exist:\n" + "\n".join(missing)

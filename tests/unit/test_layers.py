@@ -58,10 +58,10 @@ def _exists(name: str) -> bool:
     return (ROOT / rel.with_suffix(".py")).is_file() or (ROOT / rel / "__init__.py").is_file()
 
 
-def _imports(name: str, path: Path) -> list[tuple[str, int]]:
-    """(imported vibrogear module, line) for every import statement of the module, the
-    relative ones resolved; ``from pkg import sub`` counts as an import of ``pkg.sub`` where
-    ``sub`` is a module, else of ``pkg``."""
+def _all_imports(name: str, path: Path) -> list[tuple[str, int]]:
+    """(imported module, line) for every import statement of the module, at module level or
+    inside a function, the relative ones resolved; ``from pkg import sub`` counts as an
+    import of ``pkg.sub`` where ``sub`` is a module of the package, else of ``pkg``."""
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out = []
     for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
@@ -77,7 +77,13 @@ def _imports(name: str, path: Path) -> list[tuple[str, int]]:
             for a in node.names:
                 sub = f"{target}.{a.name}"
                 out.append((sub if _exists(sub) else target, node.lineno))
-    return [(t, line) for t, line in out if t == "vibrogear" or t.startswith("vibrogear.")]
+    return out
+
+
+def _imports(name: str, path: Path) -> list[tuple[str, int]]:
+    """The imports of :func:`_all_imports` that are vibrogear modules."""
+    return [(t, line) for t, line in _all_imports(name, path)
+            if t == "vibrogear" or t.startswith("vibrogear.")]
 
 
 def _part(module: str) -> str:
@@ -203,3 +209,26 @@ def test_architecture_doc_names_every_module():
             if p.name != "__init__.py" or p.read_text().strip()}
     assert sorted(have - set(listed)) == [], "modules missing from docs/architecture.md"
     assert sorted(set(listed) - have) == [], "docs/architecture.md lists modules that do not exist"
+
+
+def _draws_or_writes(target: str) -> bool:
+    return target.split(".")[0] == "matplotlib" or target == "vibrogear.report" \
+        or target.startswith("vibrogear.report.")
+
+
+def test_analyses_compute_and_report_writes():
+    """No module in analyses/ imports matplotlib or report/ (inside functions included):
+    an analysis returns an AnalysisOutcome and its report writer writes the files."""
+    analyses = {n: p for n, p in _modules().items() if n.startswith("vibrogear.analyses.")}
+    assert len(analyses) > 10
+    bad = {n: [(t, line) for t, line in _all_imports(n, p) if _draws_or_writes(t)]
+           for n, p in analyses.items()}
+    assert not {n: b for n, b in bad.items() if b}
+
+
+def test_the_import_reader_sees_imports_inside_functions(tmp_path):
+    p = tmp_path / "x.py"
+    p.write_text("def f():\n    from ..report.figure import new_figure\n"
+                 "import matplotlib.pyplot as plt\n")
+    names = [t for t, _ in _all_imports("vibrogear.analyses.x", p) if _draws_or_writes(t)]
+    assert "vibrogear.report.figure" in names and "matplotlib.pyplot" in names

@@ -81,15 +81,17 @@ def test_two_stage_estimate_bounds_the_error_over_one_period():
 
 @pytest.mark.parametrize("rtol", [3e-2, 1e-1])
 def test_stiff_gear_pair_at_a_loose_rtol_is_not_ok(rtol):
-    """400 mesh periods at 5200 rpm (rattling): at rtol 1e-8 ok with 797 events; at loose
+    """400 mesh periods at 5200 rpm (rattling): at rtol 1e-8 ok with the events of rtol 1e-10; at loose
     tolerances the 57 kHz modes carry noise, the contact switches on it, and the run says so
     and names the tolerance to tighten."""
     st = _study("gear_pair.toml", STIFF)
     m, p = st.model, 5200.0
     span = 400 * m.excitation_period(p)
+    ref = integrate(m, p, st.start(p), 0.0, span, options=IntegrationOptions(rtol=1e-10,
+                                                                             atol=1e-16))
     good = integrate(m, p, st.start(p), 0.0, span, options=IntegrationOptions(rtol=1e-8,
                                                                               atol=1e-12))
-    assert good.ok and good.events == 797
+    assert good.ok and ref.ok and good.events == ref.events > 100      # it rattles
     bad = integrate(m, p, st.start(p), 0.0, span, options=IntegrationOptions(rtol=rtol,
                                                                              atol=1e-12))
     assert bad.status in (Status.INACCURATE, Status.DIVERGED)
@@ -101,7 +103,7 @@ def test_loosest_rtol_is_measured_and_holds_over_a_long_run():
     and extrema; the next rung up fails the probe."""
     st = _study("gear_pair.toml", STIFF)
     m, p = st.model, 5200.0
-    lim = loosest_rtol(m, p, st.start(p))
+    lim = loosest_rtol(m, p, st.start(p), options=IntegrationOptions(rtol=1e-6, atol=1e-12))
     assert lim.rtol is not None and lim.failed_rtol is not None and lim.failed_rtol > lim.rtol
     assert 1e-4 <= lim.rtol <= 1e-2
     span = 400 * m.excitation_period(p)
@@ -204,5 +206,6 @@ def test_an_rtol_between_rungs_that_passes_is_kept():
     """The rtol asked for is the probe's last rung: 3.9e-4 (the accuracy rule's, between the
     rungs 3e-4 and 1e-3) passes on gear_pair and is kept, not rounded down to 3e-4."""
     st = _study("gear_pair.toml")
-    lim = loosest_rtol(st.model, 4500.0, st.start(4500.0), up_to=3.9e-4)
+    lim = loosest_rtol(st.model, 4500.0, st.start(4500.0), up_to=3.9e-4,
+                       options=IntegrationOptions(rtol=1e-6, atol=1e-12))
     assert lim.rtol == 3.9e-4 and lim.failed_rtol is None

@@ -17,7 +17,7 @@ import numpy as np
 from ..models.rotor import build_rotor_model, master_modes
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
 from ..solvers.rotor_campbell import campbell_diagram
-from ..solvers.rotor_modes import modal_energy_share, rotor_modes
+from ..solvers.rotor_modes import MODE_TYPES, modal_energy_share, rotor_modes
 
 __all__ = ["run_modes", "run_campbell", "RotorModesResult", "RotorCampbellResult"]
 
@@ -25,11 +25,12 @@ __all__ = ["run_modes", "run_campbell", "RotorModesResult", "RotorCampbellResult
 @dataclass(frozen=True, eq=False)
 class RotorModesResult:
     """The rotor model, its modes at ``speed_rpm`` (``modes``), the master modes and their
-    modal energy shares (``master_share``), and the figure title."""
+    types by modal energy share (``master_types``: lateral / axial / torsional), and the
+    figure title."""
     model: Any
     modes: Any
     master: Any
-    master_share: np.ndarray
+    master_types: tuple[str, ...]
     title: str
 
 
@@ -55,7 +56,8 @@ def run_modes(scene, ctx) -> AnalysisOutcome:
     master = master_modes(model, count=mcount, cutoff_hz=mc.master_cutoff_hz)
     t_master = time.perf_counter() - t1
     result = RotorModesResult(model=model, modes=res, master=master,
-                              master_share=modal_energy_share(model, master.vectors),
+                              master_types=tuple(MODE_TYPES[i] for i in np.argmax(
+                                  modal_energy_share(model, master.vectors), axis=1)),
                               title=f"{scene.scene.name}: mode shapes at {mc.speed_rpm:g} rpm")
     summary = {
         "status": res.status, "message": res.message, "n_dofs": model.n_dofs,

@@ -10,18 +10,24 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..analyses.impact_report import SH_COLUMNS, WP_COLUMNS
+import numpy as np
+
 from .precision_plots import plot_shooting_precision, plot_work_precision, write_table
 
 __all__ = ["write"]
 
 
+def _columns(table: dict) -> tuple[str, ...]:
+    """The table's columns: its array entries, in their order (scalars are not columns)."""
+    return tuple(k for k, v in table.items() if np.ndim(v) == 1)
+
+
 def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
     out = Path(out)
-    files = {"work_precision_csv": str(write_table(out / "work_precision.csv", r.wp, WP_COLUMNS)),
+    files = {"work_precision_csv": str(write_table(out / "work_precision.csv", r.wp, _columns(r.wp))),
              "shooting_precision_csv": str(write_table(out / "shooting_precision.csv", r.sh,
-                                                       SH_COLUMNS))}
+                                                       _columns(r.sh)))}
     plot_work_precision(r.wp, r.slopes, out / "work_precision", title=r.wp_title)
     plot_shooting_precision(r.sh, out / "shooting_precision", title=r.sh_title)
     files["work_precision_png"] = str(out / "work_precision.png")

@@ -17,14 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_csv
-from ..solvers.rotor_modes import MODE_TYPES
 
 __all__ = ["write_modes", "write_campbell"]
 
 
 def write_modes(scene, outcome, out, previous=None) -> list[str]:
     r = outcome.result
-    res, master, model, share = r.modes, r.master, r.model, r.master_share
+    res, master, model = r.modes, r.master, r.model
     out = Path(out)
     atomic_write_csv(out / "modes.csv",
                      ["index", "frequency_hz", "damped_frequency_hz", "damping_ratio", "whirl",
@@ -36,7 +35,7 @@ def write_modes(scene, outcome, out, previous=None) -> list[str]:
                        *(f"{v:.4f}" for v in res.energy_share[i]), f"{res.residuals[i]:.2e}"]
                       for i in range(res.frequencies_hz.size)])
     atomic_write_csv(out / "master_modes.csv", ["index", "frequency_hz", "mode_type", "rigid_body"],
-                     [[i + 1, f"{f:.8g}", MODE_TYPES[int(np.argmax(share[i]))],
+                     [[i + 1, f"{f:.8g}", r.master_types[i],
                        int(i < master.n_rigid)] for i, f in enumerate(master.frequencies_hz)])
     buf = io.BytesIO()
     np.savez_compressed(buf, frequencies_hz=master.frequencies_hz, vectors=master.vectors,

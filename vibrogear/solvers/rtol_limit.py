@@ -35,8 +35,6 @@ __all__ = ["RtolLimit", "loosest_rtol", "LADDER", "REFERENCE_RTOL"]
 #: the tolerances tried, tight to loose
 LADDER = (1e-8, 1e-7, 1e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1)
 REFERENCE_RTOL = 1e-10
-#: atol / rtol on every rung (as the accuracy rule's)
-ATOL_PER_RTOL = 1e-6
 
 
 @dataclass(frozen=True)
@@ -63,8 +61,8 @@ def periods_text(n: int) -> str:
     return f"{n} excitation period" + ("s" if n != 1 else "")
 
 
-def _run(model, param, u0, T, periods, rtol, base):
-    opts = IntegrationOptions(**{**base, "rtol": rtol, "atol": ATOL_PER_RTOL * rtol})
+def _run(model, param, u0, T, periods, rtol, base, atol_per_rtol):
+    opts = IntegrationOptions(**{**base, "rtol": rtol, "atol": atol_per_rtol * rtol})
     return integrate(model, param, u0, 0.0, periods * T, options=opts)
 
 
@@ -73,13 +71,14 @@ def loosest_rtol(model: ReducedModel, param: float, u0, *, periods: int = 20,
                  options: IntegrationOptions = IntegrationOptions()) -> RtolLimit:
     """Measure the loosest rtol of :data:`LADDER` below ``up_to``, and ``up_to`` itself as
     the last rung, that stays accurate over ``periods`` excitation periods from ``u0`` at
-    ``param`` (see the module doc)."""
+    ``param`` (see the module doc); atol / rtol on every rung is that of ``options``."""
     wall = time.perf_counter()
     base = {k: getattr(options, k) for k in ("max_steps", "max_events_per_step",
                                              "max_step_periods", "event_log", "max_error",
                                              "max_deformation", "max_events_per_period")}
     T = model.excitation_period(param)
-    ref = _run(model, param, u0, T, periods, REFERENCE_RTOL, base)
+    per = options.atol / options.rtol        # every rung keeps the ratio asked for
+    ref = _run(model, param, u0, T, periods, REFERENCE_RTOL, base, per)
     if not ref.ok:
         return RtolLimit(None, param, periods, REFERENCE_RTOL, f"reference: {ref.message}",
                          time.perf_counter() - wall)
@@ -87,7 +86,7 @@ def loosest_rtol(model: ReducedModel, param: float, u0, *, periods: int = 20,
     spread = max(hi - lo, 1e-3 * max(abs(lo), abs(hi)), 1e-300)
     best, failed, reason = None, None, ""
     for rtol in [r for r in LADDER if r < up_to] + [up_to]:   # the rtol asked for last
-        tr = _run(model, param, u0, T, periods, rtol, base)
+        tr = _run(model, param, u0, T, periods, rtol, base, per)
         err = max(abs(tr.monitor_min - lo), abs(tr.monitor_max - hi)) / spread
         if not tr.ok:
             failed, reason = rtol, tr.status.text
