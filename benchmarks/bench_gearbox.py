@@ -2,7 +2,7 @@
 
 Four configurations of configs/two_stage.toml: reduction level ``count`` (the scene's
 master counts, m = 162) or ``frequency`` (gearbox.master_modes = "frequency": shaft modes up
-to 2x the highest excitation frequency, static correction; vibrogear.models.master_level)
+to 2x the highest excitation frequency, static correction; vibrogear.models.gearbox.master_level)
 x tolerance ``rtol 1e-6`` (the scene's) or ``accuracy 1e-3`` (the rule of
 vibrogear.analyses.study.tolerances_for: the rtol calibrated to deliver an error of 1e-3 of
 the mesh deformation's range).  For each:
@@ -43,7 +43,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path[:0] = [str(ROOT), str(HERE)]
 
-from vibrogear.solvers.kernels import accel, contact_modes  # noqa: E402
+from vibrogear.solvers.integrator.kernels import accel, contact_modes  # noqa: E402
 
 SCENE = ROOT / "configs" / "two_stage.toml"
 PERIODS, RECORD = 200, 32
@@ -52,7 +52,7 @@ PERIODS, RECORD = 200, 32
 def two_stage_case(n: int = 700, level: str = "count"):
     """(ReducedModel, static state at the first speed, speeds) of configs/two_stage.toml."""
     from vibrogear.config import load_scene
-    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.models.gearbox.model import build_gearbox
     from vibrogear.solvers.static import static_equilibrium
 
     scene = load_scene(SCENE)
@@ -67,7 +67,7 @@ def two_stage_short_case(n: int = 3):
     (frequency criterion, m = 146) at 2400 rpm: the equal-accuracy ladder of
     bench_gearbox_integrator.py on a window short enough that the chaotic rattle has not
     yet diverged (``--periods 4 --record-periods 2``)."""
-    from vibrogear.solvers.integrate import IntegrationOptions, integrate
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 
     gm, u0, _ = two_stage_case(3, "frequency")
     model = gm.reduced
@@ -83,7 +83,7 @@ def gear_pair_case(n: int = 3):
     points: the equal-accuracy ladder of bench_gearbox_integrator.py --model
     bench_gearbox:gear_pair_case)."""
     from vibrogear.config import load_scene
-    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.models.gearbox.model import build_gearbox
     from vibrogear.solvers.static import static_equilibrium
 
     scene = load_scene(ROOT / "configs" / "gear_pair.toml")
@@ -94,7 +94,7 @@ def gear_pair_case(n: int = 3):
 
 def _opts(rtol):
     from vibrogear.analyses.study import ATOL_PER_RTOL
-    from vibrogear.solvers.integrate import IntegrationOptions
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions
     return IntegrationOptions(rtol=rtol, atol=ATOL_PER_RTOL * rtol, max_steps=50_000_000)
 
 
@@ -103,8 +103,8 @@ def _point(model, p, u0, rtol, window, ref_delta):
     from scipy.integrate import solve_ivp
     from scipy_baseline import dense_rhs, monitored_deformation
 
-    from vibrogear.solvers.contact_eval import contact_history
-    from vibrogear.solvers.integrate import integrate
+    from vibrogear.solvers.integrator.contact_eval import contact_history
+    from vibrogear.solvers.integrator.integrate import integrate
 
     T = model.excitation_period(p)
     te = np.linspace(0.0, window * T, 32 * window + 1)
@@ -133,8 +133,8 @@ def _point(model, p, u0, rtol, window, ref_delta):
 
 
 def _reference(model, p, u0, window):
-    from vibrogear.solvers.contact_eval import contact_history
-    from vibrogear.solvers.integrate import integrate
+    from vibrogear.solvers.integrator.contact_eval import contact_history
+    from vibrogear.solvers.integrator.integrate import integrate
 
     T = model.excitation_period(p)
     te = np.linspace(0.0, window * T, 32 * window + 1)
@@ -172,8 +172,8 @@ def _children_cpu() -> float:
 
 def _rhs_us(model, p, u0, calls=100_000):
     """us per right-hand side in isolation (compiled driver, states along 10 periods)."""
-    from vibrogear.solvers.integrate import integrate
-    from vibrogear.solvers.kernels import model_arrays
+    from vibrogear.solvers.integrator.integrate import integrate
+    from vibrogear.solvers.integrator.kernels import model_arrays
 
     T = model.excitation_period(p)
     tr = integrate(model, p, u0, 0.0, 10 * T, t_eval=np.linspace(0.0, 10 * T, 997),
@@ -195,15 +195,15 @@ def _orbit(model, p, u0):
     continuation runs it), integrate with each Jacobian action and without the variational
     equations, best of 3, in one run (one BLAS thread)."""
     from vibrogear.pipeline.executors import blas_threads
-    from vibrogear.solvers.split_flow import ColumnSplit
+    from vibrogear.solvers.integrator.split_flow import ColumnSplit
 
     with blas_threads(1), ColumnSplit(model) as split:
         return _orbit_runs(model, p, u0, split)
 
 
 def _orbit_runs(model, p, u0, split):
-    from vibrogear.solvers.integrate import IntegrationOptions, integrate
-    from vibrogear.solvers.shooting import periodic_flow
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+    from vibrogear.solvers.periodic.shooting import periodic_flow
 
     o = IntegrationOptions(rtol=1e-8, atol=1e-14)
     T = model.excitation_period(p)
@@ -232,7 +232,7 @@ import sys, time
 t0 = time.perf_counter()
 sys.path[:0] = sys.argv[1:3]
 from bench_gearbox import gear_pair_case
-from vibrogear.solvers.integrate import integrate
+from vibrogear.solvers.integrator.integrate import integrate
 model, u0, params = gear_pair_case(3)
 T = model.excitation_period(params[1])
 t1 = time.perf_counter()
@@ -309,8 +309,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/bench_gearbox.json"))
     a = ap.parse_args(argv)
     from vibrogear.analyses.study import tolerances_for
-    from vibrogear.solvers.integrate import integrate
-    from vibrogear.solvers.sweep import sweep
+    from vibrogear.solvers.integrator.integrate import integrate
+    from vibrogear.solvers.sequential.sweep import sweep
 
     rule = tolerances_for(a.accuracy)[0]
     res = {"speeds": a.speeds, "periods_per_speed": PERIODS, "accuracy": a.accuracy,

@@ -42,7 +42,7 @@ sys.path[:0] = [str(ROOT), str(HERE)]
 from bench_integrator import code_version  # noqa: E402
 from scipy_baseline import dense_rhs, solve_points_scipy  # noqa: E402
 
-from vibrogear.solvers.integrate import IntegrationOptions, integrate  # noqa: E402
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate  # noqa: E402
 
 LADDER = (1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7)
 DOPRI5_STABILITY = 3.3   # |h lambda| on the imaginary axis inside DOPRI5's stability region

@@ -27,8 +27,8 @@ from numba import njit  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from vibrogear.solvers.integrate import IntegrationOptions, integrate  # noqa: E402
-from vibrogear.solvers.kernels import accel, contact_modes, model_arrays  # noqa: E402
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate  # noqa: E402
+from vibrogear.solvers.integrator.kernels import accel, contact_modes, model_arrays  # noqa: E402
 
 
 @njit(cache=True)

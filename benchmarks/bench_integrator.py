@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel  # noqa: E402
-from vibrogear.solvers.integrate import IntegrationOptions, integrate  # noqa: E402
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate  # noqa: E402
 
 F_MESH = 800.0            # Hz
 TOL_LADDER = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 3e-6, 1e-6, 3e-7, 1e-7, 3e-8, 1e-8)
@@ -183,8 +183,8 @@ def code_version() -> dict:
                                   timeout=10).stdout.strip()
         except (OSError, subprocess.SubprocessError):
             return ""
-    dirty = git("status", "--porcelain", "--", "vibrogear/solvers/dopri.py",
-                "vibrogear/solvers/kernels.py", "vibrogear/solvers/integrate.py")
+    dirty = git("status", "--porcelain", "--", "vibrogear/solvers/integrator/dopri.py",
+                "vibrogear/solvers/integrator/kernels.py", "vibrogear/solvers/integrator/integrate.py")
     return {"head": git("rev-parse", "--short", "HEAD"), "solver_sources_modified": bool(dirty)}
 
 

@@ -1,7 +1,7 @@
 """Cost of the Lyapunov evidence: a two-stage sweep point with and without it (issue 10's
 target: the exponent costs at most 1.5x the point without it).
 
-Each speed's point is run by :func:`vibrogear.solvers.sweep_point.run_point` from the same
+Each speed's point is run by :func:`vibrogear.solvers.sequential.sweep_point.run_point` from the same
 settled state twice, ``lyapunov=True`` and ``False``, at the demo sweep's settings and
 tolerance (the accuracy rule); both in this run, alternating, best of ``--repeats``.  The
 exponent is computed only where the record has no period, so the ratio is reported per point
@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
-from vibrogear.solvers.motion import MOTION_LEGEND  # noqa: E402
-from vibrogear.solvers.sweep_point import run_point  # noqa: E402
+from vibrogear.solvers.sequential.motion import MOTION_LEGEND  # noqa: E402
+from vibrogear.solvers.sequential.sweep_point import run_point  # noqa: E402
 
 
 def main() -> None:

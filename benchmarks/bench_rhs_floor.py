@@ -4,7 +4,7 @@ multiply-add floor, measured on this machine in one run (issue 11 item 4).
 Three compiled drivers on the same states (sampled along 10 periods of the settled
 rattle, m = 146, frequency level), best of ``--repeats`` CPU times per call:
 
-* ``rhs``: the full right-hand side (:func:`vibrogear.solvers.kernels.accel`, through
+* ``rhs``: the full right-hand side (:func:`vibrogear.solvers.integrator.kernels.accel`, through
   bench_gearbox's driver);
 * ``linear_algebra``: its multiply-adds alone, through the same compiled helpers on the
   same arrays: the modal diagonal, the projections c_j . x, c_j . v of every row of G,
@@ -39,7 +39,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path[:0] = [str(ROOT), str(HERE)]
 
-from vibrogear.solvers.kernels import (FAST, contact_modes, project_coupling,  # noqa: E402
+from vibrogear.solvers.integrator.kernels import (FAST, contact_modes, project_coupling,  # noqa: E402
                                        row_axpy, rows_project, scatter_coupling)
 
 
@@ -117,8 +117,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", default=str(ROOT / "benchmarks/results/bench_rhs_floor.json"))
     a = ap.parse_args(argv)
     from bench_gearbox import _drive_rhs, two_stage_short_case
-    from vibrogear.solvers.integrate import IntegrationOptions, integrate
-    from vibrogear.solvers.kernels import model_arrays
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+    from vibrogear.solvers.integrator.kernels import model_arrays
 
     model, u, params = two_stage_short_case(1)
     p = float(params[0])

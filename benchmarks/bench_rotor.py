@@ -15,8 +15,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 from rotor_fixtures import friswell_two_disc, rotor_from_dict  # noqa: E402
 
-from vibrogear.solvers.rotor_campbell import campbell_diagram  # noqa: E402
-from vibrogear.solvers.rotor_modes import rotor_modes  # noqa: E402
+from vibrogear.solvers.rotor.campbell import campbell_diagram  # noqa: E402
+from vibrogear.solvers.rotor.modes import rotor_modes  # noqa: E402
 
 
 def best_of(fn, repeat=5):

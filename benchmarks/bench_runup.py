@@ -30,8 +30,8 @@ from vibrogear.analyses import runup  # noqa: E402
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.pipeline.outcome import RunContext  # noqa: E402
-from vibrogear.solvers.integrate import integrate  # noqa: E402
-from vibrogear.solvers.ramp import SpeedProfile, ramp  # noqa: E402
+from vibrogear.solvers.integrator.integrate import integrate  # noqa: E402
+from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp  # noqa: E402
 
 TARGET_S = 30.0
 

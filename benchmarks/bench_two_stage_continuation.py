@@ -1,10 +1,10 @@
 """Two-stage gearbox continuation (configs/two_stage.toml, 1500-3000 rpm, start at 3000 rpm,
 Floquet multipliers and LP / PD / NS location included; target: the whole branch <= 120 s
 on 2 cores).  In one run: the first ``N_RATIO`` points with the tangent's columns
-integrated in this process alone and split over two processes (solvers/split_flow.py),
+integrated in this process alone and split over two processes (solvers/integrator/split_flow.py),
 their ratio, then the whole branch as the scene runs it (split, quasi-Newton corrector).
 ``--exact``: also the first points with the exact Newton corrector (every iterate an orbit
-with the variational equations) against the quasi-Newton corrector (solvers/corrector.py).
+with the variational equations) against the quasi-Newton corrector (solvers/periodic/corrector.py).
 
 Run: .venv/bin/python benchmarks/bench_two_stage_continuation.py [--exact]   (never run by
 the tests)
@@ -28,7 +28,7 @@ import numpy as np  # noqa: E402
 from vibrogear.analyses.continuation import starting_orbit  # noqa: E402
 from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config.scene import load_scene  # noqa: E402
-from vibrogear.solvers.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
+from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
                                             continuation)
 
 TARGET_S = 120.0

@@ -38,8 +38,8 @@ RTOLS = [1e-3, 3e-4, 1e-4, 3e-5, 1e-5, 1e-6, 1e-7, 1e-8]
 def point_errors(model, rpm, u0, transient, record, rtols, atol_per_rtol, spp=32):
     """(errors per rtol, steps per mesh period per rtol, stroboscopic spread of the last 8
     reference periods / range, range of delta_ref)."""
-    from vibrogear.solvers.contact_eval import contact_history
-    from vibrogear.solvers.integrate import IntegrationOptions, integrate
+    from vibrogear.solvers.integrator.contact_eval import contact_history
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 
     T = model.excitation_period(rpm)
     n1 = transient + record
@@ -72,7 +72,7 @@ def main(argv=None) -> dict:
     a = ap.parse_args(argv)
     from vibrogear.analyses.study import ACCURACY_RULE, ATOL_PER_RTOL, tolerances_for
     from vibrogear.config import load_scene
-    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.models.gearbox.model import build_gearbox
     from vibrogear.solvers.static import static_equilibrium
 
     rows = []

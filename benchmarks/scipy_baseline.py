@@ -7,7 +7,7 @@ into a dense first-order matrix
     A = [[0, I], [-(W + P^T Kc(s) P), -(D + P^T Bc(s) P)]]      (2m x 2m, numpy)
 
 and every contact evaluated vectorised in numpy on dense (nc, m) directions with the laws
-of :func:`vibrogear.solvers.kernels.accel` (dead zones, one-sided contacts, exponents,
+of :func:`vibrogear.solvers.integrator.kernels.accel` (dead zones, one-sided contacts, exponents,
 damping only in contact, mesh-stiffness and transmission-error harmonics, harmonic
 forcing).  The contact mode is the sign of delta - gap at the evaluated state (the
 compiled loop carries it as an input and switches it at located events; at any state

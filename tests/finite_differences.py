@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vibrogear.solvers.shooting import periodic_flow
+from vibrogear.solvers.periodic.shooting import periodic_flow
 
 __all__ = ["fd_shooting_jacobian"]
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from vibrogear.config.base import build
 from vibrogear.config.rotor import RotorConfig
-from vibrogear.models.rotor import build_rotor_model
+from vibrogear.models.rotor.model import build_rotor_model
 
 #: Friswell et al. (2010) steel: E = 211 GN/m^2, G = 81.2 GN/m^2, rho = 7810 kg/m^3
 FRISWELL_STEEL = {"E": 211e9, "G": 81.2e9, "rho": 7810.0}

@@ -11,13 +11,14 @@ import argparse
 import sys
 from pathlib import Path
 
+from .config.verbs import VERBS
+
 __all__ = ["main", "EXIT_OK", "EXIT_FAILED", "EXIT_INPUT", "EXIT_INTERRUPTED"]
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
-SINGLE = {"sweep": "sweep", "continue": "continuation", "report": "report",
-          "modes": "modes", "campbell": "campbell", "time": "time_response", "map": "map",
-          "nvh": "nvh", "runup": "runup"}
+#: ``vibrogear COMMAND SCENE`` -> the one analysis it runs (from the verb registry)
+SINGLE = {v.command: v.name for v in VERBS.values() if v.command}
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -26,7 +27,7 @@ def _parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True)
     for name, helptext in [("run", "run the scene's analyses"), ("check", "validate the scene "
                             "(and the output folder) only"),
-                           *[(k, f"run only the {v} analysis") for k, v in SINGLE.items()]]:
+                           *[(k, f"run only the {v} analysis: {VERBS[v].help}") for k, v in SINGLE.items()]]:
         sp = sub.add_parser(name, help=helptext)
         sp.add_argument("scene", help="scene TOML file")
         sp.add_argument("--set", dest="overrides", action="append", default=[],

@@ -21,6 +21,7 @@ from typing import Any, Callable
 
 from . import __version__
 from .config import Scene
+from .config.verbs import VERBS
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from .report.html_report import write_html_report
@@ -39,31 +40,10 @@ class Entry:
     study: bool = False
 
 
-_V = "vibrogear.analyses"
-_R = "vibrogear.report"
+#: (model kind, analysis) -> Entry, from the one verb registry (config/verbs.py)
 ANALYSIS_TABLE: dict[tuple[str, str], Entry] = {
-    ("impact_pair", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
-    ("impact_pair", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
-    ("impact_pair", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
-    ("impact_pair", "report"): Entry(f"{_V}.impact_report:run_report", f"{_R}.precision_report:write"),
-    ("impact_pair", "critical_damping"): Entry(f"{_V}.critical_damping:run_critical_damping",
-                                                 f"{_R}.critical_damping_report:write"),
-    ("gearbox", "modes"): Entry(f"{_V}.gearbox_modes:run", f"{_R}.gearbox_modes_report:write", True),
-    ("gearbox", "time_response"): Entry(f"{_V}.time_response:run", f"{_R}.time_report:write", True),
-    ("gearbox", "sweep"): Entry(f"{_V}.sweep:run", f"{_R}.sweep_report:write", True),
-    ("gearbox", "continuation"): Entry(f"{_V}.continuation:run", f"{_R}.branch_report:write", True),
-    ("gearbox", "reduction_accuracy"): Entry(f"{_V}.reduction_accuracy:run_reduction_accuracy",
-                                                 f"{_R}.reduction_report:write", True),
-    ("gearbox", "nvh"): Entry(f"{_V}.nvh:run", f"{_R}.nvh_report:write", True),
-    ("gearbox", "map"): Entry(f"{_V}.operating_map:run", f"{_R}.map_report:write", True),
-    ("gearbox", "runup"): Entry(f"{_V}.runup:run", f"{_R}.runup_report:write", True),
-    ("rotor", "modes"): Entry(f"{_V}.rotor:run_modes", f"{_R}.rotor_report:write_modes"),
-    ("rotor", "campbell"): Entry(f"{_V}.rotor:run_campbell", f"{_R}.rotor_report:write_campbell"),
-    ("housing", "modes"): Entry(f"{_V}.housing:run_modes", f"{_R}.housing_report:write_modes"),
-    ("housing", "housing_sweep"): Entry(f"{_V}.housing_sweep:run_sweep", f"{_R}.housing_report:write_sweep"),
-    ("housing", "housing_convergence"): Entry(f"{_V}.housing_study:run_convergence",
-                                                    f"{_R}.housing_report:write_convergence"),
-}
+    (kind, name): Entry(f"vibrogear.analyses.{run.analysis}", f"vibrogear.report.{run.report}", run.study)
+    for name, verb in VERBS.items() for kind, run in verb.runs.items()}
 
 
 def _load(target: str) -> Callable:

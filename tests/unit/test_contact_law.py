@@ -164,7 +164,7 @@ def _one_mode_model(p, damping):
 def test_compiled_rhs_runs_the_law(p, damping):
     """accel's acceleration = forcing - d v - w2 x - f(delta, delta'; mu(t)) with f, mu, e
     from the numpy side (evaluate_set, harmonic_series), on every branch."""
-    from vibrogear.solvers.kernels import accel, model_arrays
+    from vibrogear.solvers.integrator.kernels import accel, model_arrays
 
     model = _one_mode_model(p, damping)
     ct = model.contacts

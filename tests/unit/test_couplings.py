@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from vibrogear.models.contact_law import evaluate, harmonic_series
-from vibrogear.models.couplings import (bearing_contact_parameters, bearing_geometry,
+from vibrogear.models.gearbox.couplings import (bearing_contact_parameters, bearing_geometry,
                                         gear_mesh_geometry, mesh_contact_parameters)
 
 RA, RB = 0.05, 0.08

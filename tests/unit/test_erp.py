@@ -95,7 +95,7 @@ def small_modes(tmp_path_factory):
     old = os.environ.get("VIBROGEAR_CACHE_DIR")
     os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
     try:
-        from vibrogear.models.housing_run import housing_modes
+        from vibrogear.models.housing.run import housing_modes
         scene = load_scene(SMALL)
         yield scene.housing, housing_modes(scene.housing)
     finally:
@@ -165,8 +165,8 @@ def test_old_cache_layout_is_not_misread(small_modes, tmp_path):
     """An entry of the older layout (modes.npz without the surface arrays) fails to load, so
     the cache discards and rebuilds it (and its key differs from the new layout's anyway)."""
     from vibrogear.cache import cache_key
-    from vibrogear.models.housing_result import load_modes, save_modes
-    from vibrogear.models.housing_run import housing_cache_key
+    from vibrogear.models.housing.result import load_modes, save_modes
+    from vibrogear.models.housing.run import housing_cache_key
 
     cfg, hm = small_modes
     assert housing_cache_key(cfg, "modes") != cache_key("housing-modes", cfg.key_data())
@@ -184,7 +184,7 @@ def test_surface_map_takes_the_housing_coordinates(small_modes):
     from types import SimpleNamespace
 
     from vibrogear.analyses.housing_surface import surface_map
-    from vibrogear.models.synthesis import Subsystem
+    from vibrogear.models.gearbox.synthesis import Subsystem
 
     _, hm = small_modes
     shaft = Subsystem(name="s", kind="shaft", n_dofs=12, freqs_hz=np.arange(1.0, 6.0),

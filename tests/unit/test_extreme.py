@@ -9,13 +9,14 @@ import pytest
 
 from vibrogear.cli import main
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.shooting import shoot
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.periodic.shooting import shoot
 from vibrogear.solvers.status import Status
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.verification.impact_exact import ImpactParams, linear_frf, periodic_orbit
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 
@@ -26,8 +27,7 @@ def _against_exact(par, omega, guess=None, n_periods=1):
     ex = periodic_orbit(ip, omega, guess, n_periods=n_periods)
     assert ex.converged
     model = impact_pair_model(**par)
-    sh = shoot(model, omega, ex.u0 * (1 + 1e-3) + 1e-3, n_periods=n_periods, options=OPT,
-               tol=1e-11)
+    sh = shoot(model, omega, ex.u0 * (1 + 1e-3) + 1e-3, n_periods=n_periods, options=OPT, shooting=ShootingOptions(tol=1e-11))
     assert sh.converged, sh.message
     assert np.max(np.abs(sh.u0 - ex.u0)) < 1e-6 * (1 + np.max(np.abs(ex.u0)))
     assert np.max(np.abs(np.sort_complex(sh.floquet) - np.sort_complex(ex.floquet))) < 1e-6
@@ -62,7 +62,7 @@ def test_tiny_clearance_is_the_linear_system():
     model = impact_pair_model(**par)
     for om in (0.5, 1.2):
         warm = integrate(model, om, np.zeros(2), 0.0, 200 * 2 * np.pi / om, options=OPT)
-        sh = shoot(model, om, warm.u_end, options=OPT, tol=1e-11)
+        sh = shoot(model, om, warm.u_end, options=OPT, shooting=ShootingOptions(tol=1e-11))
         assert sh.converged
         amp = 0.5 * (sh.monitor_max - sh.monitor_min)
         _, ref = linear_frf(par["zeta"], 1.0, 0.0, par["f_p"], om)

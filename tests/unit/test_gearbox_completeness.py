@@ -14,7 +14,7 @@ import scipy.linalg as sla
 
 from vibrogear.config import ConfigError
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.models.gearbox import build_gearbox
+from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.solvers.linear import linear_modes, tangent_matrices
 from vibrogear.solvers.static import static_equilibrium
 

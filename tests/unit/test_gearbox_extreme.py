@@ -13,7 +13,7 @@ import pytest
 
 from vibrogear.cli import main
 from vibrogear.config import load_scene
-from vibrogear.models.gearbox import build_gearbox
+from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.solvers.static import static_equilibrium
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -18,10 +18,10 @@ from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.pipeline.validate import validate_scene
 from vibrogear.models.contact_law import evaluate, harmonic_series
-from vibrogear.models.couplings import gear_mesh_geometry, mesh_contact_parameters
-from vibrogear.models.gearbox import RPM, build_gearbox, housing_to_rotor
-from vibrogear.models.synthesis import subsystem_offsets
-from vibrogear.solvers.contact_eval import contact_history
+from vibrogear.models.gearbox.couplings import gear_mesh_geometry, mesh_contact_parameters
+from vibrogear.models.gearbox.model import RPM, build_gearbox, housing_to_rotor
+from vibrogear.models.gearbox.synthesis import subsystem_offsets
+from vibrogear.solvers.integrator.contact_eval import contact_history
 from vibrogear.solvers.static import static_equilibrium
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -120,7 +120,7 @@ def _reduced_undamped_hz(gm, x0):
 
 def test_all_shaft_modes_kept_is_the_full_model(scene):
     from vibrogear.analyses.reduction_accuracy import full_linear_model, reduced_linear_modes
-    from vibrogear.models.full_linear import lowest_modes_full
+    from vibrogear.models.gearbox.full_linear import lowest_modes_full
 
     n = tuple(r.n_dofs for r in build_gearbox(scene).rotors)
     gm = build_gearbox(scene, master_counts=n)
@@ -223,7 +223,7 @@ def _physical_mesh_forces(gm, cfg, x, v, tau, rpm):
 def _kernel_contact_accel(model, rpm, tau, x, v):
     """Contact part of the compiled right-hand side: accel(contact modes from the sign of
     the deformations) - accel(every contact in its dead zone)."""
-    from vibrogear.solvers.kernels import accel, contact_modes, model_arrays
+    from vibrogear.solvers.integrator.kernels import accel, contact_modes, model_arrays
 
     A, Om = model_arrays(model, rpm)[:2]
     m, nc, H = model.n_modes, model.contacts.count, model.n_harmonics

@@ -215,7 +215,7 @@ def _modal_cfg(path, **kw):
 def test_modal_npz_modal_mass_and_units(tmp_path):
     """Modes with modal masses mu_i are divided by sqrt(mu_i); a millimetre file's lengths
     (points and mode values, mass in kg) are multiplied by 1e-3."""
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
 
     mu = np.array([4.0, 1.0, 9.0])
     d = _modal_npz(tmp_path / "m.npz", modal_mass=mu)
@@ -253,7 +253,7 @@ def test_modal_bad_data_exit_2_naming_the_file(tmp_path, capsys, freqs, kw, word
 
 
 def test_modal_unit_maximum_normalisation_is_refused(tmp_path):
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
 
     d = _modal_npz(tmp_path / "m.npz")
     v = d["bore_values"] / np.abs(d["bore_values"]).max(axis=(0, 1, 2))
@@ -265,8 +265,8 @@ def test_modal_unit_maximum_normalisation_is_refused(tmp_path):
 def test_modal_csv_layout_and_config_check(tmp_path):
     """The CSV layout round-trips the NPZ data (repr floats: exact); a config bore off the
     file's bore line or with another rolling-element count is named."""
-    from vibrogear.models.housing_modal import write_modes_csv
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.modal import write_modes_csv
+    from vibrogear.models.housing.run import housing_modes
 
     _modal_npz(tmp_path / "m.npz")
     a = housing_modes(_modal_cfg(tmp_path / "m.npz"))
@@ -288,7 +288,7 @@ def test_modal_csv_layout_and_config_check(tmp_path):
 def test_modal_uff_without_modes_names_dataset_58(tmp_path):
     import pyuff
 
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
 
     f = tmp_path / "frf.unv"
     d = pyuff.prepare_58(binary=0, id1="frf", func_type=4, rsp_node=1, rsp_dir=1, ref_node=1, ref_dir=1,
@@ -306,7 +306,7 @@ def test_modal_uff_dataset_55_round_trip(tmp_path):
     the precision of the UFF fields, modal masses 4 and 9 divide the modes by 2 and 3."""
     import pyuff
 
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
 
     d = _modal_npz(tmp_path / "m.npz")
     pts = d["bore_points"].reshape(-1, 3)

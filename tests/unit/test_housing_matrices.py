@@ -16,7 +16,7 @@ import scipy.sparse.linalg as spla
 from vibrogear.config import load_scene
 from vibrogear.config.base import as_data, build
 from vibrogear.config.housing import HousingConfig
-from vibrogear.models.full_linear import mac_matrix
+from vibrogear.models.gearbox.full_linear import mac_matrix
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"
@@ -47,7 +47,7 @@ def cache(tmp_path_factory):
 
 def _check(cfg, n_modes: int):
     """Full matrices vs master modes of ``cfg``: frequencies, bore values, bore-centre values."""
-    from vibrogear.models.housing_run import housing_matrices, housing_modes
+    from vibrogear.models.housing.run import housing_matrices, housing_modes
     modes, mats = housing_modes(cfg), housing_matrices(cfg)
     N = mats.n_dofs
     B, P = modes.bore_values.shape[:2]
@@ -92,7 +92,7 @@ def test_full_matrices_reproduce_master_modes_and_bore_values(cache):
 _LOAD = r"""
 import json, sys, time
 from vibrogear.config import load_scene
-from vibrogear.models.housing_run import housing_matrices
+from vibrogear.models.housing.run import housing_matrices
 t = time.perf_counter()
 m = housing_matrices(load_scene(sys.argv[1]).housing)
 print(json.dumps({"cached": m.cached, "dolfinx": "dolfinx" in sys.modules, "gmsh": "gmsh" in sys.modules,
@@ -101,7 +101,7 @@ print(json.dumps({"cached": m.cached, "dolfinx": "dolfinx" in sys.modules, "gmsh
 
 
 def test_second_call_is_a_cache_load_without_fe_work(cache):
-    from vibrogear.models.housing_run import housing_cache_keys, housing_matrices
+    from vibrogear.models.housing.run import housing_cache_keys, housing_matrices
     first = housing_matrices(_cfg())                        # computed by the test above or now
     again = housing_matrices(_cfg())
     assert again.cached and "cache_load" in again.timings
@@ -119,7 +119,7 @@ def test_second_call_is_a_cache_load_without_fe_work(cache):
 
 
 def test_refuses_under_mpi(monkeypatch):
-    from vibrogear.models.housing_run import housing_matrices
+    from vibrogear.models.housing.run import housing_matrices
     monkeypatch.setenv("OMPI_COMM_WORLD_SIZE", "2")
     with pytest.raises(RuntimeError, match="serial"):
         housing_matrices(_cfg())

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from vibrogear.config import load_scene
-from vibrogear.models.gearbox import build_gearbox
-from vibrogear.solvers.kernel_pack import _model_arrays, model_arrays
+from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.solvers.integrator.kernel_pack import _model_arrays, model_arrays
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"
 

@@ -14,7 +14,7 @@ from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.options import SweepOptions
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.sequential.sweep import sweep
 
 GEAR_PAIR = str(Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml")
 #: a short sweep: enough for the gear pair's period-1 points to settle on the map
@@ -85,7 +85,7 @@ def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
     # the largest mesh force, sampled 32 times per period: from below, within 2 %, of the
     # same period sampled 1024 times (the orbit is periodic: one period is all of it)
     from vibrogear.analyses.operating_map import _max_mesh_force
-    from vibrogear.solvers.motion import contact_groups
+    from vibrogear.solvers.sequential.motion import contact_groups
     model = ls.model_at(study.model, s)
     mesh = {"G1": contact_groups(model)["G1"][1]}
     for k in np.flatnonzero(per):

@@ -13,8 +13,8 @@ import pytest
 
 from vibrogear.cli import main
 from vibrogear.config import load_scene
-from vibrogear.models.rotor import build_rotor_model
-from vibrogear.solvers.rotor_modes import rotor_modes
+from vibrogear.models.rotor.model import build_rotor_model
+from vibrogear.solvers.rotor.modes import rotor_modes
 
 ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = str(ROOT / "configs" / "gear_pair.toml")

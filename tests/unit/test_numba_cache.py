@@ -7,7 +7,7 @@ from pathlib import Path
 
 from vibrogear.models import numba_cache
 from vibrogear.models.contact_law import contact_force
-from vibrogear.solvers import dopri, kernels
+from vibrogear.solvers.integrator import dopri, kernels
 
 
 def _locator(dispatcher):

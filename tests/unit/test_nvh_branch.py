@@ -16,8 +16,8 @@ from vibrogear.analyses.study import build_study, integration_options
 from vibrogear.config import load_scene
 from vibrogear.pipeline.outcome import RunContext
 from vibrogear.report import nvh_report
-from vibrogear.solvers.contact_eval import contact_history
-from vibrogear.solvers.integrate import integrate
+from vibrogear.solvers.integrator.contact_eval import contact_history
+from vibrogear.solvers.integrator.integrate import integrate
 
 ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = ROOT / "configs" / "gear_pair.toml"

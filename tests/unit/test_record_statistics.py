@@ -1,4 +1,4 @@
-"""Converging statistics of a record (solvers/motion.py: deformation_statistics) against
+"""Converging statistics of a record (solvers/sequential/motion.py: deformation_statistics) against
 closed forms: the RMS and the spectral lines of a trigonometric polynomial, a zero
 batch-means error on a periodic record, and on a random record an error bar that agrees
 with the spread of independent repetitions."""
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vibrogear.solvers.motion import batch_blocks, deformation_statistics
+from vibrogear.solvers.sequential.motion import batch_blocks, deformation_statistics
 
 
 def test_trigonometric_polynomial_exact():

@@ -10,8 +10,8 @@ from finite_differences import fd_shooting_jacobian
 from scipy.integrate import solve_ivp
 
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.shooting import periodic_flow
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.periodic.shooting import periodic_flow
 from vibrogear.solvers.static import static_equilibrium
 
 M, R, H = 4, 2, 2

@@ -1,4 +1,4 @@
-"""The reduction level by the frequency criterion (vibrogear.models.master_level) in the
+"""The reduction level by the frequency criterion (vibrogear.models.gearbox.master_level) in the
 reduction study, and the study's cached full reference model."""
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from vibrogear.analyses.reduction_accuracy import (_compare, _full_reference,
 from vibrogear.analyses.study import start_state
 from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
-from vibrogear.models.gearbox import build_gearbox
-from vibrogear.models.master_level import excitation_frequencies_hz, highest_speed
+from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.models.gearbox.master_level import excitation_frequencies_hz, highest_speed
 from vibrogear.pipeline.validate import validate_scene
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from rotor_fixtures import rotor_from_dict
-from vibrogear.models.rotor import dof_groups, master_modes
-from vibrogear.models.rotor_elements import (cowper_shear_coefficient, rotation_generator,
+from vibrogear.models.rotor.model import dof_groups, master_modes
+from vibrogear.models.rotor.elements import (cowper_shear_coefficient, rotation_generator,
                                              shaft_element_matrices)
 
 STEEL = {"E": 2.1e11, "nu": 0.3, "rho": 7800.0}
@@ -159,7 +159,7 @@ def test_master_modes_keep_whole_degenerate_pairs_in_a_reproducible_basis():
     gear_pair it changed with the BLAS thread count and moved frequencies by 0.5 %).  The
     basis of each degenerate cluster depends on the subspace only: a rotated basis of the
     same subspaces gives the same vectors."""
-    from vibrogear.models.rotor import _canonical_basis, _cluster_bounds, lowest_modes
+    from vibrogear.models.rotor.model import _canonical_basis, _cluster_bounds, lowest_modes
     m = stepped_rotor(free_gear_k=2e4)
     f_all, _ = lowest_modes(m.K, m.M, 30)
     f_all = np.where(f_all < 1e-3, 0.0, f_all)

@@ -1,4 +1,4 @@
-"""Run-up / run-down by chunks of constant speed (solvers/ramp.py), order tracking and the
+"""Run-up / run-down by chunks of constant speed (solvers/sequential/ramp.py), order tracking and the
 [runup] section.
 
 References: the closed-form frequency response of a linear oscillator, one integrate()
@@ -15,8 +15,8 @@ from vibrogear.config import ConfigError
 from vibrogear.config.base import build
 from vibrogear.config.runup_section import RunupConfig
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.ramp import SpeedProfile, ramp
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
 
 OPTS = IntegrationOptions(rtol=1e-10, atol=1e-13)
 
@@ -108,7 +108,7 @@ def test_constant_speed_gear_pair_keeps_the_excitation_phase():
     r = ramp(model, prof, u0, options=opts, chunks_per_period=4, samples_per_period=32,
              rows=[model.monitor])
     one = integrate(model, rpm, u0, 0.0, 30 * T, t_eval=r.t, options=opts)
-    from vibrogear.solvers.contact_eval import contact_history
+    from vibrogear.solvers.integrator.contact_eval import contact_history
     delta = contact_history(model, rpm, one.t, one.u)[0][model.monitor]
     assert np.ptp(delta) * 1e6 > 1.0
     assert np.max(np.abs(r.delta[0] - delta)) * 1e6 < 1e-6

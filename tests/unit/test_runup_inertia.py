@@ -1,4 +1,4 @@
-"""The inertia torque of the acceleration in the run-up (solvers/ramp.py ``inertia_force``,
+"""The inertia torque of the acceleration in the run-up (solvers/sequential/ramp.py ``inertia_force``,
 GearboxModel.rigid_inertia, ``[runup] inertia_torque``).
 
 References, all from the scene's geometry (not from the code's Phi^T M r): the polar
@@ -34,10 +34,10 @@ from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import build
 from vibrogear.config.runup_section import RunupConfig
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.models.gearbox import build_gearbox
+from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.models.reduced import Forcing
-from vibrogear.solvers.integrate import IntegrationOptions
-from vibrogear.solvers.ramp import SpeedProfile, ramp
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
+from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
 from vibrogear.solvers.static import static_equilibrium
 
 RHO = 7850.0

@@ -12,9 +12,9 @@ from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
 from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.status import MESSAGES, Status, from_code
 from vibrogear.verification import impact_exact as ex
 
@@ -27,7 +27,7 @@ def test_every_status_has_one_message_and_integer_codes_round_trip():
     assert set(MESSAGES) == set(Status)
     for s in Status:
         assert from_code(int(s)) is s and s.message == MESSAGES[s]
-    # the codes of the compiled loop (solvers/dopri.py) are the integrator members
+    # the codes of the compiled loop (solvers/integrator/dopri.py) are the integrator members
     assert [from_code(c) for c in (0, -1, -2, -3, -4, -5)] == [
         Status.OK, Status.MAX_STEPS, Status.NONFINITE, Status.CHATTERING,
         Status.STEP_TOO_SMALL, Status.GRAZING]

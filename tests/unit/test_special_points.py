@@ -1,4 +1,4 @@
-"""Contact switches of an orbit and the grazing note (solvers/special_points.py), on the
+"""Contact switches of an orbit and the grazing note (solvers/periodic/special_points.py), on the
 impact pair against its exact piecewise-linear orbits: where the exact orbit stays inside
 the clearance (q_max < b_r) the integrated orbit switches nothing; where it crosses the
 clearance on both sides it switches twice per contact interval, and the note names the
@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.special_points import grazing_note, switch_counts
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.periodic.special_points import grazing_note, switch_counts
 from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
 
 PAR = dict(zeta=0.05, kappa=0.5, f_m=0.2, f_p=0.3, b_r=1.0)

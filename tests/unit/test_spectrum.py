@@ -1,4 +1,4 @@
-"""One-sided amplitude spectra over whole periods (solvers/spectrum.py) against closed forms,
+"""One-sided amplitude spectra over whole periods (solvers/sequential/spectrum.py) against closed forms,
 and the ``nvh`` verb on the gear pair: frequency axis from the tooth count, Parseval, the
 same spectra whether the steady points come from a sweep or from the [nvh] grid, and bad
 [nvh] input."""
@@ -13,7 +13,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
-from vibrogear.solvers.spectrum import amplitude_spectrum, power_from_amplitudes
+from vibrogear.solvers.sequential.spectrum import amplitude_spectrum, power_from_amplitudes
 
 ROOT = Path(__file__).resolve().parents[2]
 GEAR_PAIR = ROOT / "configs" / "gear_pair.toml"

@@ -1,4 +1,4 @@
-"""Orbits with the variational equations on two cores (solvers/split_flow.py): the tangent's
+"""Orbits with the variational equations on two cores (solvers/integrator/split_flow.py): the tangent's
 columns integrated in two processes along one trajectory give the monodromy and the
 parameter sensitivity of the whole integration (same steps, same numbers up to the
 round-off of BLAS blocking), and each half alone is those columns of the whole; the
@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from vibrogear.config import load_scene
-from vibrogear.models.gearbox import build_gearbox
-from vibrogear.solvers import split_flow
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.split_flow import ColumnSplit
+from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.solvers.integrator import split_flow
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.integrator.split_flow import ColumnSplit
 from vibrogear.solvers.static import static_equilibrium
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"
@@ -80,7 +80,7 @@ def test_continuation_traces_the_same_branch_with_the_split(monkeypatch):
     """The impact pair's branch over a fold, with the split forced on and off: the same
     points (the corrector sees the same monodromies up to round-off)."""
     from vibrogear.models.impact_pair import impact_pair_model
-    from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+    from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                                 PseudoArclength, continuation)
 
     monkeypatch.setattr(split_flow, "SPLIT_MIN_STATES", 0)

@@ -14,8 +14,8 @@ from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, Reduce
 from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
-from vibrogear.solvers.integrate import IntegrationOptions
-from vibrogear.solvers.sweep import classify_period, count_clusters, sweep
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
+from vibrogear.solvers.sequential.sweep import classify_period, count_clusters, sweep
 
 # impact pair with a stiff outer spring (hardening): a resonance that bends to the
 # right, coexisting large / small responses for Omega ~ 0.7-0.9, period 2 near 0.45-0.5
@@ -290,7 +290,7 @@ def test_resumable_sweep_helper(tmp_path):
 # ---------------------------------------------------------------- classes and metrics
 
 def test_motion_class_rules():
-    from vibrogear.solvers.motion import (APERIODIC, CHAOTIC, FAILED, NOT_SETTLED, PERIODIC,
+    from vibrogear.solvers.sequential.motion import (APERIODIC, CHAOTIC, FAILED, NOT_SETTLED, PERIODIC,
                                           QUASI_PERIODIC, motion_class)
     nan = math.nan
     assert motion_class(2, (0.1, 0.2)) == PERIODIC          # a period is the evidence
@@ -307,7 +307,7 @@ def test_motion_class_rules():
 def test_contact_groups_and_window_metrics_by_hand():
     """Two meshes and a two-element bearing; switch times chosen so every metric is
     known by hand."""
-    from vibrogear.solvers.motion import contact_groups, metrics_with_errors
+    from vibrogear.solvers.sequential.motion import contact_groups, metrics_with_errors
     inf = math.inf
     ct = ContactSet(directions=np.array([[1.0, 0, 0], [0, 2.0, 0], [0, 0, 1.0], [0, 0, -1.0]]),
                     k_hi=np.ones(4), k_lo=np.ones(4), gap_hi=np.zeros(4),

@@ -20,8 +20,8 @@ from vibrogear.pipeline.executors import UnitError, backend_for, run_units
 from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
-from vibrogear.solvers.integrate import IntegrationOptions
-from vibrogear.solvers.sweep import sweep, sweep_units
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
+from vibrogear.solvers.sequential.sweep import sweep, sweep_units
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]

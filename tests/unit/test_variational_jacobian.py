@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from vibrogear.config import load_scene
-from vibrogear.models.gearbox import build_gearbox
-from vibrogear.solvers import jacobian as J
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.kernels import accel, contact_modes, model_arrays
+from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.solvers.integrator import jacobian as J
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.integrator.kernels import accel, contact_modes, model_arrays
 from vibrogear.solvers.static import static_equilibrium
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"

@@ -16,9 +16,9 @@ import pytest
 from vibrogear.analyses.study import (ATOL_PER_RTOL, integration_options, rtol_given,
                                       tolerances_for)
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.models.gearbox import build_gearbox
-from vibrogear.solvers.contact_eval import contact_history
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
+from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.solvers.integrator.contact_eval import contact_history
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.static import static_equilibrium
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -31,7 +31,8 @@ import pytest
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config.scene import load_scene
-from vibrogear.solvers.shooting import shoot
+from vibrogear.solvers.periodic.shooting import shoot
+from vibrogear.config.options import ShootingOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = str(ROOT / "configs" / "gear_pair.toml")
@@ -77,8 +78,7 @@ def test_stable_branches_agree_with_periodic_sweep_points(tmp_path):
                     continue
                 s = (p - br["param"][a]) / (br["param"][c] - br["param"][a])
                 guess = (1 - s) * br["u0"][a] + s * br["u0"][c]
-                orb = shoot(study.model, p, guess, n_periods=n, options=opts,
-                            tol=scene.shooting.tol, max_iter=8)
+                orb = shoot(study.model, p, guess, n_periods=n, options=opts, shooting=ShootingOptions(tol=scene.shooting.tol, max_iter=8))
                 if orb.converged and orb.stable:
                     found.append(orb)
         assert found, f"no stable period-{n} branch through the sweep point at {p} rpm"

@@ -8,12 +8,12 @@ from finite_differences import fd_shooting_jacobian
 
 from vibrogear.analyses.sweep import jumps
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.shooting import periodic_flow
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.periodic.shooting import periodic_flow
 from vibrogear.solvers.status import Status
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
 
 # the default scene (configs/impact_pair.toml)
@@ -189,7 +189,7 @@ def test_special_points_lie_within_their_reported_bracket(model, branches, monke
     """Every PD's reported ``located_within`` holds the exact crossing; where a crossing
     changes no stability (here forced: every orbit counted unstable), one regula-falsi
     orbit locates it and its wider bracket still holds the exact PD."""
-    from vibrogear.solvers import continuation as cont
+    from vibrogear.solvers.periodic import continuation as cont
 
     exact = _pd_checks(branches[0])
     assert len(exact) == 2

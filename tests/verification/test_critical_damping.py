@@ -13,8 +13,8 @@ import pytest
 from vibrogear.analyses.critical_damping import critical_zeta, fold_scan
 from vibrogear.cli import main
 from vibrogear.config import load_scene
-from vibrogear.solvers.continuation import ContinuationOptions, PseudoArclength
-from vibrogear.solvers.integrate import IntegrationOptions
+from vibrogear.solvers.periodic.continuation import ContinuationOptions, PseudoArclength
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.status import Status
 from vibrogear.verification import impact_exact as ex
 

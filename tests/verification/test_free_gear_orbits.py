@@ -21,13 +21,14 @@ import numpy as np
 import pytest
 
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
-from vibrogear.solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem,
+from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)
-from vibrogear.solvers.floquet import neutral_directions, split_trivial
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.shooting import periodic_flow, shoot
+from vibrogear.solvers.periodic.floquet import neutral_directions, split_trivial
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.periodic.shooting import periodic_flow, shoot
 from vibrogear.solvers.status import Status
-from vibrogear.solvers.sweep import classify_period
+from vibrogear.solvers.sequential.sweep import classify_period
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 ZETA, C_DRAG, B, K = 0.05, 0.2, 1.0, 20.0
@@ -87,7 +88,7 @@ def test_floating_orbit_is_a_family_that_shooting_borders_out(floating):
     flow = periodic_flow(floating, W, guess, options=OPT)
     s = np.linalg.svd(flow.dG_du0, compute_uv=False)
     assert s[-1] <= 1e-12 * s[0]
-    sh = shoot(floating, W, guess, options=OPT, tol=1e-11)
+    sh = shoot(floating, W, guess, options=OPT, shooting=ShootingOptions(tol=1e-11))
     assert sh.converged, sh.message
     u_ex, mu_ex, amp = _closed_form_floating(W, F_FLOAT, S_FLOAT)
     assert amp + S_FLOAT < B                      # really floating: no contact

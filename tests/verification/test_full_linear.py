@@ -10,7 +10,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from vibrogear.models.full_linear import (assemble_full, coupling_vector, lowest_modes_full, mac_matrix,
+from vibrogear.models.gearbox.full_linear import (assemble_full, coupling_vector, lowest_modes_full, mac_matrix,
                                           pair_modes)
 
 

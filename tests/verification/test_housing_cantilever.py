@@ -14,7 +14,7 @@ from scipy.optimize import brentq
 
 from vibrogear.config.housing import MaterialConfig
 from vibrogear.geometry.housing import build_beam_mesh
-from vibrogear.models.housing import solve_mesh_modes
+from vibrogear.models.housing.fe import solve_mesh_modes
 
 L, B, H = 1.0, 0.1, 0.05
 E, NU, RHO = 210e9, 0.3, 7850.0

@@ -32,7 +32,7 @@ def test_observed_order_and_richardson_on_exact_data():
 
 
 def _levels(degree, tmp_path, monkeypatch):
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
     monkeypatch.setenv("VIBROGEAR_CACHE_DIR", str(tmp_path))
     F, dofs = [], []
     for k in range(3):

@@ -46,7 +46,7 @@ def cache(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def fixed(cache):
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
     return housing_modes(_cfg())
 
 
@@ -72,7 +72,7 @@ def test_soft_foundation_rigid_modes_reproduce_the_housing_mass(cache):
     at the bore coupling points must fit u = a + theta x X exactly, and for mass-normalised modes
     sum_i psi_i psi_i^T = M_rb^-1, whose translational block inverts to m I with m = rho V
     (closed-form volume), and whose coupling block gives the centre of mass (y = width/2)."""
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
     cfg = _cfg(support="elastic", foundation_stiffness=2e6, **{"modes.count": 7})
     res = housing_modes(cfg)
     assert res.freqs_hz[5] < 0.05 * res.freqs_hz[6]   # 6 rigid modes well below the first elastic
@@ -100,7 +100,7 @@ def test_soft_foundation_rigid_modes_reproduce_the_housing_mass(cache):
 _LOAD = r"""
 import json, sys
 from vibrogear.config import load_scene
-from vibrogear.models.housing_run import housing_modes
+from vibrogear.models.housing.run import housing_modes
 res = housing_modes(load_scene(sys.argv[1]).housing)
 print(json.dumps({"cached": res.cached, "dolfinx": "dolfinx" in sys.modules, "gmsh": "gmsh" in sys.modules,
                   "f": res.freqs_hz.tolist()}))
@@ -108,7 +108,7 @@ print(json.dumps({"cached": res.cached, "dolfinx": "dolfinx" in sys.modules, "gm
 
 
 def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, cache):
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
     env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(cache)}
     out = subprocess.run([sys.executable, "-c", _LOAD, str(SMALL)], capture_output=True, text=True,
                          env=env, cwd=ROOT, timeout=120)
@@ -126,7 +126,7 @@ def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, cache):
 
 def test_block_lanczos_agrees_with_slepc_krylov_schur_and_cutoff(fixed, cache):
     """The default block Lanczos against SLEPc Krylov-Schur on the same mesh; cutoff_hz mode."""
-    from vibrogear.models.housing_run import housing_modes
+    from vibrogear.models.housing.run import housing_modes
     ks = housing_modes(_cfg(**{"modes": {**as_data(_cfg().modes), "solver": "krylovschur"}}))
     assert np.allclose(ks.freqs_hz, fixed.freqs_hz, rtol=1e-8)
     assert ks.residuals.max() < 1e-6 and ks.orthogonality_error < 1e-8

@@ -27,8 +27,8 @@ from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import as_data, build
 from vibrogear.config.housing import HousingConfig, MaterialConfig
 from vibrogear.geometry.housing import build_beam_mesh, housing_volume, read_msh_arrays, write_housing_step
-from vibrogear.models.housing import solve_mesh_modes
-from vibrogear.models.housing_run import housing_modes
+from vibrogear.models.housing.fe import solve_mesh_modes
+from vibrogear.models.housing.run import housing_modes
 
 from test_housing_cantilever import B, E, H, L, NU, RHO, timoshenko_cantilever_f1  # noqa: I001
 
@@ -275,7 +275,7 @@ def test_modal_housing_from_exported_modes_reproduces_the_gearbox(tmp_path, cach
     """The modes a parametric housing run exports (housing_modes.npz) read back as a modal
     housing: the same reduced gearbox model bit for bit, hence the same coupled frequencies."""
     from vibrogear.report.housing_report import write_modes_outputs
-    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.models.gearbox.model import build_gearbox
 
     sets = ["gearbox.shafts.0.master_count=8", "gearbox.shafts.1.master_count=8", "housing.modes.count=10"]
     src = ROOT / "configs" / "single_stage.toml"

@@ -28,15 +28,16 @@ except ImportError:  # tests/ itself on sys.path (pytest rootdir-less import)
     from reference import impact_exact as ex
 
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.config.options import ShootingOptions
 
 try:
-    from vibrogear.solvers.shooting import shoot
+    from vibrogear.solvers.periodic.shooting import shoot
 except ModuleNotFoundError as exc:  # only a *missing* module skips; a broken one fails
-    if exc.name != "vibrogear.solvers.shooting":
+    if exc.name != "vibrogear.solvers.periodic.shooting":
         raise
     shoot = None
-needs_shoot = pytest.mark.skipif(shoot is None, reason="vibrogear.solvers.shooting not available yet")
+needs_shoot = pytest.mark.skipif(shoot is None, reason="vibrogear.solvers.periodic.shooting not available yet")
 
 P_A = (0.05, 0.5, 0.2, 0.2, 0.5)
 P_B = (0.015, 0.1, 0.1, 0.1, 1.0)
@@ -157,7 +158,7 @@ def test_shooting_vs_exact_periodic_orbit(name):
     orb = ex.periodic_orbit(p, Om, u_ref, n_periods=n)
     assert orb.converged and orb.contact_sides == sides
     guess = orb.u0 + np.array([1e-3, -1e-3])
-    r = shoot(model, Om, guess, n_periods=n, options=OPT_SHOOT, tol=1e-10)
+    r = shoot(model, Om, guess, n_periods=n, options=OPT_SHOOT, shooting=ShootingOptions(tol=1e-10))
     assert r.converged and r.status == 0, r.message
     assert r.residual < 1e-10
     assert r.period == pytest.approx(orb.period, rel=1e-14)
@@ -184,8 +185,8 @@ def test_period2_orbit_is_a_flip_of_the_unstable_period1():
     squared are those of the P1 orbit traversed twice (consistency of shooting with n = 2)."""
     prm, Om, _, _, u_ref = ORBITS["unstable-P1-flip"]
     p, model = _both(prm)
-    r1 = shoot(model, Om, u_ref, n_periods=1, options=OPT_SHOOT, tol=1e-10)
-    r2 = shoot(model, Om, u_ref, n_periods=2, options=OPT_SHOOT, tol=1e-10)
+    r1 = shoot(model, Om, u_ref, n_periods=1, options=OPT_SHOOT, shooting=ShootingOptions(tol=1e-10))
+    r2 = shoot(model, Om, u_ref, n_periods=2, options=OPT_SHOOT, shooting=ShootingOptions(tol=1e-10))
     assert r1.converged and r2.converged
     assert np.allclose(r2.u0, r1.u0, rtol=0, atol=1e-8)
     mu1 = np.sort(np.real(r1.floquet))
@@ -202,7 +203,7 @@ def test_shooting_converged_orbit_is_exact_orbit_from_far_guess():
     prm, Om, n = P_B + (0.0,), 0.85, 2
     p, model = _both(prm)
     guess = np.array([0.19042901104947035, 0.013224900302871115]) + 0.05 * np.array([1.0, -1.0])
-    r = shoot(model, Om, guess, n_periods=n, options=OPT_SHOOT, tol=1e-10)
+    r = shoot(model, Om, guess, n_periods=n, options=OPT_SHOOT, shooting=ShootingOptions(tol=1e-10))
     assert r.converged
     fl = ex.exact_flow(p, Om, r.u0, 0.0, r.period, stm=True)
     assert np.max(np.abs(fl.u_end - r.u0)) < 1e-8
@@ -218,7 +219,7 @@ def test_shooting_converged_orbit_is_exact_orbit_from_far_guess():
 def test_linear_limit_shooting_vs_frf(Om):
     zeta, kappa, f_m, f_p = 0.05, 0.5, 0.2, 0.2
     model = impact_pair_model(zeta, kappa, f_m, f_p, 1e6)
-    r = shoot(model, Om, np.zeros(2), options=OPT_SHOOT, tol=1e-10)
+    r = shoot(model, Om, np.zeros(2), options=OPT_SHOOT, shooting=ShootingOptions(tol=1e-10))
     assert r.converged, r.message
     offset, amp = ex.linear_frf(zeta, kappa, f_m, f_p, Om)
     # measured ~7e-12

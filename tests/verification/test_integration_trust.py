@@ -1,4 +1,4 @@
-"""A diverged or inaccurate integration is never "ok" (solvers/trust.py), and where it is ok
+"""A diverged or inaccurate integration is never "ok" (solvers/integrator/trust.py), and where it is ok
 its error estimate bounds the true error (work-precision over rtol 1e-1 ... 1e-10).
 
 The reference of every error is the same integration at rtol 1e-13 from the same state;
@@ -18,10 +18,10 @@ import pytest
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.rtol_limit import loosest_rtol
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.integrator.rtol_limit import loosest_rtol
 from vibrogear.solvers.status import Status
-from vibrogear.solvers.trust import assess, mechanical_energy
+from vibrogear.solvers.integrator.trust import assess, mechanical_energy
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the stated factor: where the status is ok, true error <= FACTOR * estimate

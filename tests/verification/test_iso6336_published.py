@@ -20,7 +20,7 @@ import math
 import numpy as np
 import pytest
 
-from vibrogear.models.iso6336 import (C_COEFFICIENTS, N_PER_MM_UM, contact_harmonics,
+from vibrogear.models.gearbox.iso6336 import (C_COEFFICIENTS, N_PER_MM_UM, contact_harmonics,
                                       contact_ratios, mesh_stiffness, theoretical_single_stiffness)
 
 DEG = math.pi / 180.0

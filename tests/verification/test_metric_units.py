@@ -15,8 +15,8 @@ import pytest
 from vibrogear.analyses.runup import shaft_orders
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.sequential.sweep import sweep
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"
 OPT = IntegrationOptions(rtol=1e-9, atol=1e-15)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from rotor_fixtures import friswell_overhung, friswell_two_disc, rotor_from_dict
-from vibrogear.models.rotor import assemble_rotor, master_modes
-from vibrogear.solvers.rotor_modes import rotor_modes
+from vibrogear.models.rotor.model import assemble_rotor, master_modes
+from vibrogear.solvers.rotor.modes import rotor_modes
 
 E, NU, RHO = 2.1e11, 0.3, 7800.0
 G = E / (2 * (1 + NU))

@@ -1,6 +1,6 @@
 """A slow run-up reproduces the steady state; a fast one jumps late (gear_pair).
 
-References: the sequential continuation (solvers/sweep.py: settled steady states, one
+References: the sequential continuation (solvers/sequential/sweep.py: settled steady states, one
 speed at a time) and the folds of the period-1 branch found by shooting + pseudo-arclength
 continuation (5126.6 and 5233.7 rpm, ``vibrogear continue configs/gear_pair.toml``): two
 computations independent of the chunked transient."""
@@ -12,9 +12,9 @@ import pytest
 from vibrogear.analyses.runup import jump_speed, period_table
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
-from vibrogear.solvers.integrate import IntegrationOptions
-from vibrogear.solvers.ramp import SpeedProfile, ramp
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
+from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
+from vibrogear.solvers.sequential.sweep import sweep
 
 pytestmark = pytest.mark.slow
 

@@ -17,8 +17,8 @@ from scipy_baseline import dense_rhs, solve_points_scipy  # noqa: E402
 
 from vibrogear.models.impact_pair import impact_pair_model  # noqa: E402
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel  # noqa: E402
-from vibrogear.solvers.integrate import IntegrationOptions, integrate  # noqa: E402
-from vibrogear.solvers.kernels import accel, contact_modes, model_arrays  # noqa: E402
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate  # noqa: E402
+from vibrogear.solvers.integrator.kernels import accel, contact_modes, model_arrays  # noqa: E402
 
 
 def kernel_rhs(model, param, t, u):

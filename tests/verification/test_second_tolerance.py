@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.verification import impact_exact as ex
 
 #: tests/verification/test_sweep_evidence.py's double-sided orbit and chaotic pair

@@ -1,5 +1,5 @@
-"""Static correction of the master modes (residual flexibility, vibrogear.models.rotor.
-static_correction) and the frequency criterion (vibrogear.models.master_level).
+"""Static correction of the master modes (residual flexibility, vibrogear.models.rotor.model.
+static_correction) and the frequency criterion (vibrogear.models.gearbox.master_level).
 
 Independent references: the full FE solve of the same shaft on its bearings (a dense
 ``numpy.linalg.solve`` of the assembled K) for the static deflection, the full FE
@@ -16,7 +16,7 @@ import pytest
 import scipy.linalg as sla
 
 from vibrogear.config import load_scene
-from vibrogear.models.rotor import build_rotor_model, master_modes, static_correction
+from vibrogear.models.rotor.model import build_rotor_model, master_modes, static_correction
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -90,9 +90,9 @@ def test_gearbox_frequency_level_keeps_the_full_coupling_stiffness():
     twist-angle load and a unit mesh force equal to the full linearised model's."""
     from vibrogear.analyses.reduction_accuracy import full_linear_model
     from vibrogear.analyses.study import start_state
-    from vibrogear.models.gearbox import build_gearbox
-    from vibrogear.models.rotor import lowest_modes
-    from vibrogear.models.synthesis import modal_vector, subsystem_offsets
+    from vibrogear.models.gearbox.model import build_gearbox
+    from vibrogear.models.rotor.model import lowest_modes
+    from vibrogear.models.gearbox.synthesis import modal_vector, subsystem_offsets
     from vibrogear.solvers.linear import tangent_matrices
 
     scene = load_scene(ROOT / "configs" / "gear_pair.toml")

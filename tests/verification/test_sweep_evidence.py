@@ -1,6 +1,6 @@
 """A sweep point's evidence against independent references.
 
-* Largest Lyapunov exponent (two-trajectory Benettin, solvers/lyapunov.py) on stable
+* Largest Lyapunov exponent (two-trajectory Benettin, solvers/sequential/lyapunov.py) on stable
   periodic orbits = ln|mu_max| / T from the Floquet multipliers of the exact
   piecewise-linear solution (vibrogear/verification/impact_exact.py: closed form region by
   region, switch times by root finding) and, for the gear pair, of shooting's monodromy
@@ -18,11 +18,12 @@ import numpy as np
 import pytest
 
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.solvers.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.lyapunov import largest_lyapunov
-from vibrogear.solvers.motion import CHAOTIC, PERIODIC
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
+from vibrogear.solvers.sequential.motion import CHAOTIC, PERIODIC
+from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.verification import impact_exact as ex
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 #: configs/impact_pair.toml (zeta, kappa, f_m, f_p, b_r)
@@ -67,14 +68,14 @@ def test_lyapunov_equals_floquet_exponent_of_exact_orbit(prm, Om, n, real):
 def test_lyapunov_equals_floquet_exponent_of_gear_pair_orbit():
     from vibrogear.analyses.study import build_study
     from vibrogear.config import load_scene
-    from vibrogear.solvers.shooting import shoot
+    from vibrogear.solvers.periodic.shooting import shoot
 
     study = build_study(load_scene("configs/gear_pair.toml"))
     model, rpm = study.model, 5000.0
     opts = IntegrationOptions(rtol=1e-9, atol=1e-15)
     T = model.excitation_period(rpm)
     u = integrate(model, rpm, study.start(rpm), 0.0, 400 * T, options=opts).u_end
-    orb = shoot(model, rpm, u, options=opts, tol=1e-10)
+    orb = shoot(model, rpm, u, options=opts, shooting=ShootingOptions(tol=1e-10))
     assert orb.converged and orb.stable
     ref = float(np.log(np.abs(orb.floquet).max()) / T)     # -0.0032: |mu| = 0.9940
     # start along the last step of the stroboscopic map of the converging trajectory (what

@@ -23,9 +23,9 @@ import pytest
 
 from vibrogear.analyses.study import integration_options, rtol_given
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.solvers.integrate import IntegrationOptions
+from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.static import static_equilibrium
-from vibrogear.solvers.sweep import sweep
+from vibrogear.solvers.sequential.sweep import sweep
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "configs" / "two_stage.toml"
@@ -41,7 +41,7 @@ def _scene_asking_for_accuracy():
 
 
 def _run(scene, rpms, level, options):
-    from vibrogear.models.gearbox import build_gearbox
+    from vibrogear.models.gearbox.model import build_gearbox
     model = build_gearbox(scene, master_level=level).reduced
     sw = scene.sweep
     return model.n_modes, sweep(

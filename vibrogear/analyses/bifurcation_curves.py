@@ -3,7 +3,7 @@
 What this is: bifurcation points **located on one-parameter branches at a sequence of
 loads and joined**, not a two-parameter (bordered) continuation of the bifurcation
 condition.  At each load the period-1 branch is continued in speed by the continuation API
-(:func:`~vibrogear.solvers.continuation.continuation`, shooting + pseudo-arclength, LP and
+(:func:`~vibrogear.solvers.periodic.continuation.continuation`, shooting + pseudo-arclength, LP and
 PD located by the solver's test functions and bisection in arclength); the LP and PD points
 of that branch are collected; the points of successive loads are joined per label by the
 nearest speed.  Between two loads the curve is a straight line: its accuracy in load is the
@@ -31,7 +31,7 @@ import numpy as np
 
 from ..config.options import ContinuationOptions
 from ..pipeline.executors import run_units, under_mpi
-from ..solvers.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
+from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from .continuation import starting_orbit
 from .load_scaling import LoadScaling
 from .study import Study, integration_options, start_state

@@ -3,7 +3,7 @@ with Floquet stability and LP / PD / NS points (paper Figs 4-8), for any study.
 
 The starting orbit at the range's start end (:func:`starting_orbit`): ``transient_periods``
 excitation periods from the static equilibrium settle the motion; the sweep's period
-detection (:func:`~vibrogear.solvers.sweep.classify_period` on ``RECORD_PERIODS``
+detection (:func:`~vibrogear.solvers.sequential.sweep.classify_period` on ``RECORD_PERIODS``
 stroboscopic states) gives its period n (a rattle cycle of a free gear spans n mesh
 periods), and shooting over n periods converges onto it.  Where the settled motion is not
 periodic (chaotic rattle) or that shooting fails, the period-1 orbit that continues the
@@ -25,12 +25,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.continuation import (ContinuationResult, PeriodicOrbitProblem, PseudoArclength,
+from ..solvers.periodic.continuation import (ContinuationResult, PeriodicOrbitProblem, PseudoArclength,
                                     SpecialPoint, continuation)
-from ..solvers.integrate import integrate
-from ..solvers.shooting import shoot
-from ..solvers.sweep import classify_period
+from ..solvers.integrator.integrate import integrate
+from ..solvers.periodic.shooting import shoot
+from ..solvers.sequential.sweep import classify_period
 from .study import Study, integration_options
+from ..config.options import ShootingOptions
 
 __all__ = ["ContinuationStudyResult", "run", "starting_orbit"]
 
@@ -67,15 +68,14 @@ def starting_orbit(model, p0: float, u_static, *, transient_periods: int, option
             tried.append("settled motion not classified periodic")
         for k in dict.fromkeys((n, 1)):
             if k >= 1:
-                sh = shoot(model, p0, warm.u_end, n_periods=k, options=options, tol=tol,
-                           max_iter=max_iter)
+                sh = shoot(model, p0, warm.u_end, n_periods=k, options=options, shooting=ShootingOptions(tol=tol, max_iter=max_iter))
                 if sh.converged:
                     note = f" ({'; '.join(tried)})" if tried else ""
                     return sh.u0, k, warm.u_end, f"period-{k} orbit from the settled motion{note}"
                 tried.append(f"period-{k} from the settled motion: {sh.message}")
     else:
         tried.append(f"transient: {warm.message}")
-    sh = shoot(model, p0, u_static, options=options, tol=tol, max_iter=max_iter)
+    sh = shoot(model, p0, u_static, options=options, shooting=ShootingOptions(tol=tol, max_iter=max_iter))
     if sh.converged:
         note = "; ".join(tried)
         return sh.u0, 1, u_static, f"period-1 orbit from the static equilibrium ({note})"
@@ -155,8 +155,7 @@ def _least_period(model, w, method):
     least period d (the smallest divisor of n with |u(d T) - u0| <= 1e-6 |u0|: shooting
     over n periods also converges onto an orbit of period d | n); (None, n) where it
     fails."""
-    sh = shoot(model, w.param, w.u0, n_periods=w.n, options=method.integration,
-               tol=method.tol, max_iter=method.start_max_iter or 24)
+    sh = shoot(model, w.param, w.u0, n_periods=w.n, options=method.integration, shooting=ShootingOptions(tol=method.tol, max_iter=method.start_max_iter or 24))
     if not sh.converged:
         return None, w.n
     T = model.excitation_period(w.param)

@@ -26,9 +26,9 @@ import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.continuation import (ContinuationOptions, PeriodicOrbitProblem, PseudoArclength,
+from ..solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem, PseudoArclength,
                                     continuation)
-from ..solvers.integrate import IntegrationOptions, integrate
+from ..solvers.integrator.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium
 from ..solvers.status import Status
 

@@ -121,7 +121,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
 
 
 def _subsystem_shares(gm, vectors):
-    from ..models.synthesis import subsystem_offsets
+    from ..models.gearbox.synthesis import subsystem_offsets
 
     off = subsystem_offsets(gm.subsystems)
     energy = np.abs(vectors) ** 2

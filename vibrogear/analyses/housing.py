@@ -22,8 +22,8 @@ def is_root() -> bool:
 def compute_modes(cfg, *, cache: bool = True):
     """housing_modes with geometry/solver failures turned into NumericalFailure (exit 1)."""
     from ..geometry.housing import MeshingError
-    from ..models.housing import HousingSolveError
-    from ..models.housing_run import housing_modes
+    from ..models.housing.fe import HousingSolveError
+    from ..models.housing.run import housing_modes
 
     try:
         return housing_modes(cfg, cache=cache)

@@ -2,14 +2,14 @@
 and its equivalent radiated power (ERP).
 
 In the modal synthesis the housing enters as its own master modes (mass-normalised, no
-static correction: :mod:`vibrogear.models.master_level`), so its displacement is exactly
+static correction: :mod:`vibrogear.models.gearbox.master_level`), so its displacement is exactly
 u_h(x, t) = sum_i phi_i(x) x_i(t) over the housing coordinates x_i of the reduced model,
 and the outer surface's normal velocity is
 
     v_n(x, t) = sum_i phi_n,i(x) x_i'(t)        (x_i' in 1/s: the model's rate x omega_ref)
 
 with phi_n,i the normal displacement of mode i at the surface quadrature points stored with
-the housing modes (:mod:`vibrogear.models.housing_surface_data`).  Left out: the housing
+the housing modes (:mod:`vibrogear.models.housing.surface_data`).  Left out: the housing
 modes above the scene's count (their static residual is not in the synthesis either).
 
 ERP = rho c integral over the surface of mean_t(v_n^2) dA = 1/2 rho c sum over harmonics of
@@ -58,14 +58,14 @@ class SurfaceMap:
 
 
 def surface_map(gearbox) -> tuple[SurfaceMap | None, str]:
-    """The map of a :class:`~vibrogear.models.gearbox.GearboxModel`, or (None, why not)."""
+    """The map of a :class:`~vibrogear.models.gearbox.model.GearboxModel`, or (None, why not)."""
     hm = getattr(gearbox, "housing", None)
     if hm is None:
         return None, "no housing in this scene: ERP and the surface velocity are left out"
     if not hm.has_surface:
         return None, ("the housing modes carry no outer-surface data (modes read from another "
                       "program): ERP and the surface velocity are left out")
-    from ..models.synthesis import subsystem_offsets
+    from ..models.gearbox.synthesis import subsystem_offsets
 
     subs = gearbox.subsystems
     k = next(i for i, s in enumerate(subs) if s.kind == "housing")

@@ -41,8 +41,8 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
     from ..config.base import build
     from ..config.housing import HousingConfig
     from ..geometry.housing import MeshingError
-    from ..models.housing import HousingSolveError
-    from ..models.housing_run import HousingNumericalError, housing_modes
+    from ..models.housing.fe import HousingSolveError
+    from ..models.housing.run import HousingNumericalError, housing_modes
 
     cfg = build(HousingConfig, housing, "housing")
     t0 = time.perf_counter()
@@ -57,7 +57,7 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
 def sweep_signature(scene) -> dict:
     """What the points depend on: the base housing (its cache key: config, data files and
     version), the swept parameter and its values, and the number of frequencies."""
-    from ..models.housing_run import housing_cache_key
+    from ..models.housing.run import housing_cache_key
 
     opts = scene.housing_sweep
     return {"analysis": "housing_sweep", "physics": housing_cache_key(scene.housing, "modes"),

@@ -26,10 +26,11 @@ import numpy as np
 
 from ..models.impact_pair import impact_pair_from_config
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.integrate import IntegrationOptions, integrate
-from ..solvers.shooting import shoot
+from ..solvers.integrator.integrate import IntegrationOptions, integrate
+from ..solvers.periodic.shooting import shoot
 from ..solvers.static import static_equilibrium
 from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow, periodic_orbit
+from ..config.options import ShootingOptions
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",
            "ATOL_PER_RTOL", "SAMPLES_PER_PERIOD", "PrecisionResult"]
@@ -125,7 +126,7 @@ def shooting_precision(model, omega: float, guess, orbit, tols, *,
         best = np.inf
         sh = None
         for _ in range(repeats):
-            sh = shoot(model, omega, guess, options=_options(tol), tol=tol, max_iter=max_iter)
+            sh = shoot(model, omega, guess, options=_options(tol), shooting=ShootingOptions(tol=tol, max_iter=max_iter))
             best = min(best, sh.wall_time)
         rows.append((tol, tol, sh.residual, float(np.max(np.abs(sh.u0 - orbit.u0))),
                      _multiplier_error(sh.floquet, orbit.floquet), sh.iterations,

@@ -2,7 +2,7 @@
 
 A gearbox's static load is the twist of its external couplings (``[[gearbox.couplings]]``,
 role motor / load): coupling c applies the torque ``stiffness_c * twist_c`` to its shaft
-(:func:`vibrogear.models.gearbox.external_couplings`).  The load enters the reduced model
+(:func:`vibrogear.models.gearbox.model.external_couplings`).  The load enters the reduced model
 only through the constant force ``forcing.F0``, which is linear in the twists.  With every
 twist scaled by one factor ``s`` (the scene's load pattern kept):
 
@@ -79,8 +79,8 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
     """The decomposition of the scene's F0 (module docstring).  ConfigError (naming
     ``gearbox.couplings``) where the scene has no motor coupling, or its twist or stiffness
     is 0 so that no load can be scaled from it."""
-    from ..models.gearbox import external_couplings
-    from ..models.synthesis import PhysicalVector, modal_vector
+    from ..models.gearbox.model import external_couplings
+    from ..models.gearbox.synthesis import PhysicalVector, modal_vector
 
     motors = motor_couplings(gearbox_cfg)
     if not motors:

@@ -2,14 +2,14 @@
 
 Steady points: the settled end states u_end (excitation phase 0) of a [sweep] that ran before
 in the same run (``previous["sweep"]``, the direction ``[nvh] sweep_direction``), else the
-[nvh] speed grid settled here by :func:`~vibrogear.solvers.sweep.sweep` (upward, from the
+[nvh] speed grid settled here by :func:`~vibrogear.solvers.sequential.sweep.sweep` (upward, from the
 static equilibrium).  From each state ``record_periods`` whole mesh periods are integrated
-(:func:`~vibrogear.solvers.integrate.integrate`) with ``samples_per_period`` dense samples
-each, and the one-sided amplitude spectra (:mod:`vibrogear.solvers.spectrum`: mesh
+(:func:`~vibrogear.solvers.integrator.integrate.integrate`) with ``samples_per_period`` dense samples
+each, and the one-sided amplitude spectra (:mod:`vibrogear.solvers.sequential.spectrum`: mesh
 harmonics exactly on bins, no window) of
 
 * the dynamic transmission error: each mesh's deformation delta = c . x - e(t) [m],
-* the mesh forces by the contact law (:func:`~vibrogear.solvers.contact_eval.contact_history`) [N],
+* the mesh forces by the contact law (:func:`~vibrogear.solvers.integrator.contact_eval.contact_history`) [N],
 * each rolling-element bearing's resultant force on the housing, sum_j f_j e_j over its
   elements (radial unit e_j, rotor frame X = -x, Y = z of the housing) [N],
 
@@ -32,9 +32,9 @@ import numpy as np
 
 from ..config.base import ConfigError
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.contact_eval import contact_history
-from ..solvers.integrate import integrate
-from ..solvers.spectrum import amplitude_spectrum
+from ..solvers.integrator.contact_eval import contact_history
+from ..solvers.integrator.integrate import integrate
+from ..solvers.sequential.spectrum import amplitude_spectrum
 from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
 from .study import Study, integration_options
 
@@ -86,7 +86,7 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
         raise ConfigError("nvh.rpm_min", "no steady points: list 'sweep' before 'nvh' in "
                           "scene.analyses (with nvh.use_sweep = true), or give the [nvh] "
                           "speed grid rpm_min / rpm_max")
-    from ..solvers.sweep import sweep
+    from ..solvers.sequential.sweep import sweep
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)
     kw = dict(directions=("up",), transient_periods=cfg.transient_periods, record_periods=1,

@@ -1,15 +1,15 @@
 """Speed x load operating map of a gearbox (``vibrogear map SCENE``, section [map]).
 
 Each load row is a sweep over the driving speed (the sweep's point solver,
-:func:`~vibrogear.solvers.sweep_point.run_point`, walked exactly as
-:func:`~vibrogear.solvers.sweep.sweep` walks a unit: every point starts from the end state
+:func:`~vibrogear.solvers.sequential.sweep_point.run_point`, walked exactly as
+:func:`~vibrogear.solvers.sequential.sweep.sweep` walks a unit: every point starts from the end state
 of the previous good point of its direction, the first of each unit from the static
 equilibrium of that load at the grid's first speed, as a sweep's), so every map point is a settled sweep point with its motion
-class and the rattle / contact metrics of :mod:`vibrogear.solvers.motion` (impacts per
+class and the rattle / contact metrics of :mod:`vibrogear.solvers.sequential.motion` (impacts per
 mesh period per flank, rattle energy, contact fraction, bearing elements out of contact).
 The largest mesh force of each point is added here: ``force_periods`` mesh periods more,
 sampled ``force_samples`` times per period, from the point's end state, through the one
-contact law (:func:`~vibrogear.solvers.contact_eval.contact_history`).
+contact law (:func:`~vibrogear.solvers.integrator.contact_eval.contact_history`).
 
 The load of row k is the scene's coupling twists times a factor s_k
 (:mod:`.load_scaling`: F0(s) = F0_rest + s F0_couplings, exact, one model build).  The
@@ -34,12 +34,12 @@ import numpy as np
 from ..pipeline.executors import broadcast, run_units, under_mpi
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..pipeline.resume import PartialStore, fingerprint
-from ..solvers.contact_eval import contact_history
-from ..solvers.integrate import integrate
-from ..solvers.motion import MOTION_LEGEND, contact_groups
+from ..solvers.integrator.contact_eval import contact_history
+from ..solvers.integrator.integrate import integrate
+from ..solvers.sequential.motion import MOTION_LEGEND, contact_groups
 from ..solvers.status import Status
-from ..solvers.sweep import assemble_result, sweep_units
-from ..solvers.sweep_point import run_point
+from ..solvers.sequential.sweep import assemble_result, sweep_units
+from ..solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
 from .study import Study, integration_options, start_state
 from .sweep import record_from_json, record_to_json
@@ -52,7 +52,7 @@ PARTIAL_NAME = "map.partial.jsonl"
 
 @dataclass(frozen=True, eq=False)
 class OperatingMap:
-    """A computed map: ``rows[k]`` is the :class:`~vibrogear.solvers.sweep.SweepResult` of
+    """A computed map: ``rows[k]`` is the :class:`~vibrogear.solvers.sequential.sweep.SweepResult` of
     load k (all directions, in unit order); ``scale[k]`` its load factor, ``torque[k]``
     [N m] and ``twist[k]`` [rad]."""
     rpm: np.ndarray

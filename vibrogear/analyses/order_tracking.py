@@ -1,7 +1,7 @@
 """Computed order tracking and the waterfall of a signal under a varying speed.
 
 Order tracking: the signal is resampled uniformly in the reference shaft's angle (cubic
-spline; a run of :mod:`vibrogear.solvers.ramp` is sampled uniformly in that angle
+spline; a run of :mod:`vibrogear.solvers.sequential.ramp` is sampled uniformly in that angle
 already, so the resampling leaves it as it is), cut into windows of whole revolutions
 (``window_revs``, overlapping by ``overlap``), Hann-windowed and Fourier-transformed
 (``numpy.fft.rfft``).  Order o (cycles per revolution) lies on the bin o * window_revs; the

@@ -14,10 +14,10 @@
    largest normalised difference of the RMS of the dynamic deformation, its spectral lines
    at 1x-3x the mesh frequency, impacts per period and the rattle intensity of
    ``meshes[0]``), with an error bar from batch means over blocks of the record
-   (``statistics_error_bar``; :func:`~vibrogear.solvers.motion.deformation_statistics`).
+   (``statistics_error_bar``; :func:`~vibrogear.solvers.sequential.motion.deformation_statistics`).
    ``judged_by`` says which.
 3. With ``frequency_level``: the same for the level of the paper's frequency criterion, with
-   and without the static correction (:mod:`vibrogear.models.master_level`).
+   and without the static correction (:mod:`vibrogear.models.gearbox.master_level`).
 
 The full model's modes (the costly part: all housing DOF) are cached like the housing
 (:func:`_full_reference`).
@@ -67,8 +67,8 @@ def _physical_vector_full(vec, offsets, hous_T, n_shafts) -> sp.csc_matrix:
 
 def full_linear_model(gm, scene, x0):
     """(FullLinearModel, observation operator (n_obs x n_full)) linearised at x0."""
-    from ..models.full_linear import assemble_full
-    from ..models.housing_run import housing_matrices
+    from ..models.gearbox.full_linear import assemble_full
+    from ..models.housing.run import housing_matrices
     from ..solvers.linear import contact_slopes
 
     blocks = [(r.K, r.M) for r in gm.rotors]
@@ -105,7 +105,7 @@ def reduced_linear_modes(gm, x0):
     K, _ = tangent_matrices(gm.reduced, x0, 0.0)
     lam, X = sla.eigh(0.5 * (K + K.T))
     f = np.sqrt(np.clip(lam, 0.0, None)) * gm.omega_ref / (2 * np.pi)
-    from ..models.synthesis import subsystem_offsets
+    from ..models.gearbox.synthesis import subsystem_offsets
 
     off = subsystem_offsets(gm.subsystems)
     parts = []
@@ -117,7 +117,7 @@ def reduced_linear_modes(gm, x0):
 def _compare(f_full, v_full, f_red, v_red, f_max):
     from scipy.optimize import linear_sum_assignment
 
-    from ..models.full_linear import mac_matrix
+    from ..models.gearbox.full_linear import mac_matrix
 
     keep = (f_full <= f_max) & (f_full > 1e-3 * f_max)
     fk = f_full[keep]
@@ -146,9 +146,9 @@ def _response(gm, scene, cfg):
     """(mesh deformation of meshes[0] at 32 samples per period over the record window,
     the record's trajectory, its statistics with batch-means errors, period_n): the
     record starts after ``transient_periods`` at phase 0."""
-    from ..solvers.contact_eval import contact_history
-    from ..solvers.integrate import integrate
-    from ..solvers.motion import classify_period, deformation_statistics
+    from ..solvers.integrator.contact_eval import contact_history
+    from ..solvers.integrator.integrate import integrate
+    from ..solvers.sequential.motion import classify_period, deformation_statistics
 
     r, rpm = gm.reduced, cfg.rpm
     T = r.excitation_period(rpm)
@@ -174,11 +174,11 @@ def _response(gm, scene, cfg):
 
 def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
     """Impacts per period (both flanks) and rattle intensity of meshes[0], with their
-    batch-means errors (:func:`~vibrogear.solvers.motion.metrics_with_errors`)."""
+    batch-means errors (:func:`~vibrogear.solvers.sequential.motion.metrics_with_errors`)."""
     from ..models.contact_law import flank
-    from ..solvers.contact_eval import contact_kinematics
-    from ..solvers.motion import contact_groups, metrics_with_errors
-    from ..solvers.sweep_point import onset_speeds
+    from ..solvers.integrator.contact_eval import contact_kinematics
+    from ..solvers.sequential.motion import contact_groups, metrics_with_errors
+    from ..solvers.sequential.sweep_point import onset_speeds
 
     groups = contact_groups(r)
     key = next((k for k, (kind, _) in groups.items() if kind == "mesh"), None)
@@ -229,7 +229,7 @@ def _statistics_error(stats: dict, ref: dict) -> tuple[float, float, dict]:
 
 
 def _warm_up(gm, scene, cfg) -> None:
-    from ..solvers.integrate import integrate
+    from ..solvers.integrator.integrate import integrate
 
     r = gm.reduced
     integrate(r, cfg.rpm, _start(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
@@ -243,7 +243,7 @@ def _full_reference(gm, scene, x0, f_max_hz):
     import dataclasses
 
     from ..cache import cache_key, discard_entry, new_workspace, open_entry, publish_entry
-    from ..models.full_linear import lowest_modes_full
+    from ..models.gearbox.full_linear import lowest_modes_full
     from ..solvers.linear import contact_slopes
 
     t0 = time.perf_counter()
@@ -294,9 +294,9 @@ def _level_row(gm, scene, cfg, f_full, v_full, row):
 def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
     """The count levels of [reduction_accuracy], then (``frequency_level``) the level of
     the frequency criterion with and without the static correction
-    (:mod:`vibrogear.models.master_level`), each against the full model and, for the
+    (:mod:`vibrogear.models.gearbox.master_level`), each against the full model and, for the
     response, against the largest count level."""
-    from ..models.gearbox import build_gearbox
+    from ..models.gearbox.model import build_gearbox
 
     cfg = scene.reduction_accuracy
     t0 = time.perf_counter()

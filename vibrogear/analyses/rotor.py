@@ -14,10 +14,10 @@ from typing import Any
 
 import numpy as np
 
-from ..models.rotor import build_rotor_model, master_modes
+from ..models.rotor.model import build_rotor_model, master_modes
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
-from ..solvers.rotor_campbell import campbell_diagram
-from ..solvers.rotor_modes import MODE_TYPES, modal_energy_share, rotor_modes
+from ..solvers.rotor.campbell import campbell_diagram
+from ..solvers.rotor.modes import MODE_TYPES, modal_energy_share, rotor_modes
 
 __all__ = ["run_modes", "run_campbell", "RotorModesResult", "RotorCampbellResult"]
 

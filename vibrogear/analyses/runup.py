@@ -1,6 +1,6 @@
 """Run-up and run-down transients (``vibrogear runup``, section [runup]).
 
-The driving speed follows the section's profile (:mod:`vibrogear.solvers.ramp`: chunks of
+The driving speed follows the section's profile (:mod:`vibrogear.solvers.sequential.ramp`: chunks of
 constant speed, excitation phase continuous), from the static equilibrium at the start
 speed.  Against the instantaneous speed the analysis returns, per direction:
 
@@ -13,7 +13,7 @@ speed.  Against the instantaneous speed the analysis returns, per direction:
 * the waterfall (spectrogram) of the monitored mesh deformation.
 
 The inertia torque of the acceleration (``[runup] inertia_torque``, default true) is
-applied through :meth:`~vibrogear.models.gearbox.GearboxModel.inertia_force`;
+applied through :meth:`~vibrogear.models.gearbox.model.GearboxModel.inertia_force`;
 ``inertia_torque = "both"`` also runs each direction without it (run key
 ``<direction>_no_inertia``) and the summary compares the two (``inertia_effect``: peak
 upper envelope of the monitored mesh and its speed, with and without).
@@ -31,7 +31,7 @@ import numpy as np
 from ..models.contact_law import flank
 from ..pipeline.executors import run_units
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.ramp import RampResult, SpeedProfile, ramp
+from ..solvers.sequential.ramp import RampResult, SpeedProfile, ramp
 from .order_tracking import Waterfall, order_tracks, waterfall
 from .study import Study, integration_options
 

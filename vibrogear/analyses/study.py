@@ -171,7 +171,7 @@ def _requested_options(scene, record, period_tol, section) -> IntegrationOptions
 
 
 #: requested rtols at or below this are used as asked (no probe): the probe's ladder and the
-#: checks after every run (solvers/trust.py) cover them
+#: checks after every run (solvers/integrator/trust.py) cover them
 RTOL_PROBE_FROM = 1e-5
 _SECTIONS = ("time_response", "sweep", "continuation", "map", "runup", "nvh",
              "reduction_accuracy")
@@ -193,14 +193,14 @@ def lowest_param(scene) -> float | None:
 
 def within_limit(study: "Study", scene, opts: IntegrationOptions) -> IntegrationOptions:
     """``opts`` with rtol no looser than the loosest this model can use (measured once per
-    study by :func:`vibrogear.solvers.rtol_limit.loosest_rtol` at the scene's lowest
+    study by :func:`vibrogear.solvers.integrator.rtol_limit.loosest_rtol` at the scene's lowest
     parameter); a tightened rtol is noted in ``study.notes`` (summary.json "notes")."""
     if opts.rtol <= RTOL_PROBE_FROM:
         return opts
     param = lowest_param(scene)
     if param is None:
         return opts
-    from ..solvers.rtol_limit import loosest_rtol
+    from ..solvers.integrator.rtol_limit import loosest_rtol
 
     key = (param, opts.rtol)
     limit = study.rtol_limits.get(key)
@@ -238,7 +238,7 @@ def _impact_pair_study(scene) -> Study:
 
 
 def _gearbox_study(scene) -> Study:
-    from ..models.gearbox import build_gearbox
+    from ..models.gearbox.model import build_gearbox
 
     gm = build_gearbox(scene)
     r = gm.reduced

@@ -19,9 +19,9 @@ import numpy as np
 from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
-from ..solvers.motion import CHAOTIC, MOTION_LEGEND
+from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND
 from ..solvers.status import Status
-from ..solvers.sweep import PointRecord, SweepResult, sweep
+from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
 from .study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
@@ -56,7 +56,7 @@ def jumps(param, q, rel: float = 0.15) -> list[float]:
 
 def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callback=None,
                     root: bool | None = None, **sweep_kw) -> tuple[SweepResult, PartialStore | None, int]:
-    """:func:`~vibrogear.solvers.sweep.sweep` with each finished point appended to
+    """:func:`~vibrogear.solvers.sequential.sweep.sweep` with each finished point appended to
     ``out_dir/sweep.partial.jsonl`` and the points of a matching partial file reused.
     ``physics``: fingerprint of the model (default: its content hash).  Returns (result,
     store, resumed points); ``store`` is None when ``root`` is False (MPI ranks other than 0

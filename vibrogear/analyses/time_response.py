@@ -12,10 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..models.contact_law import flank
-from ..solvers.contact_eval import contact_history
+from ..solvers.integrator.contact_eval import contact_history
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.integrate import integrate
-from ..solvers.rtol_limit import loosest_rtol
+from ..solvers.integrator.integrate import integrate
+from ..solvers.integrator.rtol_limit import loosest_rtol
 from ..solvers.status import Status
 from .study import Study, integration_options
 

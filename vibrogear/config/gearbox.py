@@ -1,7 +1,7 @@
 """Gearbox scene schema: ``[gearbox]`` (shafts, gears, meshes, bearings, external couplings).
 
 Frames.  The *housing frame* is the one of ``[housing]``: x along the housing length, y along
-the shafts (front wall y = 0), z up.  Every shaft is a rotor of ``vibrogear.models.rotor``
+the shafts (front wall y = 0), z up.  Every shaft is a rotor of ``vibrogear.models.rotor.model``
 whose own axis is z; a shaft's *rotor frame* is (X, Y, Z) = (-x, z, y) of the housing frame
 (right-handed, Y up), so all shafts share one orientation.  A shaft's axis sits at the
 housing-frame (x, z) of its bore (or of its ``x``/``z`` fields when there is no housing) and

@@ -4,7 +4,7 @@ model declares.
 These frozen dataclasses live in the config layer (the lowest one) so that a scene section
 *is* the solver's options object ([integration], [shooting]) or builds it
 (:meth:`~vibrogear.config.sections.ContinuationSettings.options`), while the solvers
-import them from here (``vibrogear.solvers.integrate.IntegrationOptions`` is this class).
+import them from here (``vibrogear.solvers.integrator.integrate.IntegrationOptions`` is this class).
 Their ranges are the :func:`~vibrogear.config.base.spec` metadata of the fields: ``build``
 checks them while reading a scene (naming the field path), and ``__post_init__`` checks the
 same metadata and the cross-field invariants for objects made in code, so there is one
@@ -59,7 +59,7 @@ def check_range(obj, path: str, lo: str, hi: str) -> None:
 
 @dataclass(frozen=True)
 class IntegrationOptions:
-    """[integration]: the compiled Dormand-Prince 5(4) integrator (solvers/integrate.py)."""
+    """[integration]: the compiled Dormand-Prince 5(4) integrator (solvers/integrator/integrate.py)."""
     rtol: float = spec(1e-9, gt=0.0, lt=1.0)
     atol: float = spec(1e-11, gt=0.0)
     max_steps: int = spec(5_000_000, gt=0)
@@ -83,7 +83,7 @@ class IntegrationOptions:
 
 @dataclass(frozen=True)
 class ShootingOptions:
-    """[shooting]: Newton on the periodicity residual u(T) - u0 (solvers/shooting.py); the
+    """[shooting]: Newton on the periodicity residual u(T) - u0 (solvers/periodic/shooting.py); the
     tolerance is also the continuation corrector's."""
     tol: float = spec(1e-9, gt=0.0, lt=1.0, doc="periodicity residual tolerance (relative)")
     max_iter: int = spec(25, ge=1, le=1000)
@@ -94,7 +94,7 @@ class ShootingOptions:
 
 @dataclass(frozen=True, kw_only=True)
 class SweepOptions:
-    """The settings of :func:`vibrogear.solvers.sweep.sweep` (sequential continuation)."""
+    """The settings of :func:`vibrogear.solvers.sequential.sweep.sweep` (sequential continuation)."""
     transient_periods: int = spec(200, ge=0, le=1_000_000)
     extra_transient_periods: int = spec(800, ge=0, le=10_000_000,
                                         doc="more transient allowed while not yet settled "
@@ -154,7 +154,7 @@ class ContinuationSteps:
 
 @dataclass(frozen=True, kw_only=True)
 class ContinuationOptions(ContinuationSteps):
-    """The options of :func:`vibrogear.solvers.continuation.continuation`: the steps and
+    """The options of :func:`vibrogear.solvers.periodic.continuation.continuation`: the steps and
     the parameter range [param_min, param_max] the branch is traced in."""
     param_min: float
     param_max: float

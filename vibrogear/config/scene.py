@@ -15,6 +15,7 @@ from .nvh_section import NvhConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
+from .verbs import MODEL_KINDS, VERBS
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
                        IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
                        RpmContinuationConfig, RpmSweepConfig,
@@ -24,41 +25,13 @@ from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConf
 __all__ = ["Scene", "GearboxScene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
 
 #: sections that define the mechanical model; a scene has exactly one kind of model
-MODEL_SECTIONS = ("impact_pair", "gearbox", "rotor", "housing")
+MODEL_SECTIONS = MODEL_KINDS
 
-#: analysis -> option section it needs (None: needs none)
-ANALYSIS_SECTION = {
-    "time_response": "time_response",
-    "sweep": "sweep",
-    "continuation": "continuation",
-    "report": "report",
-    "critical_damping": "critical_damping",
-    "modes": None,
-    "campbell": None,
-    "housing_sweep": "housing_sweep",
-    "housing_convergence": "housing_convergence",
-    "reduction_accuracy": "reduction_accuracy",
-    "nvh": "nvh",
-    "map": "map",
-    "runup": "runup",
-}
+#: analysis -> option section it needs (None: needs none); from the verb registry
+ANALYSIS_SECTION = {name: v.section for name, v in VERBS.items()}
 
-#: analysis -> model sections that support it
-ANALYSIS_MODELS = {
-    "time_response": ("impact_pair", "gearbox"),
-    "sweep": ("impact_pair", "gearbox"),
-    "continuation": ("impact_pair", "gearbox"),
-    "report": ("impact_pair",),
-    "critical_damping": ("impact_pair",),
-    "modes": ("gearbox", "rotor", "housing"),
-    "campbell": ("rotor",),
-    "housing_sweep": ("housing",),
-    "housing_convergence": ("housing",),
-    "reduction_accuracy": ("gearbox",),
-    "nvh": ("gearbox",),
-    "map": ("gearbox",),
-    "runup": ("gearbox",),
-}
+#: analysis -> model sections that support it; from the verb registry
+ANALYSIS_MODELS = {name: v.models for name, v in VERBS.items()}
 
 
 @dataclass(frozen=True)

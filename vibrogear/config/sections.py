@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from .base import ConfigError, check_name, spec
+from .verbs import VERBS
 from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
                       Parameter, ShootingOptions, SweepOptions, check_range)
 
@@ -26,22 +27,8 @@ __all__ = ["SceneInfo", "ReductionAccuracyConfig", "ImpactPairConfig", "Integrat
            "RpmContinuationConfig", "RpmTimeResponseConfig", "ReportConfig",
            "CriticalDampingConfig", "ContinuationOptions", "ANALYSES"]
 
-#: analyses a scene may list, with what each is for
-ANALYSES = {
-    "time_response": "time response from the initial state",
-    "sweep": "sequential continuation (brute-force bifurcation diagram) up and down in the parameter",
-    "continuation": "shooting + pseudo-arclength continuation of periodic orbits with Floquet stability",
-    "report": "work-precision study: integrator tolerance and shooting residual against run time",
-    "critical_damping": "bisection in zeta for the damping where the primary-resonance folds meet",
-    "modes": "modal analysis (rotor or housing)",
-    "campbell": "Campbell diagram of a rotor",
-    "housing_sweep": "housing geometry sweep: first frequencies against one housing parameter",
-    "housing_convergence": "housing mesh convergence: frequency error vs DOF vs wall time, P1 and P2",
-    "reduction_accuracy": "gearbox reduction level: frequency error, MAC and response error vs run time",
-    "nvh": "spectra of mesh deformations and forces, bearing forces; housing ERP and surface velocity",
-    "map": "speed x load operating map (sweeps over speed at each load) with LP/PD curves",
-    "runup": "run-up / run-down transient: envelopes, contact losses, order tracks, waterfall",
-}
+#: analyses a scene may list, with what each is for (the verb registry)
+ANALYSES = {name: v.help for name, v in VERBS.items()}
 
 
 @dataclass(frozen=True)

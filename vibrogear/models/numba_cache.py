@@ -18,9 +18,9 @@ __all__ = ["COMPILED_SOURCES"]
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: the modules whose compiled functions inline each other
 COMPILED_SOURCES = tuple(os.path.join(_PACKAGE, *p.split("/")) for p in (
-    "models/contact_law.py", "solvers/kernels.py", "solvers/tableau.py",
-    "solvers/dense_output.py", "solvers/jacobian.py", "solvers/variational.py",
-    "solvers/dopri.py"))
+    "models/contact_law.py", "solvers/integrator/kernels.py", "solvers/integrator/tableau.py",
+    "solvers/integrator/dense_output.py", "solvers/integrator/jacobian.py", "solvers/integrator/variational.py",
+    "solvers/integrator/dopri.py"))
 
 _Base = caching.UserProvidedCacheLocator if config.CACHE_DIR else caching.InTreeCacheLocator
 

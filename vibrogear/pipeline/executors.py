@@ -59,7 +59,7 @@ def broadcast(value):
 def blas_threads(n: int):
     """Context manager: at most ``n`` BLAS threads in this process (threadpoolctl).  The
     parallelism is the processes' (the continuation's second core runs the split tangent
-    columns, :mod:`vibrogear.solvers.split_flow`); two BLAS threads on the continuation's
+    columns, :mod:`vibrogear.solvers.integrator.split_flow`); two BLAS threads on the continuation's
     small products (52 x 146 by 146 x 292) gained nothing: the two-stage branch 71 / 73 s
     with two / one thread, and 78 / 51 s in a second pair of runs."""
     from threadpoolctl import threadpool_limits

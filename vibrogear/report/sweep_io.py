@@ -5,7 +5,7 @@
   losses per excitation period), plus ``index``, ``status``, ``ok``, ``defect``,
   ``clusters``, ``u_end`` and the scalar error estimates; the motion class with its
   evidence: ``motion_class`` (int code) and ``motion_class_legend`` (its names, see
-  :mod:`vibrogear.solvers.motion`), ``lyapunov`` (largest exponent, per model time unit;
+  :mod:`vibrogear.solvers.sequential.motion`), ``lyapunov`` (largest exponent, per model time unit;
   0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2, its 95 %
   interval), ``transient_used`` (periods), ``settled_by``; per contact group
   ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics

@@ -7,7 +7,7 @@ point as a categorical colour band (one row per direction, and one per contact g
 direction where the group's own class differs: a loaded mesh can be period-1 while a free
 gear rattles), with a legend.  Then one axis per mesh (two-sided contact): drive-flank
 (filled) and back-flank (open) impacts per excitation period; last, where any mesh
-rattles, the impact energy per period of each mesh (log scale; see solvers/motion.py).
+rattles, the impact energy per period of each mesh (log scale; see solvers/sequential/motion.py).
 
 With ``branches`` (the arrays of a continuation's ``branch.npz``, same display unit) the
 top panel also carries the continuation branches' maxima and minima: stable solid,

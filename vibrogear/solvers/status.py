@@ -17,13 +17,13 @@ __all__ = ["Status", "MESSAGES", "from_code", "SUCCESS"]
 
 class Status(IntEnum):
     OK = 0
-    # ---- integrator (values used inside the compiled loop, solvers/dopri.py)
+    # ---- integrator (values used inside the compiled loop, solvers/integrator/dopri.py)
     MAX_STEPS = -1
     NONFINITE = -2
     CHATTERING = -3
     STEP_TOO_SMALL = -4
     GRAZING = -5
-    DIVERGED = -6               # checked after the loop (solvers/trust.py)
+    DIVERGED = -6               # checked after the loop (solvers/integrator/trust.py)
     INACCURATE = -7
     BAD_PARAMETER = -10
     # ---- solvers above the integrator

@@ -1,0 +1,186 @@
+"""Whether a finished integration can be trusted: the checks every run passes before it is
+called ok.
+
+The compiled loop stops only on hard failures (non-finite state, step underflow,
+chattering).  A run at a tolerance the model cannot use may still finish with finite
+numbers that mean nothing: the error controller lets the stiff modes carry noise of the
+size of the tolerance, the contacts see it as spurious impacts, and the state can grow
+without bound.  :func:`assess` judges the finished run on three pieces of evidence the
+loop returns, cheapest first:
+
+1. **Physical bounds** (:data:`Status.DIVERGED`).  No contact deformation may exceed
+   ``max_deformation`` times its physical scale: the dead zone's width (a mesh's backlash),
+   plus the static deflection under the mean load (:func:`~.static.static_equilibrium`),
+   plus the kinematic error's amplitude, plus the resonant response of every master mode
+   to the harmonic forcing (its amplitude over modal damping times frequency; a forced
+   undamped or rigid mode leaves the contacts it moves without a bound).  In an undriven system with non-negative damping
+   (no harmonic forcing, no kinematic error, no stiffness modulation, a symmetric
+   spin-free coupling) the mechanical energy may not grow.
+2. **Event storms** (:data:`Status.INACCURATE`).  More than ``max_events_per_period``
+   contact events per contact and excitation period: contacts switching on integration
+   noise, not on the motion.
+3. **The error estimate** (:data:`Status.INACCURATE`).  The sum of the local error
+   estimates (a bound of the global error while errors do not grow along the flow) per
+   excitation period above ``max_error`` times the solution's size (the RMS norm of the
+   larger of the start and end states).  Per period, not in total: in a damped, stable
+   motion the error made in one period decays over the next few, so the total of a long
+   run overstates the error by the run's length (a 400-period run at a tolerance that is
+   accurate over 20 periods would otherwise fail).
+
+Each failure message names the tolerance in use and says to tighten it; the loosest rtol
+the model can use is found by :func:`vibrogear.solvers.integrator.rtol_limit.loosest_rtol`.
+"""
+from __future__ import annotations
+
+import math
+import weakref
+
+import numpy as np
+
+from ...config.options import IntegrationOptions
+from ...models.contact_law import evaluate_set
+from ...models.reduced import ReducedModel
+from ..status import Status
+
+__all__ = ["assess", "deformation_scale", "mechanical_energy", "is_undriven"]
+
+_SCALE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_UNDRIVEN: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _gap_width(ct) -> np.ndarray:
+    """Per contact: the dead zone's width where both gaps are finite, else the finite gap."""
+    hi, lo = np.asarray(ct.gap_hi, dtype=float), np.asarray(ct.gap_lo, dtype=float)
+    two = np.isfinite(hi) & np.isfinite(lo)
+    width = np.where(two, np.abs(hi - np.where(two, lo, 0.0)), 0.0)
+    one = np.where(np.isfinite(hi), np.abs(hi), 0.0)
+    return np.where(two, width, one)
+
+
+def deformation_scale(model: ReducedModel) -> np.ndarray:
+    """(nc,) the physical size of each contact's deformation: gap width + |static
+    deflection| + kinematic-error amplitude + resonant forced response (cached per model)."""
+    got = _SCALE.get(model)
+    if got is not None:
+        return got
+    from ..static import static_equilibrium     # local: static imports this layer's status
+
+    ct = model.contacts
+    te = np.sum(np.hypot(ct.error_cos, ct.error_sin), axis=1) if ct.count else np.zeros(0)
+    st = static_equilibrium(model, 0.0)
+    static = np.abs(ct.directions @ st.x) if st.converged else np.zeros(ct.count)
+    scale = _gap_width(ct) + static + te + _resonant(model)
+    _SCALE[model] = scale
+    return scale
+
+
+def _resonant(model: ReducedModel) -> np.ndarray:
+    """(nc,) the largest deformation the harmonic forcing can drive through each contact
+    if every master mode resonated at once: sum_i |c_ji| |F_i| / (d_i w_i) (inf where an
+    undamped or rigid mode is forced: no bound)."""
+    ct, f = model.contacts, model.forcing
+    amp = np.sum(np.abs(f.Fc), axis=0) + np.sum(np.abs(f.Fs), axis=0)
+    w = np.sqrt(np.maximum(model.omega2, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        per_mode = np.where(amp > 0.0, amp / (model.damping * w), 0.0)
+    return np.abs(ct.directions) @ per_mode if ct.count else np.zeros(0)
+
+
+def is_undriven(model: ReducedModel, param: float) -> bool:
+    """No harmonic forcing, kinematic error or stiffness modulation, damping >= 0 and a
+    symmetric coupling without spin terms: its mechanical energy can only decrease."""
+    got = _UNDRIVEN.get(model)
+    if got is None:
+        f, ct, cp = model.forcing, model.contacts, model.coupling
+        passive = (not np.any(f.Fc) and not np.any(f.Fs) and not np.any(ct.error_cos)
+                   and not np.any(ct.error_sin) and not np.any(ct.stiffness_cos)
+                   and not np.any(ct.stiffness_sin) and bool(np.all(model.damping >= 0.0))
+                   and bool(np.all(ct.damping >= 0.0)) and np.allclose(cp.Kc0, cp.Kc0.T)
+                   and (cp.Bc0.size == 0 or bool(np.all(
+                       np.linalg.eigvalsh(cp.Bc0 + cp.Bc0.T)
+                       >= -1e-12 * max(1.0, float(np.abs(cp.Bc0).max()))))))
+        spin_free = not np.any(cp.Kc1) and not np.any(cp.Bc1)
+        got = _UNDRIVEN[model] = (passive, spin_free)
+    passive, spin_free = got
+    return passive and (spin_free or model.spin_per_param * param == 0.0)
+
+
+def mechanical_energy(model: ReducedModel, u: np.ndarray) -> float:
+    """Kinetic + modal and coupling strain + contact potential - work of the mean load
+    (for :func:`is_undriven` models: the contact law's potential k s^(p+1) / (p+1))."""
+    m = model.n_modes
+    x, v = u[:m], u[m:]
+    ct, cp = model.contacts, model.coupling
+    e = 0.5 * v @ v + 0.5 * x @ (model.omega2 * x) - model.forcing.F0 @ x
+    if cp.P.shape[0]:
+        y = cp.P @ x
+        e += 0.5 * y @ (cp.Kc0 @ y)
+    if ct.count:
+        d = ct.directions @ x
+        p = ct.exponent
+        over = np.maximum(d - ct.gap_hi, 0.0)
+        under = np.where(np.isfinite(ct.gap_lo), np.maximum(ct.gap_lo - d, 0.0), 0.0)
+        e += float(np.sum(ct.k_hi * over ** (p + 1) / (p + 1)
+                          + ct.k_lo * under ** (p + 1) / (p + 1)))
+    return float(e)
+
+
+def _tighten(options: IntegrationOptions) -> str:
+    return (f"rtol {options.rtol:.3g}: tighten [integration] rtol (the section's own rtol "
+            f"where it has one), e.g. to {options.rtol / 100:.1g}")
+
+
+def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
+           u_eval: np.ndarray, t0: float, t1: float, error_estimate: float, events: int,
+           monitor_range: tuple[float, float], options: IntegrationOptions
+           ) -> tuple[Status, str, float]:
+    """(status, message, relative error estimate) of a run the loop finished: OK, or
+    DIVERGED / INACCURATE with the evidence and the tolerance to tighten."""
+    ct = model.contacts
+    n = u0.shape[0]
+    size = np.sqrt(max(float(u0 @ u0), float(u_end @ u_end)) / n)
+    rel = error_estimate / (size + options.atol)
+    if ct.count:
+        m = model.n_modes
+        bound = options.max_deformation * deformation_scale(model)
+        worst = np.abs(ct.directions @ u_end[:m])
+        if u_eval.size:
+            worst = np.maximum(worst, np.max(np.abs(u_eval[:, :m] @ ct.directions.T), axis=0))
+        lo, hi = monitor_range
+        if math.isfinite(lo) and math.isfinite(hi):  # the monitored extrema see between samples
+            te = float(np.sum(np.hypot(ct.error_cos[model.monitor], ct.error_sin[model.monitor])))
+            worst[model.monitor] = max(worst[model.monitor], max(abs(lo), abs(hi)) - te)
+        over = np.flatnonzero((worst > bound) & (bound > 0.0))      # inf bound: none
+        if over.size:
+            j = int(over[np.argmax(worst[over] / bound[over])])
+            name = ct.names[j] if j < len(ct.names) else f"contact {j}"
+            return (Status.DIVERGED,
+                    f"{Status.DIVERGED.message}: the deformation of {name} reached "
+                    f"{worst[j]:.3g}, {worst[j] / bound[j] * options.max_deformation:.3g} "
+                    f"times its physical scale {bound[j] / options.max_deformation:.3g} "
+                    f"(gap + static deflection + kinematic error; the limit is "
+                    f"{options.max_deformation:g} times); {_tighten(options)}", rel)
+    if is_undriven(model, param):
+        e0, e1 = mechanical_energy(model, u0), mechanical_energy(model, u_end)
+        slack = 1e-6 * max(abs(e0), abs(e1)) + 10.0 * error_estimate * (size + 1e-300)
+        if e1 > e0 + slack and abs(e1 - e0) > 1e-3 * abs(e0):
+            return (Status.DIVERGED,
+                    f"{Status.DIVERGED.message}: the energy of an undriven, damped system "
+                    f"grew from {e0:.6g} to {e1:.6g}; {_tighten(options)}", rel)
+    W = model.excitation_frequency(param)
+    periods = (t1 - t0) * W / (2.0 * np.pi) if W > 0.0 else 1.0
+    if ct.count and W > 0.0:
+        limit = options.max_events_per_period * ct.count * max(periods, 1.0)
+        if events > limit:
+            return (Status.INACCURATE,
+                    f"{Status.INACCURATE.message}: {events} contact events in "
+                    f"{periods:.4g} excitation periods, more than "
+                    f"{options.max_events_per_period:g} per contact and period (the contacts "
+                    f"switch on integration noise); {_tighten(options)}", rel)
+    rate = rel / max(periods, 1.0)
+    if rate > options.max_error:
+        return (Status.INACCURATE,
+                f"{Status.INACCURATE.message}: the accumulated error estimate "
+                f"{error_estimate:.3g} is {rate:.3g} of the solution's size {size:.3g} per "
+                f"excitation period (limit {options.max_error:g}); {_tighten(options)}", rel)
+    return Status.OK, Status.OK.message, rel

@@ -1,0 +1,300 @@
+"""Motion classes with evidence and the rattle / contact metrics of a sweep point.
+
+Motion classes (integer codes, :data:`MOTION_LEGEND`):
+
+* ``PERIODIC`` (1): the stroboscopic samples repeat with a period n <= max_period
+  (``period_n`` gives n; evidence: the periodicity defect);
+* ``QUASI_PERIODIC`` (2): no period, the transient stopped because its statistics
+  settled, and the 95 % interval of the largest Lyapunov exponent contains 0;
+* ``CHAOTIC`` (3): no period, and the interval lies above 0;
+* ``NOT_SETTLED`` (4): no period, not chaotic, and either the interval lies below 0 (the
+  motion still converges: a transient longer than the budget, or a period > max_period)
+  or the transient budget was used up;
+* ``APERIODIC`` (5): no period, the transient stopped because its statistics settled,
+  no exponent computed (``[sweep] lyapunov = false``);
+* ``FAILED`` (0): the integration failed.
+
+Per contact group (each gear mesh, i.e. each two-sided contact; each bearing, its
+one-sided rolling-element contacts grouped by the name before ':') the period is
+classified again on the group's deformations alone: the loaded mesh can be period-1
+while a free gear rattles; a group without a period of its own takes the point's class.
+
+Contact metrics over a record window of P excitation periods, from the integrator's
+located contact events (exact switch times) and the contact law's modes:
+
+* ``impacts_drive_<g>`` / ``impacts_back_<g>``: contact onsets on the upper (drive,
+  delta > gap_hi) / lower (back, delta < gap_lo) flank per excitation period (a
+  gearbox's: the mesh period of its first mesh; other meshes are counted per that
+  period too);
+* ``impact_velocity_rms_<g>`` / ``impact_velocity_max_<g>``: RMS and largest normal
+  approach speed |delta'| at those onsets, in the model's length unit per second (m/s for
+  a gearbox; ``ReducedModel.time_unit_s``);
+* ``contact_fraction_<g>``: fraction of the time in contact (mode != 0);
+* ``rattle_<g>``: impact energy per period, sum over onsets of m_eff v^2 / 2 divided by
+  P, with m_eff = 1 / (c . c) the effective mass of the contact direction c in the
+  model's mass-normalised modal coordinates, converted with the model's force unit
+  (energy = force x length: J for a gearbox; model units for a nondimensional model);
+* ``unloaded_<bearing>``: mean number of its rolling elements out of contact.
+
+Each metric has an ``_err`` companion: the standard error of its mean over up to 8
+consecutive blocks of the record window (batch means, s / sqrt(B); blocks of whole
+multiples of the period for a periodic point, where it is ~0), so that chaotic points
+report statistics with an error that shrinks as the record grows.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+
+from ...models.reduced import ReducedModel
+from ..integrator.contact_eval import contact_kinematics
+
+__all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
+           "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics",
+           "metrics_with_errors", "classify_period", "count_clusters",
+           "monitored_deformation", "best_defect", "deformation_statistics", "batch_blocks"]
+
+FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
+MOTION_LEGEND = ("failed", "periodic", "quasi-periodic", "chaotic", "not settled",
+                 "not periodic (no exponent)")
+
+
+def motion_class(period_n: int, ci=(math.nan, math.nan), *, budget_used: bool = False,
+                 failed: bool = False) -> int:
+    """The class code of a point (module docstring) from its period, the exponent's
+    interval ``ci`` (NaN: not computed) and whether the transient budget ran out."""
+    if failed:
+        return FAILED
+    if period_n > 0:
+        return PERIODIC
+    lo, hi = (float(c) for c in ci)
+    if math.isfinite(lo) and math.isfinite(hi):
+        if lo > 0.0:
+            return CHAOTIC
+        if hi < 0.0 or budget_used:
+            return NOT_SETTLED
+        return QUASI_PERIODIC
+    return NOT_SETTLED if budget_used else APERIODIC
+
+
+def _key(name: str) -> str:
+    return re.sub(r"[^0-9A-Za-z]+", "_", str(name)).strip("_") or "contact"
+
+
+def contact_groups(model: ReducedModel) -> dict:
+    """{key: ("mesh" | "bearing", contact indices)}: every two-sided contact alone (a
+    gear mesh, the impact pair's clearance), one-sided contacts grouped by the part of
+    their name before ':' (a bearing's rolling elements)."""
+    ct = model.contacts
+    out: dict = {}
+    names = ct.names or tuple(f"c{j}" for j in range(ct.count))
+    for j in range(ct.count):
+        if np.isfinite(ct.gap_lo[j]):
+            key = _key(names[j])
+            while key in out:
+                key += "_"
+            out[key] = ("mesh", np.array([j]))
+        else:
+            key = "bearing_" + _key(str(names[j]).split(":")[0])
+            kind, idx = out.get(key, ("bearing", np.zeros(0, int)))
+            out[key] = (kind, np.append(idx, j).astype(int))
+    return out
+
+
+def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:
+    """Fraction of [t0, t1] with mode != 0, from the initial mode and the switches."""
+    edges = np.concatenate([[t0], times, [t1]])
+    states = np.concatenate([[mode0], modes])
+    return float(np.sum(np.diff(edges) * (states != 0)) / (t1 - t0))
+
+
+def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed,
+                   t0: float, t1: float, period: float, *, empty: float = 0.0) -> dict:
+    """The metrics (module docstring) over [t0, t1]: ``mode0`` (nc,) the modes at t0,
+    ``events`` (t, contact, new mode) of the window in time order, ``onset_speed`` (len
+    events,) |delta'| at each event (NaN where not needed); ``empty``: the approach
+    speeds of a mesh without impacts."""
+    t, j, md = events
+    speed = np.asarray(onset_speed, dtype=float)
+    P = (t1 - t0) / period
+    out = {}
+    c2 = np.sum(model.contacts.directions ** 2, axis=1)
+    per_s = 1.0 / model.time_unit_s          # approach speeds per second, not per model time
+    joule = model.force_unit_n               # model energy (force x length) -> J
+    for key, (kind, idx) in groups.items():
+        if kind == "mesh":
+            c = int(idx[0])
+            mine = j == c
+            drive = mine & (md == 1)
+            back = mine & (md == -1)
+            onset = drive | back
+            v = speed[onset] * per_s
+            out[f"impacts_drive_{key}"] = float(np.sum(drive) / P)
+            out[f"impacts_back_{key}"] = float(np.sum(back) / P)
+            out[f"impact_velocity_rms_{key}"] = float(np.sqrt(np.mean(v ** 2))) if v.size \
+                else empty
+            out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else empty
+            out[f"contact_fraction_{key}"] = _fraction(int(mode0[c]), t[mine], md[mine], t0, t1)
+            out[f"rattle_{key}"] = float(np.sum(0.5 * speed[onset] ** 2 / c2[c]) * joule / P)
+        else:
+            out[f"unloaded_{key}"] = float(sum(
+                1.0 - _fraction(int(mode0[c]), t[j == c], md[j == c], t0, t1) for c in idx))
+    return out
+
+
+def metrics_with_errors(model: ReducedModel, groups: dict, mode0, events, onset_speed,
+                        t0: float, t1: float, period: float, *, period_n: int = 0,
+                        blocks: int = 8) -> dict:
+    """:func:`window_metrics` over [t0, t1] and the ``_err`` companions: the standard
+    error of the mean of the metric over at most ``blocks`` consecutive blocks of whole
+    periods (multiples of ``period_n`` for a periodic point), s / sqrt(B) (batch means;
+    two blocks: half their difference).  Speeds use the blocks that have impacts."""
+    t, j, md = (np.asarray(a) for a in events)
+    speed = np.asarray(onset_speed, dtype=float)
+    full = window_metrics(model, groups, mode0, (t, j, md), speed, t0, t1, period)
+    P = int(round((t1 - t0) / period))
+    L, B = batch_blocks(P, period_n, blocks)
+    if B < 2:
+        return {**full, **{f"{k}_err": math.nan for k in full}}
+    mode = np.array(mode0, dtype=int).copy()
+    vals = {k: [] for k in full}
+    for b in range(B):
+        a, e = t0 + b * L * period, t0 + (b + 1) * L * period
+        sel = (t >= a) & (t < e)
+        w = window_metrics(model, groups, mode, (t[sel], j[sel], md[sel]), speed[sel], a, e,
+                           period, empty=math.nan)
+        for k, v in w.items():
+            vals[k].append(v)
+        for i in np.nonzero(sel)[0]:            # modes at the next block's start
+            mode[j[i]] = md[i]
+    err = {}
+    for k, v in vals.items():
+        v = np.asarray(v, dtype=float)
+        v = v[np.isfinite(v)]
+        if v.size >= 2:
+            err[f"{k}_err"] = float(np.std(v, ddof=1) / math.sqrt(v.size))
+        else:                                   # no impacts in any block: exactly 0
+            err[f"{k}_err"] = 0.0 if v.size == 0 and full[k] == 0.0 else math.nan
+    return {**full, **err}
+
+
+def batch_blocks(periods: int, period_n: int = 0, blocks: int = 8) -> tuple[int, int]:
+    """(L, B): blocks of L whole periods (a multiple of ``period_n`` for a periodic point),
+    B of them, at most about ``blocks``, over a record of ``periods`` periods."""
+    n = max(1, int(period_n))
+    L = n * max(1, (int(periods) // n) // int(blocks))
+    return L, int(periods) // L
+
+
+def deformation_statistics(delta, samples_per_period: int, *, harmonics=(1, 2, 3),
+                           period_n: int = 0, blocks: int = 8) -> dict:
+    """Statistics of a deformation record that converge on chaotic motion: ``rms`` (about
+    its mean: the dynamic deformation) and ``line_<k>x``, the amplitude of the spectral line
+    at k times the excitation frequency (the Fourier coefficient over whole periods,
+    |2/N sum delta exp(-i k W t)|), each with an ``_err`` companion by batch means over
+    blocks of whole periods (:func:`batch_blocks`; NaN with fewer than 2 blocks).
+    ``delta``: S = ``samples_per_period`` equidistant samples per period over whole
+    periods, starting at a period's start (the sample at the record's end left out)."""
+    d = np.asarray(delta, dtype=float).ravel()
+    S = int(samples_per_period)
+    P = d.size // S
+    d = d[:P * S]
+
+    def stats(x):
+        k = np.arange(x.size)
+        out = {"rms": float(np.std(x))}
+        for h in harmonics:
+            c = 2.0 / x.size * np.sum(x * np.exp(-2j * np.pi * h * k / S))
+            out[f"line_{h}x"] = float(abs(c))
+        return out
+
+    full = stats(d)
+    L, B = batch_blocks(P, period_n, blocks)
+    if B < 2:
+        return {**full, **{f"{k}_err": math.nan for k in full}}
+    per = [stats(d[b * L * S:(b + 1) * L * S]) for b in range(B)]
+    err = {f"{k}_err": float(np.std([q[k] for q in per], ddof=1) / math.sqrt(B))
+           for k in full}
+    return {**full, **err}
+
+
+# ---------------------------------------------------------------- periodicity
+
+def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.ndarray:
+    """delta_mon = c_mon . x - e_mon(t) at times ``t`` for states (len(t), 2m)."""
+    if model.contacts.count == 0:
+        return np.atleast_2d(states)[:, 0].copy()
+    return contact_kinematics(model, param, t, states, rows=[model.monitor])[0][0]
+
+
+def _scaled(samples: np.ndarray, split: int | None, ref=None) -> np.ndarray:
+    """Samples divided by block scales (largest |value| in each block of ``ref``, default
+    the samples themselves; tiny floor)."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    r = s if ref is None else np.asarray(ref, dtype=float).reshape(-1, s.shape[1])
+    blocks = [slice(0, s.shape[1])] if not split else [slice(0, split), slice(split, None)]
+    out = np.empty_like(s)
+    for b in blocks:
+        sc = float(np.max(np.abs(r[:, b]), initial=0.0))
+        out[:, b] = s[:, b] / (sc if sc > 1e-300 else 1.0)
+    return out
+
+
+def classify_period(samples, max_period: int, period_tol: float, *,
+                    split: int | None = None) -> tuple[int, float]:
+    """(n, defect): smallest n <= max_period with max_k |P_{k+n} - P_k| <= period_tol.
+
+    ``samples`` (R,) or (R, n) stroboscopic samples; ``split``: index where the velocity
+    block starts (the two blocks are scaled separately).  Differences are measured in
+    units of each block's largest |value|.  Returns (0, nan) when no n qualifies or the
+    samples are not finite.
+    """
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    if s.shape[0] < 2 or not np.all(np.isfinite(s)):
+        return 0, math.nan
+    z = _scaled(s, split)
+    defects = {}
+    for n in range(1, min(int(max_period), s.shape[0] - 1) + 1):
+        defects[n] = float(np.max(np.abs(z[n:] - z[:-n])))
+        if defects[n] > period_tol:
+            continue
+        # a genuine period-n cycle is resolved from every shorter divisor cycle; a slowly
+        # decaying transient can pass at n > 1 by aliasing while n = 1 nearly passes
+        if all(defects[d] > 10.0 * period_tol for d in range(1, n) if n % d == 0):
+            return n, defects[n]
+    return 0, math.nan
+
+
+def count_clusters(samples, rel_tol: float = 1e-3, *, split: int | None = None) -> int:
+    """Number of distinct Poincare clusters (greedy, inf-norm radius ``rel_tol`` in scaled
+    units).  Period-n motion gives n; quasi-periodic or chaotic motion gives many."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    if s.shape[0] == 0 or not np.all(np.isfinite(s)):
+        return 0
+    z = _scaled(s, split)
+    centres: list[np.ndarray] = []
+    for p in z:
+        if not any(float(np.max(np.abs(p - c))) <= rel_tol for c in centres):
+            centres.append(p)
+    return len(centres)
+
+
+def best_defect(samples, max_period: int) -> float:
+    """min over n <= max_period of max_k |P_{k+n} - P_k| (raw units, inf-norm): the
+    distance of the stroboscopic samples from the nearest period.  It shrinks while a
+    transient decays and stays put on a quasi-periodic or chaotic attractor; compare it
+    between windows of one run (it carries the samples' units)."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    d = [float(np.max(np.abs(s[n:] - s[:-n]))) for n in range(1, min(int(max_period),
+                                                                   s.shape[0] - 1) + 1)]
+    return min(d) if d else math.nan

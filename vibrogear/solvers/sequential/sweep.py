@@ -1,0 +1,257 @@
+"""Sequential continuation (brute-force bifurcation diagram, the paper's Fig. 2).
+
+The work is split into independent *units* (direction, segment): the parameter values
+of each direction ("up": as given, "down": reversed) are cut into ``segments``
+contiguous pieces; every unit starts from ``u0`` (or zeros) at its first point and walks
+its points in order, each point starting from the end state of the previous good point
+of the same unit.  Units never depend on each other, so they run in parallel (local
+processes or MPI ranks, :mod:`vibrogear.pipeline.executors`) and the results do not
+depend on the number of workers.
+
+Each point (:mod:`.sweep_point`) integrates a transient that stops when the stroboscopic
+map has converged or the statistics have settled (at most ``transient_periods +
+extra_transient_periods`` periods), then ``record_periods`` periods that are recorded:
+stroboscopic (Poincare) samples of the full state and of the monitored deformation
+delta_mon = c_mon . x - e_mon(t), its extrema (located on the dense output), the contact
+losses of the monitored contact, the contact events.  The motion class with its evidence
+(period-n, else the largest Lyapunov exponent with its interval) and the rattle / contact
+metrics per contact group come from them (:mod:`.motion`, :mod:`.lyapunov`).
+
+Each point starts at t = 0 where the excitation phase is cos(W t) = 1; since a whole
+number of periods is integrated, the end state is again at phase 0 and seeds the next
+point directly.  A failed point keeps NaN values and its integrator status and
+message; the unit goes on from its last good state.  Solvers never print.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from functools import partial
+
+import numpy as np
+
+from ...config.options import SweepOptions
+from ...models.reduced import ReducedModel
+from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
+from ..integrator.integrate import IntegrationOptions
+from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
+from ..status import Status
+from .sweep_point import PointRecord, run_point
+
+__all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
+           "count_clusters", "monitored_deformation", "assemble_result", "MOTION_LEGEND"]
+
+DIRECTIONS = ("up", "down")
+
+
+@dataclass(frozen=True, eq=False)
+class SweepResult:
+    """All points of a sweep in unit order (up units first, then down; each unit in
+    walk order), whatever order the workers finished them in."""
+    param: np.ndarray            # (N,)
+    direction: np.ndarray        # (N,) "up" / "down"
+    index: np.ndarray            # (N,) index into the parameter grid
+    qmin: np.ndarray             # (N,) NaN where failed
+    qmax: np.ndarray
+    poincare: np.ndarray         # (N, R)
+    period_n: np.ndarray         # (N,) int, 0 = not periodic
+    impacts: np.ndarray          # (N,) contact losses per excitation period
+    defect: np.ndarray           # (N,) periodicity defect (NaN: not periodic / failed)
+    clusters: np.ndarray         # (N,) int
+    status: np.ndarray           # (N,) int, 0 ok
+    message: tuple[str, ...]
+    u_end: np.ndarray            # (N, n)
+    steps: int
+    rejected: int
+    rhs_calls: int
+    events: int
+    wall_time: float             # of this call (resumed points cost nothing)
+    point_wall: np.ndarray       # (N,) wall time per point as recorded
+    rtol: float
+    atol: float
+    period_tol: float
+    param_name: str = "param"
+    status_code: Status = Status.OK   # OK, PARTIAL (some points failed), STOPPED_BY_CALLBACK
+    status_message: str = "ok"
+    states: np.ndarray | None = None   # (N, R, n) when kept
+    records: tuple = field(default=(), repr=False)
+    motion_class: np.ndarray | None = None    # (N,) int, index into MOTION_LEGEND
+    lyapunov: np.ndarray | None = None        # (N,) largest exponent (NaN: not computed)
+    lyapunov_ci: np.ndarray | None = None     # (N, 2) its 95 % interval
+    transient_used: np.ndarray | None = None  # (N,) transient periods integrated
+    settled_by: np.ndarray | None = None      # (N,) "map" / "statistics" / "budget"
+    metrics: dict = field(default_factory=dict)   # {name: (N,)} per-group classes, metrics
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.status == 0
+
+    @property
+    def motion_legend(self) -> tuple[str, ...]:
+        """Names of the ``motion_class`` codes."""
+        return MOTION_LEGEND
+
+    @property
+    def error_estimate(self) -> dict:
+        """Integrator tolerances and the worst periodicity defect of the periodic points."""
+        d = self.defect[np.isfinite(self.defect)]
+        return {"rtol": self.rtol, "atol": self.atol, "period_tol": self.period_tol,
+                "max_periodicity_defect": float(d.max()) if d.size else None,
+                "failed_points": int(np.sum(self.status != 0))}
+
+
+# ---------------------------------------------------------------- the sweep
+
+def sweep_units(n_params: int, directions=DIRECTIONS, segments: int = 1) -> list:
+    """[(direction, indices in walk order)]: each direction's walk cut into ``segments``
+    contiguous pieces (at most one point each when segments > n_params)."""
+    out = []
+    for d in directions:
+        order = np.arange(n_params) if d == "up" else np.arange(n_params - 1, -1, -1)
+        for piece in np.array_split(order, max(1, min(int(segments), n_params))):
+            out.append((d, tuple(int(i) for i in piece)))
+    return out
+
+
+def _walk_unit(model, kw, unit, emit) -> int:
+    """Walk one unit (direction, indices, params, seed, done): each new point goes to
+    ``emit``; done points are skipped and their end states seed the next point."""
+    direction, indices, params, seed, done = unit
+    seed = np.array(seed, dtype=float)
+    new = 0
+    for i, p in zip(indices, params):
+        rec = done.get(i)
+        if rec is None:
+            rec = run_point(model, float(p), seed, direction, i, **kw)
+            emit(rec)
+            new += 1
+        if rec.ok:
+            seed = np.array(rec.u_end, dtype=float)
+    return new
+
+
+def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_periods: int = 200,
+          record_periods: int = 32, max_period: int = 8, period_tol: float = 1e-5,
+          options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
+          done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
+          extra_transient_periods: int = 0, segments: int = 1,
+          workers: int | None = None, lyapunov: bool = True,
+          settle: bool = True, second_tolerance: bool = False) -> SweepResult:
+    """Sequential continuation of ``model`` over ``params`` in independent units (see the
+    module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
+
+    ``lyapunov``: the largest Lyapunov exponent of points without a period (their class
+    evidence); ``settle``: stop a transient whose statistics have settled (a transient
+    always stops once the stroboscopic map has converged); ``second_tolerance``: the
+    record window again at rtol / 10 from the same settled state, the change of each
+    statistic (extrema, contact metrics) in ``metrics["<name>_tol_err"]``.
+
+    ``segments``: pieces per direction (each starts again from ``u0``).  ``workers``:
+    local processes (None: min(units, cores); 1: in this process); under ``mpirun``
+    with several ranks the units go to the ranks instead, every rank must call
+    :func:`sweep` with the same arguments and gets the same result.
+    ``callback(record)`` is called in this process (rank 0) after each newly computed
+    point, as it arrives; returning ``False`` stops the sweep.  ``done``:
+    {(direction, index): PointRecord} of points already finished (e.g. read back from
+    a partial file): they are not recomputed, and their end states seed the next point
+    exactly as in an uninterrupted run.  Results do not depend on ``workers``.
+    """
+    wall = time.perf_counter()
+    params = np.asarray(params, dtype=float).ravel()
+    if params.size == 0:
+        raise ValueError("sweep: params must not be empty")
+    directions = tuple(directions)
+    # the settings' rules, defined once with the [sweep] section (ConfigError: a ValueError)
+    SweepOptions(transient_periods=int(transient_periods), record_periods=int(record_periods),
+                 extra_transient_periods=int(extra_transient_periods), directions=directions,
+                 max_period=int(max_period), period_tol=float(period_tol),
+                 segments=int(segments), workers=None if workers is None else int(workers),
+                 lyapunov=bool(lyapunov), second_tolerance=bool(second_tolerance))
+    n_states = model.n_states
+    seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
+    if seed.shape != (n_states,):
+        raise ValueError(f"sweep: u0 must have {n_states} entries")
+    done = dict(done or {})
+    kw = dict(transient_periods=int(transient_periods), record_periods=int(record_periods),
+              max_period=int(max_period), period_tol=float(period_tol),
+              cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
+              extra_transient_periods=int(extra_transient_periods), lyapunov=bool(lyapunov),
+              settle=bool(settle), second_tolerance=bool(second_tolerance))
+    layout = sweep_units(params.size, directions, int(segments))
+    units = [(d, idx, params[list(idx)], seed, {i: done[(d, i)] for i in idx if (d, i) in done})
+             for d, idx in layout]
+    todo = [u for u in units if len(u[4]) < len(u[1])]
+    new: dict = {}
+    stopped = False
+
+    def on_result(_k, rec):
+        nonlocal stopped
+        new[(rec.direction, rec.index)] = rec
+        if callback is not None and callback(rec) is False:
+            stopped = True
+            return False
+        return None
+
+    # a unit's cost: its points still to compute (a resumed sweep's part-done units are
+    # shorter; the longest go first, the short ones fill the end)
+    run_units(partial(_walk_unit, model, kw), todo, workers=workers, on_result=on_result,
+              costs=[len(u[1]) - len(u[4]) for u in todo])
+    if under_mpi() and not is_root():
+        return broadcast(None)                  # rank 0's result, identical everywhere
+    records = [r for d, idx in layout for i in idx
+               for r in (done.get((d, i)) or new.get((d, i)),) if r is not None]
+    failed = sum(1 for r in records if not r.ok)
+    if stopped:
+        code = Status.STOPPED_BY_CALLBACK
+        msg = f"{code.message} after {len(records)} points"
+    elif failed:
+        code, msg = Status.PARTIAL, f"{failed} of {len(records)} points failed"
+    else:
+        code, msg = Status.OK, Status.OK.message
+    result = assemble_result(records, n_states=n_states, record_periods=int(record_periods),
+                             options=options, period_tol=period_tol,
+                             param_name=model.param_name, status_code=code,
+                             status_message=msg, wall_time=time.perf_counter() - wall)
+    return broadcast(result)
+
+
+def assemble_result(records, *, n_states: int, record_periods: int, options, period_tol,
+                    param_name="param", status_code=Status.OK, status_message="ok",
+                    wall_time=0.0) -> SweepResult:
+    """Stack point records into a :class:`SweepResult` (also used after reading files)."""
+    recs = tuple(records)
+    N, R = len(recs), int(record_periods)
+    f = lambda name: np.array([getattr(r, name) for r in recs], dtype=float)  # noqa: E731
+    i = lambda name: np.array([getattr(r, name) for r in recs], dtype=np.int64)  # noqa: E731
+    poinc = np.full((N, R), np.nan)
+    u_end = np.zeros((N, n_states))
+    for k, r in enumerate(recs):
+        p = np.asarray(r.poincare, dtype=float)
+        poinc[k, :min(R, p.size)] = p[:R]
+        u_end[k] = r.u_end
+    states = None
+    if N and all(r.states is not None for r in recs):
+        states = np.stack([r.states for r in recs])
+    keys = sorted({k for r in recs for k in r.metrics})
+    metrics = {k: np.array([r.metrics.get(k, math.nan) for r in recs], dtype=float)
+               for k in keys}
+    for k in keys:                      # classes and periods stay integers (-1: absent)
+        if k.startswith(("period_n_", "motion_class_")):
+            metrics[k] = np.where(np.isfinite(metrics[k]), metrics[k], -1).astype(np.int64)
+    return SweepResult(
+        param=f("param"), direction=np.array([r.direction for r in recs], dtype="<U4"),
+        index=i("index"), qmin=f("qmin"), qmax=f("qmax"), poincare=poinc,
+        period_n=i("period_n"), impacts=f("impacts"), defect=f("defect"),
+        clusters=i("clusters"), status=i("status"), message=tuple(r.message for r in recs),
+        u_end=u_end, steps=int(sum(r.steps for r in recs)),
+        rejected=int(sum(r.rejected for r in recs)),
+        rhs_calls=int(sum(r.rhs_calls for r in recs)),
+        events=int(sum(r.events for r in recs)), wall_time=float(wall_time),
+        point_wall=f("wall_time"), rtol=float(options.rtol), atol=float(options.atol),
+        period_tol=float(period_tol), param_name=param_name, status_code=Status(status_code),
+        status_message=status_message, states=states, records=recs,
+        motion_class=i("motion_class"), lyapunov=f("lyapunov"),
+        lyapunov_ci=np.array([r.lyapunov_ci for r in recs], dtype=float).reshape(N, 2),
+        transient_used=i("transient_used"),
+        settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics)

@@ -1,0 +1,354 @@
+"""One point of a sweep: a transient that stops when settled, a record window, the motion
+class with its evidence (period, Lyapunov exponent) and the contact metrics.
+
+Every integration starts at phase 0 (t = 0, cos(W t) = 1) and covers whole excitation
+periods T, so its end state is again at phase 0.
+
+* **Transient** in blocks of max(max_period + 2, 8) periods, at most ``transient_periods +
+  extra_transient_periods`` (the budget).  It stops after a block when
+
+  - the stroboscopic map has converged: the last max_period + 2 samples have a period
+    n <= max_period within ``period_tol`` (:func:`~.motion.classify_period`), or
+  - the statistics have settled (``settle``): with windows of W = max(record_periods,
+    ``SETTLE_WINDOW``) periods, the mean and the standard deviation of the monitored
+    deformation (8 samples per period) over the last two windows differ by at most
+    ``SETTLE_TOL`` of its range, and over the last three windows the distance of the
+    stroboscopic samples from the nearest period (:func:`~.motion.best_defect`) has not
+    shrunk below ``NO_CONTRACTION`` of the previous window's, twice (a decaying
+    transient shrinks it, an attractor does not).
+
+  ``transient_used`` is the number of periods integrated; ``settled_by`` says why it
+  stopped ("map", "statistics" or "budget").
+* **Record** of ``record_periods`` periods in chunks of min(:data:`~.lyapunov.CHUNK`,
+  record_periods // 8) periods (at least 1; one integrator call each, the blocks of the
+  exponent's interval), 16 dense samples per period: stroboscopic samples, extrema
+  of the monitored deformation, located contact events.
+* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
+  is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
+  (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
+  trajectory per chunk) decides chaotic / quasi-periodic / not settled.  Per contact
+  group, the period again on the group's deformations alone.
+* **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
+  (the state at each onset by a short integration from the dense sample before it),
+  contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
+  error over blocks of the record window.
+* **Second tolerance** (``second_tolerance``): the record window again at rtol / 10 (atol /
+  10) from the same settled state; the change of the extrema and of each metric is its
+  tolerance error (``<name>_tol_err`` in the metrics).  On a periodic point it estimates
+  the integration error; on a chaotic one the two records diverge and it is a sampling
+  difference of the same size as the batch-means error.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...models.contact_law import flank
+from ..integrator.contact_eval import contact_kinematics
+from ..integrator.integrate import integrate
+from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
+from .motion import (FAILED, best_defect, classify_period, contact_groups, count_clusters,
+                     metrics_with_errors, monitored_deformation, motion_class)
+from ..status import Status
+
+__all__ = ["PointRecord", "run_point", "failed_point", "onset_speeds", "SETTLE_TOL", "NO_CONTRACTION",
+           "SETTLE_WINDOW"]
+
+#: settled statistics: mean and std of two windows within this fraction of the range
+SETTLE_TOL = 0.1
+#: ... and the distance from the nearest period not below this fraction of the last one
+NO_CONTRACTION = 0.95
+#: shortest window of the statistics test (periods)
+SETTLE_WINDOW = 32
+_S_TRANSIENT = 8      # dense samples per period for the transient's statistics
+_S_RECORD = 16        # dense samples per period in the record (impact-speed starts)
+
+
+@dataclass(frozen=True, eq=False)
+class PointRecord:
+    """One finished point of a sweep (what the callback receives and resuming needs)."""
+    direction: str
+    index: int                   # index into the ``params`` array given to the sweep
+    param: float
+    qmin: float                  # extrema of the monitored deformation (NaN if failed)
+    qmax: float
+    poincare: np.ndarray         # (R,) monitored deformation at the period multiples
+    period_n: int                # 1..max_period, 0 = not periodic (or failed)
+    impacts: float               # contact losses of the monitored contact per period
+    defect: float                # max_k |P_{k+n} - P_k| / scale (periodic points), else NaN
+    clusters: int                # distinct Poincare clusters (0 if failed)
+    status: int                  # Status: OK, or the integrator's failure (< 0)
+    message: str
+    u_end: np.ndarray            # (n,) state at the end (phase 0): seeds the next point
+    steps: int = 0
+    rejected: int = 0
+    rhs_calls: int = 0
+    events: int = 0
+    wall_time: float = 0.0
+    states: np.ndarray | None = None   # (R, n) Poincare samples of the full state (optional)
+    motion_class: int = FAILED         # motion.MOTION_LEGEND index
+    lyapunov: float = math.nan         # largest Lyapunov exponent (per model time unit)
+    lyapunov_ci: tuple = (math.nan, math.nan)   # its 95 % interval
+    transient_used: int = 0            # transient periods integrated
+    settled_by: str = ""               # "map", "statistics", "budget"
+    metrics: dict = field(default_factory=dict)  # per-group classes and contact metrics
+
+    @property
+    def ok(self) -> bool:
+        return self.status == 0
+
+
+def failed_point(direction, index, param, R, status, message, u_seed, counts=None,
+                 wall=0.0, used=0) -> PointRecord:
+    nan = math.nan
+    c = np.zeros(4, np.int64) if counts is None else counts
+    return PointRecord(direction, int(index), float(param), nan, nan, np.full(R, nan), 0,
+                       nan, nan, 0, int(status), message, np.array(u_seed, dtype=float),
+                       steps=int(c[0]), rejected=int(c[1]), rhs_calls=int(c[2]),
+                       events=int(c[3]), wall_time=wall, transient_used=int(used))
+
+
+def _count(counts, tr):
+    counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+
+
+def _settled(dense, strob, W: int, max_period: int) -> bool:
+    """The statistics test of the module docstring on the last three windows of W
+    periods: the last two have equal statistics, and neither step between the three
+    shrank the distance from the nearest period."""
+    S = _S_TRANSIENT
+    a, b = dense[-2 * S * W: -S * W], dense[-S * W:]
+    rng = float(np.ptp(np.concatenate([a, b])))
+    if not rng > 0:
+        return False
+    if abs(a.mean() - b.mean()) > SETTLE_TOL * rng or abs(a.std() - b.std()) > SETTLE_TOL * rng:
+        return False
+    d = [best_defect(strob[len(strob) - (k + 1) * W - 1: len(strob) - k * W], max_period)
+         for k in (2, 1, 0)]
+    return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
+
+
+def onset_speeds(model, param, start, tr, t_eval, rows, options, counts=None) -> list:
+    """|delta'| of contact ``rows`` at each contact onset of trajectory ``tr`` (from
+    ``start`` at t = 0, dense samples at ``t_eval`` = h, 2h, ..., h = T / S), NaN at the
+    other events: the state at the onset by a short integration from the dense sample
+    before it."""
+    out = []
+    h = float(t_eval[0])
+    for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
+        v = math.nan
+        if md != 0 and int(j) in rows:
+            i = int(math.floor(te / h * (1 + 1e-14))) - 1
+            ts, us = (0.0, start) if i < 0 else (t_eval[i], tr.u[i])
+            if te - ts > 1e-12 * _S_RECORD * h:
+                loc = integrate(model, param, us, ts, te, options=options)
+                if counts is not None:
+                    _count(counts, loc)
+                us = loc.u_end
+            v = abs(float(contact_kinematics(model, param, [te], us[None, :],
+                                             rows=[int(j)])[1][0, 0]))
+        out.append(v)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Record:
+    """A record window: its chunks (start state, period-end states, time offset), all
+    period-end states, the end state, monitor extrema and losses, the contact events with
+    the onset speeds."""
+    chunks: list
+    states: np.ndarray
+    end: np.ndarray
+    qmin: float
+    qmax: float
+    losses: int
+    lost_events: bool
+    events: tuple
+    speeds: np.ndarray
+
+
+def _record(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
+    """The record window of R periods in chunks (module docstring): a :class:`_Record`,
+    or (status, message) where the integration failed."""
+    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
+    chunks, states, ev_t, ev_j, ev_m, speeds = [], [], [], [], [], []
+    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
+    seed = np.array(seed, dtype=float)
+    t0 = 0.0
+    while t0 < R * T * (1 - 1e-12):
+        k = min(chunk, R - int(round(t0 / T)))
+        t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        _count(counts, tr)
+        if not tr.ok:
+            return tr.status, tr.message
+        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
+                and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                         and math.isfinite(tr.monitor_max)))):
+            return Status.NONFINITE, "non-finite state or monitor values"
+        ends = tr.u[_S_RECORD - 1::_S_RECORD]
+        chunks.append((seed.copy(), ends, t0))
+        states.append(ends)
+        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
+        losses += tr.monitor_losses
+        lost_events |= tr.events > tr.event_times.size
+        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
+        ev_t += [t0 + te for te in tr.event_times]
+        ev_j += [int(j) for j in tr.event_contacts]
+        ev_m += [int(md) for md in tr.event_modes]
+        seed = tr.u_end.copy()
+        t0 += k * T
+    return _Record(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
+                   (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
+                   np.array(speeds))
+
+
+def _extrema(model, param, rec: _Record, has_monitor) -> tuple[float, float]:
+    """(min, max) of the monitored deformation over a record: the integrator's located
+    extrema and the stroboscopic samples (the samples alone without a monitored contact)."""
+    delta = monitored_deformation(model, param, np.zeros(len(rec.states)), rec.states)
+    if not has_monitor:
+        return float(delta.min()), float(delta.max())
+    return min(rec.qmin, float(delta.min())), max(rec.qmax, float(delta.max()))
+
+
+def _metrics(model, param, u_rec, rec: _Record, groups, R, T, n) -> dict:
+    """The contact metrics of a record with their batch-means errors."""
+    mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
+                  model.contacts.gap_hi, model.contacts.gap_lo)
+    return metrics_with_errors(model, groups, mode0, rec.events, rec.speeds, 0.0, R * T, T,
+                               period_n=n)
+
+
+def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
+    """period_n of each contact group from its deformations and rates alone."""
+    out = {}
+    t = np.zeros(strob.shape[0])          # period ends are at phase 0
+    d, dd, _ = contact_kinematics(model, param, t, strob)
+    for key, (_kind, idx) in groups.items():
+        s = np.hstack([d[idx].T, dd[idx].T])
+        out[f"period_n_{key}"] = classify_period(s, max_period, period_tol, split=len(idx))[0]
+    return out
+
+
+def run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
+              max_period, period_tol, cluster_tol, options, keep_states,
+              extra_transient_periods=0, lyapunov=True, settle=True,
+              second_tolerance=False) -> PointRecord:
+    """One sweep point (module docstring)."""
+    wall = time.perf_counter()
+    R = int(record_periods)
+    counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
+    if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
+        return failed_point(direction, index, param, R, Status.BAD_PARAMETER,
+                            Status.BAD_PARAMETER.message, u_seed)
+    T = model.excitation_period(param)
+    m = model.n_modes
+    has_monitor = model.contacts.count > 0
+    seed = np.array(u_seed, dtype=float)
+
+    def fail(st, msg, used):
+        return failed_point(direction, index, param, R, st, msg, u_seed, counts,
+                            time.perf_counter() - wall, used)
+
+    # ---- transient, stopped when settled
+    budget = int(transient_periods) + int(extra_transient_periods)
+    block = max(int(max_period) + 2, 8)
+    W = max(R, SETTLE_WINDOW)
+    strob, dense = [seed], []
+    used, settled_by = 0, "budget"
+    while used < budget:
+        k = min(block, budget - used)
+        t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        _count(counts, tr)
+        used += k
+        if not tr.ok or not np.all(np.isfinite(tr.u_end)):
+            return fail(tr.status or Status.NONFINITE, tr.message, used)
+        seed = tr.u_end.copy()
+        strob.extend(tr.u[_S_TRANSIENT - 1::_S_TRANSIENT])
+        dense.append(monitored_deformation(model, param, t_eval, tr.u))
+        L = int(max_period) + 2
+        if len(strob) >= L and classify_period(np.array(strob[-L:]), max_period, period_tol,
+                                               split=m)[0] > 0:
+            settled_by = "map"
+            break
+        if settle and used >= 3 * W and _settled(np.concatenate(dense), np.array(strob), W,
+                                                  int(max_period)):
+            settled_by = "statistics"
+            break
+
+    # ---- record in chunks
+    u_rec = seed.copy()
+    groups = contact_groups(model)
+    chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
+    rec = _record(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor)
+    if isinstance(rec, tuple):
+        return fail(*rec, used)
+    chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
+
+    # ---- class and evidence
+    n, defect = classify_period(states, max_period, period_tol, split=m)
+    lam, ci = math.nan, (math.nan, math.nan)
+    msg = "ok"
+    if n == 0 and lyapunov and len(chunks) >= 2:
+        scale = state_scale(np.vstack([u_rec, states]), m)
+        # start along the last step of the stroboscopic map: the slowest direction
+        v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
+                              u_rec.size, index)
+        logs = []
+        for start, ends, _ in chunks:
+            g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
+                                            options=options)
+            counts[2] += calls
+            if st != Status.OK:
+                msg = f"Lyapunov exponent not determined: {st.message}"
+                logs = []
+                break
+            logs.append(g)
+        if logs:
+            lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+    cls = motion_class(n, ci, budget_used=settled_by == "budget")
+    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
+        if has_monitor else {}
+    for key in list(metrics):
+        gn = metrics[key]
+        metrics[key.replace("period_n_", "motion_class_")] = motion_class(
+            gn, ci, budget_used=settled_by == "budget") if gn > 0 else cls
+    if has_monitor:
+        metrics.update(_metrics(model, param, u_rec, rec, groups, R, T, n))
+        if rec.lost_events:
+            msg = "event log full: raise [integration] event_log for the contact metrics"
+            metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
+                       for k, v in metrics.items()}
+    if second_tolerance:
+        # the record window again at rtol / 10 from the same settled state: the change of
+        # each statistic is its tolerance error
+        fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
+        rec2 = _record(model, param, u_rec, R, T, chunk, groups, fine, counts, has_monitor)
+        tol_err = {k: math.nan for k in ("qmin", "qmax")}
+        if not isinstance(rec2, tuple):
+            e1 = _extrema(model, param, rec, has_monitor)
+            e2 = _extrema(model, param, rec2, has_monitor)
+            tol_err["qmin"], tol_err["qmax"] = abs(e2[0] - e1[0]), abs(e2[1] - e1[1])
+            if has_monitor:
+                m2 = _metrics(model, param, u_rec, rec2, groups, R, T, n)
+                tol_err.update({k: abs(v - metrics[k]) for k, v in m2.items()
+                                if not k.endswith("_err") and k in metrics})
+        metrics.update({f"{k}_tol_err": float(v) for k, v in tol_err.items()})
+    delta = monitored_deformation(model, param, np.zeros(R), states)
+    qmin, qmax = _extrema(model, param, rec, has_monitor)
+    return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
+                       losses / R, defect, count_clusters(states, cluster_tol, split=m), 0,
+                       msg, seed.copy(), steps=int(counts[0]), rejected=int(counts[1]),
+                       rhs_calls=int(counts[2]), events=int(counts[3]),
+                       wall_time=time.perf_counter() - wall,
+                       states=states.copy() if keep_states else None, motion_class=int(cls),
+                       lyapunov=float(lam), lyapunov_ci=tuple(float(c) for c in ci),
+                       transient_used=int(used), settled_by=settled_by, metrics=metrics)
