@@ -348,9 +348,7 @@ def main(argv=None) -> dict:
                 continue
             t = time.perf_counter()
             cpu0 = _children_cpu()
-            sw = sweep(model, params, directions=("up",), transient_periods=PERIODS - RECORD,
-                       record_periods=RECORD, extra_transient_periods=0, options=opts, u0=u0,
-                       segments=a.segments, workers=2)
+            sw = sweep(model, params, SweepOptions(directions=("up",), transient_periods=PERIODS - RECORD, record_periods=RECORD, extra_transient_periods=0, segments=a.segments, workers=2), options=opts, u0=u0)
             wall = time.perf_counter() - t
             cpu = _children_cpu() - cpu0
             cfg.update({"sweep": {"wall_s": wall, "segments": a.segments,

@@ -39,6 +39,7 @@ from vibrogear.analyses.operating_map import compute_map  # noqa: E402
 from vibrogear.analyses.study import integration_options  # noqa: E402
 from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
+from vibrogear.config.options import SweepOptions  # noqa: E402
 from vibrogear.solvers.sequential.sweep import sweep  # noqa: E402
 
 TARGET_S = 120.0
@@ -70,7 +71,7 @@ def main() -> dict:
     rows = np.linspace(0, scales.size - 1, args.loads).round().astype(int)
     cols = np.linspace(0, rpm.size - 1, args.speeds).round().astype(int)
     block_rpm, block_scales = rpm[cols], scales[rows]
-    settings = dataclasses.replace(cfg.sweep_options(), workers=1)
+    settings = dataclasses.replace(SweepOptions.of(cfg), workers=1)
     compute_map(study, ls, block_rpm[:1], block_scales[:1], settings, opts)     # JIT warm-up
     n = block_rpm.size * block_scales.size * len(settings.directions)
 
@@ -86,10 +87,7 @@ def main() -> dict:
     t = time.perf_counter()
     for s in block_scales:                   # baseline: plain sweeps of the same rows
         model = ls.model_at(study.model, s)
-        sweep(model, block_rpm, u0=_start(model, block_rpm[0]),
-              options=opts, **{k: getattr(settings, k) for k in (
-                  "transient_periods", "extra_transient_periods", "record_periods",
-                  "max_period", "period_tol", "directions", "lyapunov")}, workers=1)
+        sweep(model, block_rpm, settings, u0=_start(model, block_rpm[0]), options=opts)
     sweep_s = time.perf_counter() - t
     same = all(np.array_equal(a.qmax, b.qmax, equal_nan=True) for a, b in zip(m1.rows, m2.rows))
     total = rpm.size * scales.size * len(settings.directions)

@@ -15,6 +15,7 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import shoot
 from vibrogear.solvers.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification.impact_exact import ImpactParams, linear_frf, periodic_orbit
 from vibrogear.config.options import ShootingOptions
 
@@ -75,8 +76,7 @@ def test_large_forcing_double_sided_impacts_and_chaos():
     says 'not periodic', and an independent Lyapunov estimate is positive."""
     par = dict(zeta=0.02, kappa=0.0, f_m=0.1, f_p=1.0, b_r=1.0)
     model = impact_pair_model(**par)
-    res = sweep(model, [0.8, 1.0], directions=("up",), transient_periods=200, record_periods=64,
-                max_period=16, options=IntegrationOptions(rtol=1e-8, atol=1e-10))
+    res = sweep(model, [0.8, 1.0], SweepOptions(directions=("up",), transient_periods=200, record_periods=64, max_period=16, extra_transient_periods=0), options=IntegrationOptions(rtol=1e-8, atol=1e-10))
     assert res.period_n[0] == 1 and res.qmin[0] < -1 and res.qmax[0] > 1   # double-sided
     assert res.period_n[1] == 0 and res.clusters[1] > 16
     # largest Lyapunov exponent from the variational equations, renormalised per period

@@ -70,10 +70,8 @@ def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
                     force_samples=32)
     row = m.rows[0]
     other = build_study(load_scene(GEAR_PAIR, _twists(0.028)))
-    ref = sweep(other.model, rpm, u0=other.start(rpm[0]), options=scene.integration,
-                **{k: getattr(SETTINGS, k) for k in ("transient_periods", "record_periods",
-                   "extra_transient_periods", "max_period", "period_tol", "directions",
-                   "workers", "lyapunov")})
+    ref = sweep(other.model, rpm, SweepOptions.of(SETTINGS), u0=other.start(rpm[0]),
+                options=scene.integration)
     assert np.array_equal(row.param, ref.param)
     assert np.array_equal(row.period_n, ref.period_n)
     per = ref.period_n > 0

@@ -2,6 +2,7 @@
 hysteresis, failed points, resume, files and plots."""
 from __future__ import annotations
 
+import dataclasses
 import csv
 import math
 
@@ -16,13 +17,15 @@ from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import classify_period, count_clusters, sweep
+from vibrogear.config.options import SweepOptions
 
 # impact pair with a stiff outer spring (hardening): a resonance that bends to the
 # right, coexisting large / small responses for Omega ~ 0.7-0.9, period 2 near 0.45-0.5
 HYST = dict(zeta=0.015, kappa=0.2, f_m=0.1, f_p=0.2, b_r=1.0)
 HYST_GRID = np.round(np.arange(0.65, 0.951, 0.05), 10)
 OPTS = IntegrationOptions(rtol=1e-9, atol=1e-11)
-SWEEP_KW = dict(transient_periods=120, record_periods=12, max_period=4, period_tol=1e-5)
+SETTINGS = SweepOptions(transient_periods=120, extra_transient_periods=0, record_periods=12,
+                        max_period=4, period_tol=1e-5)
 
 
 def _eq(a, b) -> bool:
@@ -32,7 +35,7 @@ def _eq(a, b) -> bool:
 
 @pytest.fixture(scope="module")
 def hyst_result():
-    return sweep(impact_pair_model(**HYST), HYST_GRID, options=OPTS, **SWEEP_KW)
+    return sweep(impact_pair_model(**HYST), HYST_GRID, SETTINGS, options=OPTS)
 
 
 # ---------------------------------------------------------------- classifier (synthetic)
@@ -65,8 +68,7 @@ def test_linear_limit_matches_frf():
     zeta, kappa, f_p = 0.05, 0.5, 0.2
     model = impact_pair_model(zeta, kappa, 0.0, f_p, 1e6)
     W = np.array([0.4, 0.7, 0.9])
-    r = sweep(model, W, directions=("up",), transient_periods=100, record_periods=6,
-              max_period=3, period_tol=1e-6, options=OPTS)
+    r = sweep(model, W, SweepOptions(directions=("up",), transient_periods=100, record_periods=6, max_period=3, period_tol=1e-6, extra_transient_periods=0), options=OPTS)
     amp = f_p / np.sqrt((kappa - W ** 2) ** 2 + (2 * zeta * W) ** 2)
     np.testing.assert_allclose(r.qmax - r.qmin, 2 * amp, rtol=1e-6)
     np.testing.assert_allclose(r.qmax, amp, rtol=1e-6)
@@ -80,8 +82,7 @@ def test_model_without_contacts_uses_the_samples():
     base = impact_pair_model(zeta, kappa, 0.0, f_p, 1.0)
     model = ReducedModel(base.omega2, base.damping, base.coupling, base.forcing,
                          ContactSet.empty(1, 1))
-    r = sweep(model, [W], directions=("up",), transient_periods=100, record_periods=4,
-              max_period=2, options=OPTS)
+    r = sweep(model, [W], SweepOptions(directions=("up",), transient_periods=100, record_periods=4, max_period=2, extra_transient_periods=0), options=OPTS)
     X = f_p / (kappa - W ** 2 + 2j * zeta * W)           # q = Re(X exp(i W t))
     assert r.status_code == 0 and r.period_n[0] == 1 and r.impacts[0] == 0
     np.testing.assert_allclose(r.poincare[0], X.real, rtol=1e-6)
@@ -120,8 +121,7 @@ def _scipy_impact_flow(u, t0, t1, W, zeta, kappa, f_m, f_p, b_r):
 def test_period_two_confirmed_by_scipy():
     W, n_tr, R = 0.5, 100, 8
     model = impact_pair_model(**HYST)
-    r = sweep(model, [W], directions=("up",), transient_periods=n_tr, record_periods=R,
-              max_period=4, period_tol=1e-6, options=IntegrationOptions(rtol=1e-10,
+    r = sweep(model, [W], SweepOptions(directions=("up",), transient_periods=n_tr, record_periods=R, max_period=4, period_tol=1e-6, extra_transient_periods=0), options=IntegrationOptions(rtol=1e-10,
                                                                          atol=1e-12))
     assert r.period_n[0] == 2 and r.clusters[0] == 2 and r.impacts[0] > 0
     # the transient stopped once the stroboscopic map had converged, inside the budget
@@ -164,12 +164,12 @@ def test_up_and_down_jump_at_different_parameters(hyst_result):
 
 def test_failed_point_reported_and_sweep_goes_on(tmp_path, hyst_result):
     # the limit is per integrator call: a transient block is 8 periods here
-    per_period = np.array([rec.steps / (rec.transient_used + SWEEP_KW["record_periods"])
+    per_period = np.array([rec.steps / (rec.transient_used + SETTINGS.record_periods)
                            for rec in hyst_result.records])
     limit = int(8 * 0.5 * (per_period.min() + per_period.max()))
     assert 8 * per_period.min() < limit < 8 * per_period.max()
     opts = IntegrationOptions(rtol=OPTS.rtol, atol=OPTS.atol, max_steps=limit)
-    r = sweep(impact_pair_model(**HYST), HYST_GRID, options=opts, **SWEEP_KW)
+    r = sweep(impact_pair_model(**HYST), HYST_GRID, SETTINGS, options=opts)
     bad = r.status != 0
     assert np.any(bad) and np.any(~bad) and r.status_code == 1
     assert np.all(r.status[bad] == -1)
@@ -192,8 +192,7 @@ def test_failed_point_reported_and_sweep_goes_on(tmp_path, hyst_result):
 
 
 def test_bad_parameter_is_a_failed_point_not_an_exception():
-    r = sweep(impact_pair_model(**HYST), [0.0, 0.9], directions=("up",),
-              transient_periods=5, record_periods=2, max_period=1, options=OPTS)
+    r = sweep(impact_pair_model(**HYST), [0.0, 0.9], SweepOptions(directions=("up",), transient_periods=5, record_periods=2, max_period=1, extra_transient_periods=0), options=OPTS)
     assert r.status[0] < 0 and r.status[1] == 0 and r.status_code == 1
 
 
@@ -206,14 +205,14 @@ def test_resume_gives_identical_results(tmp_path, hyst_result):
     seen = []
     first, store, resumed = resumable_sweep(
         model, HYST_GRID, tmp_path, options=OPTS, root=True,
-        callback=lambda rec: (seen.append(rec), len(seen) < half)[1], **SWEEP_KW)
+        callback=lambda rec: (seen.append(rec), len(seen) < half)[1], settings=SETTINGS)
     assert first.status_code == 2 and first.param.size == half and resumed == 0
     with part.open("a") as fh:                          # a torn line from the kill
         fh.write('{"kind":"point","direction":"do')
     assert len(read_items(part)) == half
     new = []
     res, store, resumed = resumable_sweep(model, HYST_GRID, tmp_path, options=OPTS, root=True,
-                                          callback=new.append, **SWEEP_KW)
+                                          callback=new.append, settings=SETTINGS)
     assert resumed == half and len(new) == 2 * HYST_GRID.size - half
     for name in ("param", "direction", "index", "qmin", "qmax", "poincare", "period_n",
                  "impacts", "defect", "clusters", "status", "u_end", "motion_class",
@@ -230,8 +229,8 @@ def test_partial_file_of_another_run_is_set_aside(tmp_path, change):
     """A partial file is reused only for the same physics, grid, integrator options and
     sweep settings; otherwise it is renamed aside (kept) and the sweep starts clean."""
     grid = HYST_GRID[:3]
-    kw = dict(directions=("up",), transient_periods=20, record_periods=4, max_period=2,
-              options=OPTS)
+    kw = dict(settings=SweepOptions(directions=("up",), transient_periods=20, extra_transient_periods=0,
+                                    record_periods=4, max_period=2), options=OPTS)
     stop = iter([True, False])                           # stop after the second point
     resumable_sweep(impact_pair_model(**HYST), grid, tmp_path, root=True,
                     callback=lambda rec: next(stop), **kw)
@@ -243,7 +242,7 @@ def test_partial_file_of_another_run_is_set_aside(tmp_path, change):
     elif change == "options":
         kw["options"] = IntegrationOptions(rtol=1e-9, atol=1e-11, max_steps=123_456)
     else:
-        kw["record_periods"] = 5
+        kw["settings"] = dataclasses.replace(kw["settings"], record_periods=5)
     new = []
     res, store, resumed = resumable_sweep(model, grid, tmp_path, root=True,
                                           callback=new.append, **kw)
@@ -263,7 +262,7 @@ def test_files_and_plot(tmp_path, hyst_result):
     z = read_sweep_npz(paths["npz"])
     for key in ("param", "direction", "qmin", "qmax", "poincare", "period_n", "impacts"):
         assert key in z
-    assert z["poincare"].shape == (2 * HYST_GRID.size, SWEEP_KW["record_periods"])
+    assert z["poincare"].shape == (2 * HYST_GRID.size, SETTINGS.record_periods)
     assert set(z["direction"].tolist()) == {"up", "down"}
     assert np.array_equal(z["period_n"], hyst_result.period_n)
     assert not list(tmp_path.glob(".*.tmp"))            # atomic writes leave no temp files
@@ -276,8 +275,8 @@ def test_files_and_plot(tmp_path, hyst_result):
 def test_resumable_sweep_helper(tmp_path):
     model = impact_pair_model(**HYST)
     grid = HYST_GRID[:3]
-    kw = dict(directions=("up",), transient_periods=20, record_periods=4, max_period=2,
-              options=OPTS)
+    kw = dict(settings=SweepOptions(directions=("up",), transient_periods=20, extra_transient_periods=0,
+                                    record_periods=4, max_period=2), options=OPTS)
     stop = iter([True, False])                           # stop after the second point
     r1, st1, _ = resumable_sweep(model, grid, tmp_path, root=True,
                                  callback=lambda rec: next(stop), **kw)

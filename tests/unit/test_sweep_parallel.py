@@ -3,6 +3,7 @@ arrays whatever runs them, one writer of the partial file, resuming after a SIGK
 failures reported per point or raised without losing the other units' points."""
 from __future__ import annotations
 
+import dataclasses
 import os
 import shutil
 import signal
@@ -22,6 +23,7 @@ from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import sweep, sweep_units
+from vibrogear.config.options import SweepOptions
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -29,8 +31,12 @@ MPIRUN = shutil.which("mpirun")
 HYST = dict(zeta=0.015, kappa=0.2, f_m=0.1, f_p=0.2, b_r=1.0)
 GRID = np.round(np.linspace(0.6, 0.95, 6), 10)
 OPTS = IntegrationOptions(rtol=1e-9, atol=1e-11)
-KW = dict(transient_periods=40, record_periods=8, max_period=4, period_tol=1e-5,
-          options=OPTS, segments=2, extra_transient_periods=40)
+SETTINGS = SweepOptions(transient_periods=40, record_periods=8, max_period=4, period_tol=1e-5,
+                        segments=2, extra_transient_periods=40)
+
+
+def _s(**kw) -> SweepOptions:
+    return dataclasses.replace(SETTINGS, **kw)
 ARRAYS = ("param", "direction", "index", "qmin", "qmax", "poincare", "period_n", "impacts",
           "defect", "clusters", "status", "u_end")
 MODEL = impact_pair_model(**HYST)
@@ -62,7 +68,7 @@ def boom_model():
 
 @pytest.fixture(scope="module")
 def serial():
-    return sweep(MODEL, GRID, u0=U0, workers=1, **KW)
+    return sweep(MODEL, GRID, _s(workers=1), u0=U0, options=OPTS)
 
 
 # ---------------------------------------------------------------- executor layer
@@ -135,8 +141,7 @@ def test_units_are_independent_and_start_from_u0(serial):
     # every unit starts from u0: its first point equals a one-point sweep from u0, and its
     # second point a two-point sweep
     for d, idx in layout:
-        alone = sweep(MODEL, GRID[list(idx[:2])], directions=("up",), u0=U0, workers=1,
-                      **{**KW, "segments": 1})
+        alone = sweep(MODEL, GRID[list(idx[:2])], _s(directions=("up",), workers=1, segments=1), u0=U0, options=OPTS)
         rows = [k for k, (dd, i) in enumerate(zip(serial.direction, serial.index))
                 if dd == d and i in idx[:2]]
         rows.sort(key=lambda k: idx.index(serial.index[k]))
@@ -147,7 +152,7 @@ def test_units_are_independent_and_start_from_u0(serial):
 
 def test_two_processes_bit_identical_to_serial(serial):
     got = []
-    par = sweep(MODEL, GRID, u0=U0, workers=2, callback=got.append, **KW)
+    par = sweep(MODEL, GRID, _s(workers=2), u0=U0, callback=got.append, options=OPTS)
     _same(par, serial)
     assert par.status_code == 0 and len(got) == 2 * GRID.size
     assert sorted((r.direction, r.index) for r in got) == sorted(
@@ -156,14 +161,13 @@ def test_two_processes_bit_identical_to_serial(serial):
 
 def test_failed_points_reported_per_point_other_unit_kept():
     grid = np.array([0.7, 0.0, 0.8, 0.85, 0.9, 0.95])   # 0.0: no excitation period
-    kw = {**KW, "segments": 2}
-    r = sweep(MODEL, grid, directions=("up",), u0=U0, workers=2, **kw)
+    r = sweep(MODEL, grid, _s(directions=("up",), workers=2, segments=2), u0=U0, options=OPTS)
     assert r.status_code == 1 and r.status.tolist() == [0, -10, 0, 0, 0, 0]
     assert "finite and > 0" in r.message[1] and np.isnan(r.qmax[1])
     # the failed point seeds nothing: its unit goes on from the last good state, and the
     # other unit is untouched
-    a = sweep(MODEL, grid[[0, 2]], directions=("up",), u0=U0, workers=1, **{**kw, "segments": 1})
-    b = sweep(MODEL, grid[3:], directions=("up",), u0=U0, workers=1, **{**kw, "segments": 1})
+    a = sweep(MODEL, grid[[0, 2]], _s(directions=("up",), workers=1, segments=1), u0=U0, options=OPTS)
+    b = sweep(MODEL, grid[3:], _s(directions=("up",), workers=1, segments=1), u0=U0, options=OPTS)
     assert np.array_equal(r.u_end[[0, 2]], a.u_end) and np.array_equal(r.qmax[[0, 2]], a.qmax)
     assert np.array_equal(r.u_end[3:], b.u_end) and np.array_equal(r.poincare[3:], b.poincare)
 
@@ -171,8 +175,8 @@ def test_failed_points_reported_per_point_other_unit_kept():
 def test_crashing_unit_raises_and_keeps_the_other_units_points(tmp_path, monkeypatch):
     monkeypatch.setenv("BOOM_SLEEP", "2.5")      # the other unit finishes meanwhile
     with pytest.raises(UnitError, match="injected failure"):
-        resumable_sweep(boom_model(), GRID, tmp_path, directions=("up",), u0=U0, workers=2,
-                        **KW)
+        resumable_sweep(boom_model(), GRID, tmp_path, settings=_s(directions=("up",), workers=2),
+                        u0=U0, options=OPTS)
     done = sorted((d["direction"], d["index"]) for d in read_items(tmp_path / PARTIAL_NAME))
     assert done == [("up", 0), ("up", 1), ("up", 2), ("up", 3), ("up", 4)]
 
@@ -189,7 +193,8 @@ def stall(rec):
     seen.append(rec)
     if len(seen) >= int(sys.argv[2]):
         time.sleep(600)                      # "hangs" here until SIGKILL
-resumable_sweep(t.MODEL, t.GRID, sys.argv[1], u0=t.U0, workers=2, callback=stall, **t.KW)
+resumable_sweep(t.MODEL, t.GRID, sys.argv[1], settings=t._s(workers=2), u0=t.U0, callback=stall,
+                options=t.OPTS)
 """
 
 
@@ -223,8 +228,8 @@ def test_sigkilled_sweep_resumes_without_recomputing(tmp_path, serial):
     assert proc.returncode == -signal.SIGKILL
     assert len(read_items(part)) == n_first and not (tmp_path / "sweep.npz").exists()
     new = []
-    res, store, resumed = resumable_sweep(MODEL, GRID, tmp_path, u0=U0, workers=2,
-                                          callback=new.append, **KW)
+    res, store, resumed = resumable_sweep(MODEL, GRID, tmp_path, settings=_s(workers=2), u0=U0,
+                                          callback=new.append, options=OPTS)
     assert resumed == n_first and len(new) == 2 * GRID.size - n_first
     assert store.path == part and "resumed 5" in store.note
     _same(res, serial)
@@ -239,7 +244,7 @@ import test_sweep_parallel as t
 from vibrogear.analyses.sweep import resumable_sweep
 from vibrogear.report.sweep_io import write_sweep
 model = t.boom_model() if sys.argv[2] == "boom" else t.MODEL
-res, store, _ = resumable_sweep(model, t.GRID, sys.argv[1], u0=t.U0, **t.KW)
+res, store, _ = resumable_sweep(model, t.GRID, sys.argv[1], settings=t.SETTINGS, u0=t.U0, options=t.OPTS)
 if store is not None:                  # rank 0 writes the files, as the runner does
     write_sweep(res, sys.argv[1])
     store.path.unlink()

@@ -14,6 +14,7 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import periodic_flow
 from vibrogear.solvers.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
 
 # the default scene (configs/impact_pair.toml)
@@ -110,9 +111,7 @@ def test_shooting_jacobian_against_finite_differences(model):
 @pytest.fixture(scope="module")
 def fold_sweep(model):
     params = np.arange(0.80, 1.0001, 0.004)
-    return params, sweep(model, params, transient_periods=150, record_periods=8, max_period=4,
-                         options=IntegrationOptions(rtol=1e-8, atol=1e-10),
-                         u0=np.array([1.05, 0.0]))
+    return params, sweep(model, params, SweepOptions(transient_periods=150, record_periods=8, max_period=4, extra_transient_periods=0), options=IntegrationOptions(rtol=1e-8, atol=1e-10), u0=np.array([1.05, 0.0]))
 
 
 def test_sweep_jumps_at_the_folds(branches, fold_sweep):

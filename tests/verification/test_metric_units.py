@@ -17,6 +17,7 @@ from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"
 OPT = IntegrationOptions(rtol=1e-9, atol=1e-15)
@@ -40,8 +41,7 @@ def case():
     P = 16
     T = model.excitation_period(RPM)
     u0 = integrate(model, RPM, study.start(RPM), 0.0, 300 * T, options=OPT).u_end
-    s = sweep(model, [RPM], directions=("up",), transient_periods=1, record_periods=P,
-              max_period=4, options=OPT, u0=u0, settle=False, lyapunov=False)
+    s = sweep(model, [RPM], SweepOptions(directions=("up",), transient_periods=1, record_periods=P, max_period=4, lyapunov=False, extra_transient_periods=0), options=OPT, u0=u0, settle=False)
     assert s.transient_used[0] == 1
     start = integrate(model, RPM, u0, 0.0, T, options=OPT).u_end    # the record's start
     names, orders, _ = shaft_orders(scene, (1,))

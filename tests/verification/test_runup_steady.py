@@ -15,6 +15,7 @@ from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 
 pytestmark = pytest.mark.slow
 
@@ -50,9 +51,7 @@ def test_slow_ramp_reproduces_sweep_extrema(study, rpm_a, rpm_b, speeds):
     settled sweep's extrema to 1e-2 of their range (measured 3.4e-4 at most, below the
     folds; 3e-6 above; at 20 rpm/s half of that: the error is the quasi-static lag)."""
     m = study.model
-    sw = sweep(m, np.array(speeds), directions=("up",), transient_periods=300,
-               extra_transient_periods=400, record_periods=32, period_tol=1e-5,
-               options=OPTS, u0=study.start(speeds[0]), workers=1, lyapunov=False)
+    sw = sweep(m, np.array(speeds), SweepOptions(directions=("up",), transient_periods=300, extra_transient_periods=400, record_periods=32, period_tol=1e-5, workers=1, lyapunov=False), options=OPTS, u0=study.start(speeds[0]))
     assert np.all(sw.status == 0)
     rpm, lo, hi = _envelope(study, rpm_a, rpm_b, 40.0)
     for k, p in enumerate(speeds):

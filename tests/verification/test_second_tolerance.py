@@ -10,11 +10,13 @@ settled state; the change of each statistic is its tolerance error (``<name>_tol
 """
 from __future__ import annotations
 
+import dataclasses
 import numpy as np
 
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification import impact_exact as ex
 
 #: tests/verification/test_sweep_evidence.py's double-sided orbit and chaotic pair
@@ -32,8 +34,7 @@ def test_tolerance_error_matches_the_true_error_on_a_periodic_orbit():
     assert orb.converged and orb.stable
     fl = orb.flow
     v = np.abs(fl.switch_states[fl.switch_to != 0, 1])
-    s = sweep(model, [Om], directions=("up",), transient_periods=0, record_periods=8,
-              max_period=4, options=LOOSE, u0=orb.u0, second_tolerance=True)
+    s = sweep(model, [Om], SweepOptions(directions=("up",), transient_periods=0, record_periods=8, max_period=4, second_tolerance=True, extra_transient_periods=0), options=LOOSE, u0=orb.u0)
     g = s.metrics
     assert s.period_n[0] == 1
     true = {"impact_velocity_max_clearance": abs(g["impact_velocity_max_clearance"][0] - v.max()),
@@ -48,10 +49,11 @@ def test_tolerance_error_matches_the_true_error_on_a_periodic_orbit():
 def test_chaotic_tolerance_error_is_a_sampling_difference():
     model, Om = impact_pair_model(*CHAOS), 1.0
     u = integrate(model, Om, np.zeros(2), 0.0, 300 * 2 * np.pi / Om, options=LOOSE).u_end
-    kw = dict(directions=("up",), transient_periods=0, record_periods=128, u0=u,
-              lyapunov=False, options=LOOSE)
-    on = sweep(model, [Om], second_tolerance=True, **kw)
-    off = sweep(model, [Om], **kw)
+    kw = dict(u0=u, options=LOOSE)
+    base = SweepOptions(directions=("up",), transient_periods=0, extra_transient_periods=0,
+                        record_periods=128, lyapunov=False, shoot=False)
+    on = sweep(model, [Om], dataclasses.replace(base, second_tolerance=True), **kw)
+    off = sweep(model, [Om], base, **kw)
     assert on.period_n[0] == 0
     for k in ("impacts_drive", "contact_fraction", "impact_velocity_rms", "rattle"):
         key = f"{k}_clearance"

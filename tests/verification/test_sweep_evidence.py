@@ -22,6 +22,7 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
 from vibrogear.solvers.sequential.motion import CHAOTIC, PERIODIC
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification import impact_exact as ex
 from vibrogear.config.options import ShootingOptions
 
@@ -100,8 +101,7 @@ def test_lyapunov_positive_on_chaotic_impact_pair():
     # two perturbation sizes, tolerances and start directions: the intervals overlap
     assert a.ci[0] <= b.ci[1] and b.ci[0] <= a.ci[1]
     # the sweep calls it chaotic with the same evidence
-    s = sweep(model, [Om], directions=("up",), transient_periods=200, record_periods=64,
-              options=OPT, u0=u)
+    s = sweep(model, [Om], SweepOptions(directions=("up",), transient_periods=200, record_periods=64, extra_transient_periods=0), options=OPT, u0=u)
     assert s.motion_class[0] == CHAOTIC and s.period_n[0] == 0
     assert s.lyapunov_ci[0][0] > 0.0
 
@@ -116,8 +116,7 @@ def test_impact_metrics_equal_exact_orbit(prm, Om, n):
     v = np.abs(fl.switch_states[onset, 1])          # delta' = q' (c = 1, e = 0)
     drive = np.sum(fl.switch_to == 1) / P
     back = np.sum(fl.switch_to == -1) / P
-    s = sweep(impact_pair_model(*prm), [Om], directions=("up",), transient_periods=8,
-              record_periods=8 * n, max_period=4, options=OPT, u0=orb.u0)
+    s = sweep(impact_pair_model(*prm), [Om], SweepOptions(directions=("up",), transient_periods=8, record_periods=8 * n, max_period=4, extra_transient_periods=0), options=OPT, u0=orb.u0)
     assert s.period_n[0] == n and s.motion_class[0] == PERIODIC
     g = s.metrics
     assert g["impacts_drive_clearance"][0] == pytest.approx(drive, abs=1e-12)
@@ -140,10 +139,10 @@ def test_transient_stops_when_the_map_has_converged():
     model, Om, budget, tol = impact_pair_model(*P_A), 0.5, 400, 1e-6
     T = 2 * np.pi / Om
     kw = dict(directions=("up",), record_periods=16, max_period=4, period_tol=tol,
-              options=OPT)
-    settled = sweep(model, [Om], transient_periods=budget, **kw)
+              extra_transient_periods=0)
+    settled = sweep(model, [Om], SweepOptions(transient_periods=budget, **kw), options=OPT)
     u_full = integrate(model, Om, np.zeros(2), 0.0, budget * T, options=OPT).u_end
-    fixed = sweep(model, [Om], transient_periods=0, u0=u_full, **kw)
+    fixed = sweep(model, [Om], SweepOptions(transient_periods=0, **kw), u0=u_full, options=OPT)
     used = int(settled.transient_used[0])
     # measured: 40 of 400 periods, Poincare samples and extrema within 7e-12 of the scale
     assert settled.settled_by[0] == "map" and used < budget / 2
@@ -162,9 +161,7 @@ def test_chaotic_statistics_converge_with_their_errors():
     u = integrate(model, Om, np.zeros(2), 0.0, 300 * 2 * np.pi / Om, options=OPT).u_end
     runs = {}
     for R, rtol in ((64, 1e-9), (256, 1e-9), (256, 1e-7)):
-        runs[R, rtol] = sweep(model, [Om], directions=("up",), transient_periods=0,
-                              record_periods=R, u0=u, lyapunov=False,
-                              options=IntegrationOptions(rtol=rtol, atol=1e-2 * rtol)).metrics
+        runs[R, rtol] = sweep(model, [Om], SweepOptions(directions=("up",), transient_periods=0, record_periods=R, lyapunov=False, extra_transient_periods=0), u0=u, options=IntegrationOptions(rtol=rtol, atol=1e-2 * rtol)).metrics
     names = ("impacts_drive", "impacts_back", "contact_fraction", "impact_velocity_rms",
              "rattle")
     short, long_, loose = runs[64, 1e-9], runs[256, 1e-9], runs[256, 1e-7]

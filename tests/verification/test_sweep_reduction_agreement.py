@@ -26,6 +26,7 @@ from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.static import static_equilibrium
 from vibrogear.solvers.sequential.sweep import sweep
+from vibrogear.config.options import SweepOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "configs" / "two_stage.toml"
@@ -44,11 +45,7 @@ def _run(scene, rpms, level, options):
     from vibrogear.models.gearbox.model import build_gearbox
     model = build_gearbox(scene, master_level=level).reduced
     sw = scene.sweep
-    return model.n_modes, sweep(
-        model, rpms, directions=("up",), transient_periods=sw.transient_periods,
-        extra_transient_periods=sw.extra_transient_periods, record_periods=sw.record_periods,
-        max_period=sw.max_period, period_tol=sw.period_tol, options=options,
-        u0=static_equilibrium(model, rpms[0]).u0, workers=1, second_tolerance=True)
+    return model.n_modes, sweep(model, rpms, SweepOptions(directions=("up",), transient_periods=sw.transient_periods, extra_transient_periods=sw.extra_transient_periods, record_periods=sw.record_periods, max_period=sw.max_period, period_tol=sw.period_tol, workers=1, second_tolerance=True), options=options, u0=static_equilibrium(model, rpms[0]).u0)
 
 
 def _compare(rpms):

@@ -86,12 +86,15 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
         raise ConfigError("nvh.rpm_min", "no steady points: list 'sweep' before 'nvh' in "
                           "scene.analyses (with nvh.use_sweep = true), or give the [nvh] "
                           "speed grid rpm_min / rpm_max")
+    from ..config.options import SweepOptions
     from ..solvers.sequential.sweep import sweep
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)
-    kw = dict(directions=("up",), transient_periods=cfg.transient_periods, record_periods=1,
-              max_period=1, options=integration_options(scene, record=True, study=study),
-              u0=study.start(rpm[0]), workers=1, lyapunov=False)
+    kw = dict(settings=SweepOptions(directions=("up",), transient_periods=cfg.transient_periods,
+                                    extra_transient_periods=0, record_periods=1, max_period=1,
+                                    workers=1, lyapunov=False, shoot=False),
+              options=integration_options(scene, record=True, study=study),
+              u0=study.start(rpm[0]))
     if ctx is None:
         res = sweep(study.model, rpm, **kw)
     else:

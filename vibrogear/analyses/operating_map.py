@@ -41,6 +41,7 @@ from ..solvers.status import Status
 from ..solvers.sequential.sweep import assemble_result, sweep_units
 from ..solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
+from ..config.options import SweepOptions
 from .study import Study, integration_options, start_state
 from .sweep import record_from_json, record_to_json
 
@@ -115,7 +116,7 @@ def _max_mesh_force(model, param, u, meshes, periods, samples, options, force_un
             for k, idx in meshes.items()}
 
 
-def _walk(model, scaling: LoadScaling, kw, extra, unit, emit) -> int:
+def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
     """One unit (row, scale, direction, indices, params, first speed, done): the points of
     one direction (piece) of one load row, each new one emitted as (row, record)."""
     row, scale, direction, indices, params, p_first, done = unit
@@ -125,7 +126,7 @@ def _walk(model, scaling: LoadScaling, kw, extra, unit, emit) -> int:
     for i, p in zip(indices, params):
         rec = done.get(i)
         if rec is None:
-            rec = run_point(m, float(p), seed, direction, i, **kw)
+            rec = run_point(m, float(p), seed, direction, i, settings, **kw)
             if rec.ok:
                 force = _max_mesh_force(m, float(p), rec.u_end, **extra)
                 rec = dataclasses.replace(rec, metrics={**rec.metrics, **force})
@@ -150,13 +151,7 @@ def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, optio
     groups = contact_groups(model)
     meshes = {k: idx for k, (kind, idx) in groups.items() if kind == "mesh"}
     bearings = tuple(k for k, (kind, _) in groups.items() if kind != "mesh")
-    kw = dict(transient_periods=settings.transient_periods,
-              record_periods=settings.record_periods, max_period=settings.max_period,
-              period_tol=settings.period_tol, cluster_tol=1e-3, options=options,
-              keep_states=False, extra_transient_periods=settings.extra_transient_periods,
-              lyapunov=settings.lyapunov, settle=True)
-    if getattr(settings, "second_tolerance", False):
-        kw["second_tolerance"] = True
+    kw = dict(options=options, cluster_tol=1e-3, keep_states=False, settle=True)
     extra = dict(meshes=meshes, periods=int(force_periods), samples=int(force_samples),
                  options=options, force_unit=study.force_unit_n)
     store, done, note = None, {}, ""
@@ -190,7 +185,7 @@ def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, optio
         if callback is not None:
             callback(row, rec)
 
-    run_units(partial(_walk, model, scaling, kw, extra), units, workers=settings.workers,
+    run_units(partial(_walk, model, scaling, settings, kw, extra), units, workers=settings.workers,
               on_result=on_result)
     if under_mpi() and not root:
         return broadcast(None)
@@ -230,7 +225,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                 study=study)
     total = len(cfg.directions) * rpm.size * scales.size
     with ctx.progress(total, "map") as bar:
-        res = compute_map(study, scaling, rpm, scales, cfg.sweep_options(), opts, out=ctx.out,
+        res = compute_map(study, scaling, rpm, scales, SweepOptions.of(cfg), opts, out=ctx.out,
                           root=ctx.root, force_periods=cfg.force_periods,
                           force_samples=cfg.force_samples,
                           callback=lambda k, rec: bar.update(

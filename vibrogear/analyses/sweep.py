@@ -10,6 +10,7 @@ report has written ``sweep.npz``.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,6 +23,7 @@ from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND
 from ..solvers.status import Status
 from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
+from ..config.options import SweepOptions
 from .study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
@@ -64,8 +66,8 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
     params = np.asarray(params, dtype=float).ravel()
     store, done = None, {}
     if root if root is not None else is_root_process():
-        settings = {k: v for k, v in sweep_kw.items()
-                    if k not in _NOT_IN_SIGNATURE + ("options", "u0")}
+        settings = {k: v for k, v in dataclasses.asdict(sweep_kw["settings"]).items()
+                    if k not in _NOT_IN_SIGNATURE}
         u0 = sweep_kw.get("u0")
         store = PartialStore(Path(out_dir) / PARTIAL_NAME, {
             "analysis": "sweep", "physics": physics or fingerprint(model),
@@ -95,12 +97,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             study.model, params, ctx.out, physics=study.physics, root=ctx.root,
             callback=lambda rec: bar.update(1, f"{rec.param:.4g} {study.param_unit} "
                                                f"P{rec.period_n}"),
-            directions=cfg.directions, transient_periods=cfg.transient_periods,
-            record_periods=cfg.record_periods,
-            extra_transient_periods=cfg.extra_transient_periods, max_period=cfg.max_period,
-            period_tol=cfg.period_tol, options=opts, u0=study.start(params[0]),
-            segments=cfg.segments, workers=cfg.workers, lyapunov=cfg.lyapunov,
-            **({"second_tolerance": True} if cfg.second_tolerance else {}))
+            settings=SweepOptions.of(cfg), options=opts, u0=study.start(params[0]))
     failed = int(np.sum(res.status != 0))
     if failed == res.param.size:
         raise NumericalFailure(f"sweep: all {failed} points failed; first: "

@@ -104,9 +104,3 @@ class MapConfig(SweepOptions):
         lo, hi = ((self.twist_min, self.twist_max) if self.load_kind == "twist"
                   else (self.torque_min, self.torque_max))
         return np.linspace(lo, hi, self.n_loads)
-
-    def sweep_options(self) -> SweepOptions:
-        """The sweep settings of each load row."""
-        import dataclasses
-        return SweepOptions(**{f.name: getattr(self, f.name)
-                               for f in dataclasses.fields(SweepOptions)})

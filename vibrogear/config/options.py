@@ -115,9 +115,19 @@ class SweepOptions:
                                "(default: all cores; 1: serial; under mpirun: the ranks)")
     lyapunov: bool = spec(True, doc="largest Lyapunov exponent (with its 95 % interval) of "
                           "points without a period: it tells chaotic from quasi-periodic")
+    shoot: bool = spec(True, doc="a point without a period is shot from its settled state "
+                       "(Newton on the period map, periods 1 and 2) before it is called "
+                       "quasi-periodic or chaotic: a stable orbit makes it periodic (a slow "
+                       "transient, not a torus); an unstable one is reported beside the class")
     second_tolerance: bool = spec(False, doc="record every point's window again at rtol/10 "
                                   "from the same settled state; the change of each statistic "
                                   "is reported as its tolerance error (<name>_tol_err)")
+
+    @classmethod
+    def of(cls, section) -> "SweepOptions":
+        """The solver's settings of a section that extends them ([sweep], [map]), without the
+        section's own fields (grid, loads)."""
+        return cls(**{f.name: getattr(section, f.name) for f in dataclasses.fields(cls)})
 
     def __post_init__(self):
         check_fields(self)

@@ -69,11 +69,6 @@ class SweepSettings(SweepOptions):
         if len(self.range_keys) == 2:
             check_range(self, path, *self.range_keys)
 
-    def options(self) -> SweepOptions:
-        """The solver's settings (without the grid)."""
-        return SweepOptions(**{f.name: getattr(self, f.name)
-                               for f in dataclasses.fields(SweepOptions)})
-
 
 @dataclass(frozen=True, kw_only=True)
 class ContinuationSettings(ContinuationSteps):

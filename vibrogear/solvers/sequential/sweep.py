@@ -114,7 +114,7 @@ def sweep_units(n_params: int, directions=DIRECTIONS, segments: int = 1) -> list
     return out
 
 
-def _walk_unit(model, kw, unit, emit) -> int:
+def _walk_unit(model, settings, kw, unit, emit) -> int:
     """Walk one unit (direction, indices, params, seed, done): each new point goes to
     ``emit``; done points are skipped and their end states seed the next point."""
     direction, indices, params, seed, done = unit
@@ -123,7 +123,7 @@ def _walk_unit(model, kw, unit, emit) -> int:
     for i, p in zip(indices, params):
         rec = done.get(i)
         if rec is None:
-            rec = run_point(model, float(p), seed, direction, i, **kw)
+            rec = run_point(model, float(p), seed, direction, i, settings, **kw)
             emit(rec)
             new += 1
         if rec.ok:
@@ -131,21 +131,21 @@ def _walk_unit(model, kw, unit, emit) -> int:
     return new
 
 
-def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_periods: int = 200,
-          record_periods: int = 32, max_period: int = 8, period_tol: float = 1e-5,
+def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
           options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
           done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
-          extra_transient_periods: int = 0, segments: int = 1,
-          workers: int | None = None, lyapunov: bool = True,
-          settle: bool = True, second_tolerance: bool = False) -> SweepResult:
+          settle: bool = True) -> SweepResult:
     """Sequential continuation of ``model`` over ``params`` in independent units (see the
     module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
 
+    ``settings`` (:class:`~vibrogear.config.options.SweepOptions`, default its defaults):
     ``lyapunov``: the largest Lyapunov exponent of points without a period (their class
-    evidence); ``settle``: stop a transient whose statistics have settled (a transient
-    always stops once the stroboscopic map has converged); ``second_tolerance``: the
-    record window again at rtol / 10 from the same settled state, the change of each
-    statistic (extrema, contact metrics) in ``metrics["<name>_tol_err"]``.
+    evidence); ``shoot``: Newton on the period map from such a point's settled state
+    before it is called quasi-periodic or chaotic (:mod:`.sweep_point`);
+    ``second_tolerance``: the record window again at rtol / 10 from the same settled
+    state, the change of each statistic (extrema, contact metrics) in
+    ``metrics["<name>_tol_err"]``.  ``settle``: stop a transient whose statistics have
+    settled (a transient always stops once the stroboscopic map has converged).
 
     ``segments``: pieces per direction (each starts again from ``u0``).  ``workers``:
     local processes (None: min(units, cores); 1: in this process); under ``mpirun``
@@ -161,24 +161,15 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
     params = np.asarray(params, dtype=float).ravel()
     if params.size == 0:
         raise ValueError("sweep: params must not be empty")
-    directions = tuple(directions)
-    # the settings' rules, defined once with the [sweep] section (ConfigError: a ValueError)
-    SweepOptions(transient_periods=int(transient_periods), record_periods=int(record_periods),
-                 extra_transient_periods=int(extra_transient_periods), directions=directions,
-                 max_period=int(max_period), period_tol=float(period_tol),
-                 segments=int(segments), workers=None if workers is None else int(workers),
-                 lyapunov=bool(lyapunov), second_tolerance=bool(second_tolerance))
+    settings = SweepOptions() if settings is None else settings
     n_states = model.n_states
     seed = np.zeros(n_states) if u0 is None else np.array(u0, dtype=float)
     if seed.shape != (n_states,):
         raise ValueError(f"sweep: u0 must have {n_states} entries")
     done = dict(done or {})
-    kw = dict(transient_periods=int(transient_periods), record_periods=int(record_periods),
-              max_period=int(max_period), period_tol=float(period_tol),
-              cluster_tol=float(cluster_tol), options=options, keep_states=keep_states,
-              extra_transient_periods=int(extra_transient_periods), lyapunov=bool(lyapunov),
-              settle=bool(settle), second_tolerance=bool(second_tolerance))
-    layout = sweep_units(params.size, directions, int(segments))
+    kw = dict(options=options, cluster_tol=float(cluster_tol), keep_states=keep_states,
+              settle=bool(settle))
+    layout = sweep_units(params.size, settings.directions, settings.segments)
     units = [(d, idx, params[list(idx)], seed, {i: done[(d, i)] for i in idx if (d, i) in done})
              for d, idx in layout]
     todo = [u for u in units if len(u[4]) < len(u[1])]
@@ -195,7 +186,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
 
     # a unit's cost: its points still to compute (a resumed sweep's part-done units are
     # shorter; the longest go first, the short ones fill the end)
-    run_units(partial(_walk_unit, model, kw), todo, workers=workers, on_result=on_result,
+    run_units(partial(_walk_unit, model, settings, kw), todo, workers=settings.workers,
+              on_result=on_result,
               costs=[len(u[1]) - len(u[4]) for u in todo])
     if under_mpi() and not is_root():
         return broadcast(None)                  # rank 0's result, identical everywhere
@@ -209,8 +201,8 @@ def sweep(model: ReducedModel, params, *, directions=DIRECTIONS, transient_perio
         code, msg = Status.PARTIAL, f"{failed} of {len(records)} points failed"
     else:
         code, msg = Status.OK, Status.OK.message
-    result = assemble_result(records, n_states=n_states, record_periods=int(record_periods),
-                             options=options, period_tol=period_tol,
+    result = assemble_result(records, n_states=n_states, record_periods=settings.record_periods,
+                             options=options, period_tol=settings.period_tol,
                              param_name=model.param_name, status_code=code,
                              status_message=msg, wall_time=time.perf_counter() - wall)
     return broadcast(result)

@@ -28,6 +28,10 @@ periods T, so its end state is again at phase 0.
   (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
   trajectory per chunk) decides chaotic / quasi-periodic / not settled.  Per contact
   group, the period again on the group's deformations alone.
+* **Orbit check** (``shoot``, :mod:`~.orbit_check`): a point without a period is first shot
+  from its settled state (periods 1 and 2).  A stable orbit makes it periodic
+  (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
+  is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
   (the state at each onset by a short integration from the dense sample before it),
   contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
@@ -47,10 +51,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...config.options import IntegrationOptions, SweepOptions
 from ...models.contact_law import flank
 from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
+from .orbit_check import check_orbit
 from .motion import (FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from ..status import Status
@@ -236,13 +242,13 @@ def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> di
     return out
 
 
-def run_point(model, param, u_seed, direction, index, *, transient_periods, record_periods,
-              max_period, period_tol, cluster_tol, options, keep_states,
-              extra_transient_periods=0, lyapunov=True, settle=True,
-              second_tolerance=False) -> PointRecord:
-    """One sweep point (module docstring)."""
+def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
+              options: IntegrationOptions, cluster_tol: float = 1e-3, keep_states: bool = False,
+              settle: bool = True) -> PointRecord:
+    """One sweep point (module docstring) with ``settings`` (:class:`SweepOptions`)."""
     wall = time.perf_counter()
-    R = int(record_periods)
+    max_period, period_tol = settings.max_period, settings.period_tol
+    R = settings.record_periods
     counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
     if not (math.isfinite(param) and model.excitation_frequency(param) > 0):
         return failed_point(direction, index, param, R, Status.BAD_PARAMETER,
@@ -257,7 +263,7 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
                             time.perf_counter() - wall, used)
 
     # ---- transient, stopped when settled
-    budget = int(transient_periods) + int(extra_transient_periods)
+    budget = settings.transient_periods + settings.extra_transient_periods
     block = max(int(max_period) + 2, 8)
     W = max(R, SETTLE_WINDOW)
     strob, dense = [seed], []
@@ -295,9 +301,22 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
 
     # ---- class and evidence
     n, defect = classify_period(states, max_period, period_tol, split=m)
+    orbit = None
+    if n == 0 and settings.shoot:
+        # a slow transient or an attractor without a period? (orbit_check.py)
+        orbit = check_orbit(model, param, seed, period_tol=period_tol, options=options)
+        counts[2] += orbit.rhs_calls
+        if orbit.stable:
+            again = _record(model, param, orbit.u0, R, T, chunk, groups, options, counts,
+                            has_monitor)
+            if not isinstance(again, tuple):
+                n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
+                if n2 > 0:
+                    u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
+                    chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
     lam, ci = math.nan, (math.nan, math.nan)
     msg = "ok"
-    if n == 0 and lyapunov and len(chunks) >= 2:
+    if n == 0 and settings.lyapunov and len(chunks) >= 2:
         scale = state_scale(np.vstack([u_rec, states]), m)
         # start along the last step of the stroboscopic map: the slowest direction
         v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
@@ -327,7 +346,9 @@ def run_point(model, param, u_seed, direction, index, *, transient_periods, reco
             msg = "event log full: raise [integration] event_log for the contact metrics"
             metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
                        for k, v in metrics.items()}
-    if second_tolerance:
+    if orbit is not None:
+        metrics.update(orbit.as_metrics())
+    if settings.second_tolerance:
         # the record window again at rtol / 10 from the same settled state: the change of
         # each statistic is its tolerance error
         fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
