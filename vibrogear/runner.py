@@ -63,6 +63,23 @@ def resolve(scene: Scene) -> list[tuple[str, Entry]]:
     return plan
 
 
+def _load_saved(name: str, kind: str, out: Path, previous) -> dict:
+    """The saved results a verb reads (``Verb.reads_saved``) whose verb did not run in this
+    run: {verb: outcome} with its main ``.npz`` in the output folder as a dict of arrays."""
+    loaded = {}
+    for dep in VERBS[name].reads_saved:
+        run = VERBS[dep].runs.get(kind)
+        if dep in previous or run is None:
+            continue
+        path = Path(out) / next(f for f in run.outputs if f.endswith(".npz"))
+        if path.is_file():
+            import numpy as np
+            with np.load(path, allow_pickle=False) as z:
+                loaded[dep] = AnalysisOutcome(summary={"loaded_from": str(path)},
+                                              result={k: z[k] for k in z.files})
+    return loaded
+
+
 def write_summary(out: Path, summary: dict) -> None:
     if not is_root_process():
         return  # under mpirun only rank 0 writes files
@@ -114,8 +131,10 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
                 t0 = time.perf_counter()
             fn = _load(entry.analysis)
             args = (study, scene, ctx) if entry.study else (scene, ctx)
-            # analyses that read earlier outcomes take them as ``previous`` (read-only)
-            kw = {"previous": MappingProxyType(previous)} \
+            # analyses that read earlier outcomes take them as ``previous`` (read-only), with
+            # the saved results of verbs that did not run here
+            seen = {**_load_saved(name, scene.model_kind, ctx.out, previous), **previous}
+            kw = {"previous": MappingProxyType(seen)} \
                 if "previous" in inspect.signature(fn).parameters else {}
             outcome = _as_outcome(fn(*args, **kw))
             record = dict(outcome.summary)

@@ -56,6 +56,26 @@ def test_continuation_alone_overlays_the_sweep_already_in_the_folder(tmp_path):
     assert code == 0 and not (out / "bifurcation_branches.png").exists()
 
 
+def test_branches_from_the_saved_sweep_equal_those_from_this_runs_sweep(tmp_path):
+    """``from_sweep`` gets the sweep from the runner: this run's outcome, or the sweep.npz an
+    earlier run left in the folder (loaded by the runner, not by the analysis). Both give the
+    same windows and branches; with neither, the summary says so."""
+    fs = ("--set", "continuation.from_sweep=true")
+    assert _run(tmp_path, "one", *fs, "--set", 'scene.analyses=["sweep", "continuation"]')[0] == 0
+    assert _run(tmp_path, "two", *fs, "--set", 'scene.analyses=["sweep"]')[0] == 0
+    code, two, s2 = _run(tmp_path, "two", *fs, "--set", 'scene.analyses=["continuation"]')
+    s1 = json.loads((tmp_path / "one" / "summary.json").read_text())
+    w1 = s1["results"]["continuation"]["from_sweep"]
+    w2 = s2["results"]["continuation"]["from_sweep"]
+    assert code == 0 and w1["windows"] and w1["windows"] == w2["windows"]
+    assert w1["source"] == "this run's sweep" and w2["source"].endswith("sweep.npz")
+    with np.load(tmp_path / "one" / "branch.npz") as za, np.load(two / "branch.npz") as zb:
+        assert np.array_equal(za["param"], zb["param"]) and np.array_equal(za["u0"], zb["u0"])
+    code, _, s3 = _run(tmp_path, "empty", *fs, "--set", 'scene.analyses=["continuation"]')
+    assert code == 0 and s3["results"]["continuation"]["from_sweep"]["note"] == \
+        "no sweep in this run or in the output folder"
+
+
 def test_continuation_liouville_identity(tmp_path):
     """det M = exp(-2 zeta T) on every branch point (no contact damping): Liouville."""
     code, out, s = _run(tmp_path, "c", "--set", 'scene.analyses=["continuation"]')

@@ -14,8 +14,9 @@ units: the parameter is scaled by range / |u|, so ``ds``, ``ds_min``, ``ds_max``
 the scene's parameter unit (:class:`~vibrogear.config.options.ContinuationSteps`).
 
 With ``from_sweep`` also a branch both ways from each distinct period-n window of the sweep
-whose ``sweep.npz`` is in the output folder (this run's sweep writes it before; or an
-earlier run's), each half ending with its reason (:mod:`.sweep_branches`).
+(this run's sweep outcome, or an earlier run's ``sweep.npz`` in the output folder, which the
+runner loads: ``previous["sweep"]``), each half ending with its reason
+(:mod:`.sweep_branches`).
 """
 from __future__ import annotations
 
@@ -83,7 +84,7 @@ def starting_orbit(model, p0: float, u_static, *, transient_periods: int, option
     return None, 1, u_static, "; ".join(tried)
 
 
-def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
+def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     cfg = scene.continuation
     model = study.model
     opts = integration_options(scene, section=scene.continuation, study=study)
@@ -117,7 +118,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         raise NumericalFailure(f"continuation: {res.message}")
     from_sweep = None
     if getattr(cfg, "from_sweep", False):
-        res, from_sweep = _from_sweep(study, ctx, res, method, options, cfg)
+        res, from_sweep = _from_sweep(study, (previous or {}).get("sweep"), res, method,
+                                      options, cfg)
     wall = time.perf_counter() - t0
     branches = res.branches
     special = [{"label": s.label, study.param_name: float(s.param), "branch": s.branch,
@@ -167,21 +169,31 @@ def _least_period(model, w, method):
     return sh.u0, w.n
 
 
-def _from_sweep(study, ctx, res: ContinuationResult, method, options, cfg):
-    """Branches started both ways from each distinct period-n window of the sweep in
-    ``ctx.out/sweep.npz`` (written by this run's sweep, or an earlier one) that no branch
-    traced so far passes through (:mod:`.sweep_branches`).  Returns (the result with them
-    appended, a summary of the windows: where each started and how each half ended)."""
+def _sweep_arrays(result) -> dict:
+    """The arrays the windows need, from this run's sweep result or a saved ``sweep.npz``
+    (a dict of its arrays, loaded by the runner)."""
+    if isinstance(result, dict):
+        return result
+    sw = getattr(result, "sweep", result)
+    data = {k: getattr(sw, k) for k in ("param", "direction", "status", "period_n", "qmax",
+                                         "u_end")}
+    data["param_name"] = sw.param_name
+    return data
+
+
+def _from_sweep(study, sweep, res: ContinuationResult, method, options, cfg):
+    """Branches started both ways from each distinct period-n window of ``sweep`` (the
+    outcome of this run's sweep, or of an earlier run's ``sweep.npz`` in the output folder,
+    handed over by the runner) that no branch traced so far passes through
+    (:mod:`.sweep_branches`).  Returns (the result with them appended, a summary of the
+    windows: where each started and how each half ended)."""
     import dataclasses
-    from pathlib import Path
 
     from .sweep_branches import on_branch, period_windows
 
-    path = Path(ctx.out) / "sweep.npz"
-    if not path.is_file():
-        return res, {"windows": [], "note": "no sweep.npz in the output folder"}
-    with np.load(path, allow_pickle=False) as z:
-        data = {k: z[k] for k in z.files}
+    if sweep is None or sweep.result is None:
+        return res, {"windows": [], "note": "no sweep in this run or in the output folder"}
+    data = _sweep_arrays(sweep.result)
     if str(data.get("param_name", study.model.param_name)) != study.model.param_name:
         return res, {"windows": [], "note": "sweep.npz is over another parameter"}
     lo, hi = options.param_min, options.param_max
@@ -224,4 +236,4 @@ def _from_sweep(study, ctx, res: ContinuationResult, method, options, cfg):
     out = ContinuationResult(branches=tuple(branches), special_points=special,
                              status=res.status, message=res.message, counters=counters,
                              wall_time=res.wall_time)
-    return out, {"windows": notes, "source": str(path)}
+    return out, {"windows": notes, "source": sweep.summary.get("loaded_from", "this run's sweep")}

@@ -40,6 +40,10 @@ class Verb:
     section: str | None           # the option section it needs (None: none)
     runs: dict[str, Run] = field(default_factory=dict)   # model kind -> Run
     command: str | None = None    # ``vibrogear COMMAND SCENE`` runs this verb alone
+    #: verbs whose saved result it reads when they did not run in this run: the runner loads
+    #: their main file from the output folder into ``previous`` (e.g. ``vibrogear continue``
+    #: after ``vibrogear sweep`` into the same folder)
+    reads_saved: tuple[str, ...] = ()
 
     @property
     def models(self) -> tuple[str, ...]:
@@ -63,7 +67,8 @@ _VERBS = (
     Verb("continuation", "shooting + pseudo-arclength continuation of periodic orbits with Floquet "
          "stability", "continuation",
          _both("continuation:run", "branch_report:write",
-               ("branch.npz", "branch.csv", "branch_max.png", "branch_min.png")), command="continue"),
+               ("branch.npz", "branch.csv", "branch_max.png", "branch_min.png")), command="continue",
+         reads_saved=("sweep",)),
     Verb("report", "work-precision study: integrator tolerance and shooting residual against run "
          "time", "report",
          {"impact_pair": Run("impact_report:run_report", "precision_report:write",
