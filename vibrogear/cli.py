@@ -64,9 +64,36 @@ def _cache(action: str) -> int:
 def main(argv: list[str] | None = None) -> int:
     try:
         return _main(argv)
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         print("\nvibrogear: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted_code(exc)
+
+
+def _interrupted_code(exc: BaseException) -> int:
+    """130 for Ctrl-C, 128 + the signal number for SIGTERM (143) and SIGHUP (129)."""
+    return 128 + exc.signum if hasattr(exc, "signum") else EXIT_INTERRUPTED
+
+
+def _handle_stop_signals() -> None:
+    """SIGTERM and SIGHUP behave as Ctrl-C: they raise :class:`Terminated` (a
+    KeyboardInterrupt) in the main thread, so every interrupt path keeps what finished."""
+    import signal
+    import threading
+
+    from .pipeline.outcome import Terminated
+
+    if threading.current_thread() is not threading.main_thread():
+        return
+
+    def stop(signum, _frame):
+        # worker processes (run_units) get the signal too, as a terminal's Ctrl-C reaches
+        # the whole process group; the pool then ends instead of finishing its units
+        import multiprocessing
+        for child in multiprocessing.active_children():
+            child.terminate()
+        raise Terminated(signum)
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        signal.signal(sig, stop)
 
 
 def _main(argv: list[str] | None) -> int:
@@ -99,13 +126,15 @@ def _main(argv: list[str] | None) -> int:
     from .runner import NumericalFailure, RunContext, run_scene
 
     ctx = RunContext(out=out, quiet=args.quiet)
+    _handle_stop_signals()
     try:
         summary = run_scene(scene, ctx, source=str(args.scene))
-    except KeyboardInterrupt:
-        print(f"\nvibrogear: interrupted; finished results and partial files are kept in {out}/. "
-              "Run the same command again to resume: points computed with the same physics, grid, "
-              "options and version are reused.", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        by = f" by {exc.name}" if hasattr(exc, "signum") else ""
+        print(f"\nvibrogear: interrupted{by}; finished results and partial files are kept in "
+              f"{out}/. Run the same command again to resume: points computed with the same "
+              "physics, grid, options and version are reused.", file=sys.stderr)
+        return _interrupted_code(exc)
     except NumericalFailure as exc:
         _error("numerical failure", exc)
         return EXIT_FAILED

@@ -23,7 +23,8 @@ from . import __version__
 from .config import Scene
 from .config.verbs import VERBS
 from .pipeline.files import atomic_write_text, finite_json
-from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
+from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
+                               is_root_process)
 from .report.html_report import write_html_report
 
 __all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure",
@@ -161,11 +162,15 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             # is the KeyboardInterrupt
             if not is_interrupt(exc):
                 raise
-            exc = KeyboardInterrupt()
+            exc = _interrupt_of(exc)
+            by = f"by {exc.name}" if isinstance(exc, Terminated) else "by the user (Ctrl-C)"
             summary["results"][name] = {"status": "interrupted",
-                                        "message": "stopped by the user (Ctrl-C); run the same "
-                                        "command again to resume"}
+                                        "message": f"stopped {by}; run the same command "
+                                        "again to resume"}
             summary["status"] = "interrupted"
+            summary["resume"] = RESUME_HINT
+            if isinstance(exc, Terminated):
+                summary["signal"] = exc.name
             failure = exc
         summary["wall_time_s"][name] = time.perf_counter() - t0
         if study is not None and study.notes:
@@ -179,6 +184,23 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
     if failure is not None:
         raise failure
     return summary
+
+
+#: what an interrupted run says about resuming (summary.json and the command line)
+RESUME_HINT = ("finished results and partial files are kept; run the same command again to "
+               "resume: points computed with the same physics, grid, options and version are "
+               "reused")
+
+
+def _interrupt_of(exc: BaseException) -> KeyboardInterrupt:
+    """The KeyboardInterrupt (or :class:`Terminated`) in ``exc``'s chain."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return KeyboardInterrupt()
 
 
 def is_interrupt(exc: BaseException) -> bool:

@@ -19,7 +19,19 @@ from typing import Any
 from .executors import is_root
 from .progress import Progress
 
-__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "is_root_process"]
+__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "Terminated", "is_root_process"]
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (``kill``, ``docker stop``, SLURM, a closed terminal), raised by the
+    command line's handler and handled exactly as Ctrl-C: what finished is kept, the run
+    says how to resume; the exit code is 128 + the signal number."""
+
+    def __init__(self, signum: int):
+        import signal
+        self.signum = int(signum)
+        self.name = signal.Signals(self.signum).name
+        super().__init__(self.name)
 
 
 class NumericalFailure(RuntimeError):
