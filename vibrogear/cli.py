@@ -35,6 +35,8 @@ def _parser() -> argparse.ArgumentParser:
                         "list entries as printed, e.g. gearbox.gears[0].teeth=30")
         sp.add_argument("--out", default=None, help="output folder (default out/<scene name>)")
         sp.add_argument("--quiet", action="store_true", help="no progress bars")
+        sp.add_argument("--wait", action="store_true", help="if another run holds the output "
+                        "folder, wait for it to end (default: exit 2 naming it)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -125,10 +127,17 @@ def _main(argv: list[str] | None) -> int:
         return EXIT_OK
     from .runner import NumericalFailure, RunContext, run_scene
 
+    from .pipeline.outcome import is_root_process
+    from .pipeline.run_lock import FolderInUse, RunLock
+
     ctx = RunContext(out=out, quiet=args.quiet)
     _handle_stop_signals()
     try:
-        summary = run_scene(scene, ctx, source=str(args.scene))
+        with RunLock(out, wait=args.wait, enabled=is_root_process()):
+            summary = run_scene(scene, ctx, source=str(args.scene))
+    except FolderInUse as exc:
+        _error("invalid input", exc)
+        return EXIT_INPUT
     except KeyboardInterrupt as exc:
         by = f" by {exc.name}" if hasattr(exc, "signum") else ""
         print(f"\nvibrogear: interrupted{by}; finished results and partial files are kept in "

@@ -36,6 +36,7 @@ from ..solvers.integrator.contact_eval import contact_history
 from ..solvers.integrator.integrate import integrate
 from ..solvers.sequential.spectrum import amplitude_spectrum
 from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
+from .line_sources import label_points, natural_frequencies, point_summary, sweep_classes
 from .study import Study, integration_options
 
 __all__ = ["NvhResult", "BranchSpectra", "run", "steady_points", "order_lines",
@@ -62,6 +63,11 @@ class NvhResult:
     velocity_fields: dict = field(default_factory=dict)    # rpm -> (nf,) RMS v_n [m/s]
     study: Study | None = None
     branch: BranchSpectra | None = None    # spectra of the continuation's branch points
+    #: quantity -> [Lines per point]: the named spectral lines (analyses/line_sources.py)
+    lines: dict = field(default_factory=dict)
+    #: evidence name -> (P,): the DTE spectrum's torus base pair and broadband measures
+    evidence: dict = field(default_factory=dict)
+    motion_class: np.ndarray | None = None   # (P,) the sweep's class per point (-1: none)
 
     @property
     def erp_db(self) -> np.ndarray | None:
@@ -284,13 +290,23 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
             warnings.extend(more)
     order = np.arange(R * S // 2 + 1) / R
     mesh_hz, shaft_hz, shaft_names = order_lines(scene.gearbox, rpm)
+    f1_hz = model.excitation_frequency(rpm) / (2 * np.pi * study.time_unit_s)
+    amplitudes = {k: np.array(v) for k, v in records.items()}
+    classes = sweep_classes(previous, cfg.sweep_direction, rpm) if source.startswith(
+        "sweep") else np.full(rpm.size, -1, dtype=np.int64)
+    modes_hz, modes_rpm = natural_frequencies(study, scene, previous, ctx)
+    lines, evidence, lines_summary = label_points(
+        scene, rpm, f1_hz, np.outer(f1_hz, order), amplitudes, R * S, classes, modes_hz,
+        cfg.max_order * float(np.max(mesh_hz)))
+    lines_summary["modes_rpm"] = modes_rpm
     names = {"dte": tuple(gm.contacts[j].name for j in mesh),
              "mesh_force": tuple(gm.contacts[j].name for j in mesh),
              "bearing_force": tuple(f"{b}:{c}" for b, _, _ in bearings for c in ("X", "Y"))}
     res = NvhResult(rpm=rpm, order=order, freq_hz=np.outer(model.excitation_frequency(rpm)
                                                            / (2 * np.pi * study.time_unit_s),
                                                            order),
-                    amplitudes={k: np.array(v) for k, v in records.items()}, channels=names,
+                    amplitudes=amplitudes, channels=names, lines=lines, evidence=evidence,
+                    motion_class=classes,
                     units={"dte": "m", "mesh_force": "N", "bearing_force": "N"},
                     parseval=parseval, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                     shaft_names=shaft_names, source=source, erp_w=erp_w, erp_note=note,
@@ -300,6 +316,8 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                "source": source, "record_periods": R, "samples_per_period": S,
                "resolution_orders": 1.0 / R, "window": "none (whole mesh periods)",
                "parseval_max_rel_error": parseval, "settle_wall_s": t_settle,
+               "lines": lines_summary, "points_evidence": point_summary(rpm, classes, evidence,
+                                                                      lines.get("dte")),
                "wall_s": time.perf_counter() - t_start}
     if erp_w is not None:
         k = int(np.argmax(erp_w))

@@ -18,13 +18,14 @@ def _edges(x: np.ndarray) -> np.ndarray:
 
 def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: float,
                    mesh_hz, shaft_hz, max_order: float, shaft_names=(), title: str = "",
-                   power: bool = False):
+                   power: bool = False, lines=None):
     """Colour map of ``amp`` (P, K) [unit] over frequency (P, K) [Hz] and speed (P,) [rpm],
     in dB re the largest amplitude, with mesh order lines h x f_mesh (h = 1 .. max_order,
     each mesh) and 1x shaft order lines.  Each bin is drawn as the cell of its order
     (frequency proportional to speed), so lines at a fixed order stay on their bins.  One
     speed: the spectrum as a line.  ``power``: ``amp`` is a power (10 log10 instead of
-    20 log10)."""
+    20 log10).  ``lines``: (frequency, rpm, kind) of the named spectral lines, marked by
+    kind (unidentified: a white x)."""
     rpm, freq_hz, amp = np.asarray(rpm), np.asarray(freq_hz), np.asarray(amp)
     ref = float(np.max(amp[:, 1:])) if amp.shape[1] > 1 and np.max(amp[:, 1:]) > 0 else 1.0
     floor = 1e-12 if power else 1e-6                      # -120 dB / -120 dB
@@ -50,6 +51,7 @@ def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: fl
             name = shaft_names[i] if i < len(shaft_names) else f"shaft {i}"
             ax.plot(f0 * scale, speeds, color="r", lw=0.8,
                     ls=_LINE_STYLES[i % len(_LINE_STYLES)], label=f"{name} 1x")
+        _mark_lines(ax, lines, max_hz)
         ax.set_ylabel("driving speed [rpm]")
         ax.legend(loc="lower right", fontsize=7, framealpha=0.6)
     else:
@@ -63,6 +65,25 @@ def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: fl
     ax.set_xlabel("frequency [Hz]")
     ax.set_title(title, fontsize=9)
     return save_figure(fig, path, formats=("png",))
+
+
+_KIND_STYLE = {"mesh": ("o", "w"), "shaft": ("s", "tab:red"), "free gear": ("D", "tab:orange"),
+               "bearing": ("^", "tab:pink"), "mode": ("v", "tab:cyan"),
+               "base": ("*", "yellow"), "combination": ("P", "tab:olive"),
+               "unidentified": ("x", "w")}
+
+
+def _mark_lines(ax, lines, max_hz: float):
+    """The named lines as markers by kind (drawn below ``max_hz``)."""
+    if lines is None:
+        return
+    f, rpm, kind = (np.asarray(a) for a in lines)
+    keep = f <= max_hz
+    for k, (marker, colour) in _KIND_STYLE.items():
+        sel = keep & (kind == k)
+        if np.any(sel):
+            ax.plot(f[sel], rpm[sel], marker, ms=3.0, mfc="none" if k != "base" else colour,
+                    mec=colour, lw=0, mew=0.7, label=f"line: {k}")
 
 
 def plot_erp(path, rpm, erp_w, *, title: str = ""):

@@ -6,7 +6,22 @@
 ``bearing_force`` [N]: ``amp_<q>`` (P, channels, K) one-sided amplitudes (bin 0: the mean),
 ``channels_<q>`` the channel names, ``parseval_<q>`` the largest relative Parseval error;
 ``mesh_hz`` (P, meshes) and ``shaft_hz`` (P, shafts) for order lines; with a housing
-``erp_w_per_bin`` (P, K), the ERP of each bin [W] (its sum over bins: ``erp_w``).  ``erp.csv``: rpm,
+``erp_w_per_bin`` (P, K), the ERP of each bin [W] (its sum over bins: ``erp_w``).
+
+The named lines (:mod:`vibrogear.analyses.line_sources`), one row per line of each point's
+spectrum (RSS over the channels) of each quantity: ``line_point`` (index into ``rpm``),
+``line_rpm``, ``line_quantity``, ``line_freq_hz``, ``line_amp`` (leakage corrected, the
+quantity's unit), ``line_source`` (e.g. "G1 mesh 2x", "z4 relative 1x", "A front BPFO",
+"mode 7 (1994 Hz)", "1x G1 mesh - 2x f2", or "unidentified"), ``line_kind`` (mesh, shaft,
+free gear, bearing, mode, base, combination, unidentified), ``line_identified``,
+``line_offset_hz`` (line minus the matched frequency), ``line_chance`` (the chance of a
+match near the line), ``line_alternatives`` (other candidates within the tolerance); per
+point ``motion_class`` (the sweep's, -1 without) and ``evidence_<name>`` of the DTE spectrum:
+``f1_hz`` (the excitation), ``f2_hz`` and ``nu`` (a quasi-periodic point's second base
+frequency and f2 / f1 folded into [0, 1/2]; 0 elsewhere), ``explained`` (line power on the
+lattice a f1 + b f2), ``harmonic`` (on the harmonics of f1), ``broadband`` (AC power outside
+the identified lines), ``flatness``, ``identified`` (line power named).  The waterfalls mark
+the lines by kind.  ``erp.csv``: rpm,
 erp_w, erp_db (only with a housing that has surface data).  The surface file holds the
 outer-surface triangles with the cell data ``v_rms`` [m/s] (RMS normal velocity per facet).
 
@@ -30,7 +45,7 @@ import numpy as np
 from ..pipeline.files import atomic_write_bytes
 from .nvh_plots import plot_erp, plot_waterfall
 
-__all__ = ["write", "write_branch", "write_surface_velocity"]
+__all__ = ["write", "write_branch", "write_surface_velocity", "line_arrays"]
 
 _LABELS = {"dte": "dynamic transmission error", "mesh_force": "mesh force",
            "bearing_force": "bearing force"}
@@ -61,6 +76,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {}
     arrays = {"rpm": r.rpm, "order": r.order, "freq_hz": r.freq_hz, "mesh_hz": r.mesh_hz,
               "shaft_hz": r.shaft_hz, "shaft_names": np.array(r.shaft_names)}
+    arrays.update(line_arrays(r))
     files["npz"] = _write_spectra(out / "spectra.npz", arrays, r, r.channels)
     max_hz = cfg.max_order * 1.05 * float(np.max(r.mesh_hz))
     title = r.study.title if r.study is not None else scene.scene.name
@@ -72,7 +88,8 @@ def write(scene, outcome, out, previous=None) -> dict:
         plot_waterfall(path, r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
                        max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
                        max_order=cfg.max_order, shaft_names=r.shaft_names,
-                       title=f"{title}\n{_LABELS[q]}, steady points from {r.source}")
+                       title=f"{title}\n{_LABELS[q]}, steady points from {r.source}",
+                       lines=_lines_of(r, q))
         files[f"waterfall_{q}"] = str(path)
     if r.erp_w is not None:
         lines = ["rpm,erp_w,erp_db"] + [f"{p!r},{w!r},{d!r}" for p, w, d in
@@ -98,6 +115,42 @@ def write(scene, outcome, out, previous=None) -> dict:
     if r.branch is not None:
         files.update(write_branch(scene, r, out, max_hz, title))
     return files
+
+
+def line_arrays(r) -> dict:
+    """The named lines of every point and quantity, one row per line, and the per-point
+    evidence (module docstring)."""
+    rows = [(i, q, ln, j) for q, per in getattr(r, "lines", {}).items()
+            for i, ln in enumerate(per) for j in range(ln.freq.size)]
+    out = {"line_point": np.array([i for i, _, _, _ in rows], dtype=np.int64),
+           "line_rpm": np.array([r.rpm[i] for i, _, _, _ in rows], dtype=float),
+           "line_quantity": np.array([q for _, q, _, _ in rows], dtype=str),
+           "line_freq_hz": np.array([ln.freq[j] for _, _, ln, j in rows], dtype=float),
+           "line_amp": np.array([ln.amp[j] for _, _, ln, j in rows], dtype=float),
+           "line_source": np.array([ln.source[j] for _, _, ln, j in rows], dtype=str),
+           "line_kind": np.array([ln.kind[j] for _, _, ln, j in rows], dtype=str),
+           "line_offset_hz": np.array([ln.offset[j] for _, _, ln, j in rows], dtype=float),
+           "line_chance": np.array([ln.chance[j] for _, _, ln, j in rows], dtype=float),
+           "line_alternatives": np.array([ln.alternatives[j] for _, _, ln, j in rows],
+                                         dtype=str)}
+    out["line_identified"] = out["line_kind"] != "unidentified"
+    for k in ("line_offset_hz", "line_chance"):       # 0 where nothing was matched
+        out[k] = np.where(np.isfinite(out[k]), out[k], 0.0)
+    for k, v in getattr(r, "evidence", {}).items():
+        out[f"evidence_{k}"] = np.where(np.isfinite(v), v, 0.0)
+    if getattr(r, "motion_class", None) is not None:
+        out["motion_class"] = np.asarray(r.motion_class, dtype=np.int64)
+    return out
+
+
+def _lines_of(r, q):
+    """(frequency, rpm, kind) of the named lines of quantity ``q`` (None without)."""
+    per = getattr(r, "lines", {}).get(q)
+    if not per:
+        return None
+    return (np.concatenate([ln.freq for ln in per]),
+            np.concatenate([np.full(ln.freq.size, p) for p, ln in zip(r.rpm, per)]),
+            np.concatenate([np.array(ln.kind, dtype=str) for ln in per]))
 
 
 def _write_spectra(path: Path, arrays: dict, res, channels: dict) -> str:

@@ -14,7 +14,15 @@
   ``unloaded_<bearing>``), each with an ``_err`` companion (batch means over blocks of the
   record) and, with ``[sweep] second_tolerance``, a ``_tol_err`` companion (the change when
   the record window is integrated again at rtol / 10 from the same state; also
-  ``qmin_tol_err`` / ``qmax_tol_err``).  No NaN/inf is ever written:
+  ``qmin_tol_err`` / ``qmax_tol_err``).  The spectral evidence of the class, from the
+  record's stroboscopic samples ``poincare`` (one per excitation period;
+  :func:`~vibrogear.solvers.sequential.spectral_lines.stroboscopic_evidence`):
+  ``base_f2_order``, a quasi-periodic point's two base frequencies being the excitation
+  (order 1) and this one, the rotation number nu in (0, 1/2] (f2 is known up to f2 -> +-f2 +
+  k f1; ``nvh`` names the representative seen in the dense spectrum, in Hz); 0 elsewhere;
+  ``strob_flatness``, the spectral flatness of the samples (a torus or a period: lines,
+  ~0; chaos: broadband, towards 0.56), and ``strob_peak_fraction``, the share of their power
+  at nu, 2 nu, 3 nu (folded).  No NaN/inf is ever written:
   failed points carry 0 placeholders and ``ok = False`` / ``status < 0``.
 * ``sweep.csv`` repeats the per-point scalars; missing values are empty cells.
 
@@ -33,12 +41,17 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
+from ..solvers.sequential.motion import QUASI_PERIODIC
+from ..solvers.sequential.spectral_lines import stroboscopic_evidence
 
-__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
+__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "spectral_evidence"]
 
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
                "clusters", "defect", "status", "message", "wall_time", "motion_class",
-               "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by")
+               "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by",
+               "base_f2_order", "strob_flatness", "strob_peak_fraction")
+#: the spectral evidence of the stroboscopic samples (:func:`spectral_evidence`)
+SPECTRAL_COLUMNS = CSV_COLUMNS[-3:]
 
 
 def _finite(a, fill=0.0) -> np.ndarray:
@@ -50,6 +63,26 @@ def _cell(x) -> str:
     if isinstance(x, (float, np.floating)):
         return repr(float(x)) if math.isfinite(x) else ""
     return str(x)
+
+
+def spectral_evidence(result) -> dict:
+    """Per point, from its stroboscopic samples ``poincare`` (module docstring):
+    ``base_f2_order`` (a quasi-periodic point's second base frequency in orders of the
+    excitation, the rotation number in (0, 1/2]; 0 elsewhere), ``strob_flatness`` and
+    ``strob_peak_fraction``; 0 for failed points."""
+    N = result.param.size
+    out = {k: np.zeros(N) for k in SPECTRAL_COLUMNS}
+    for k in range(N):
+        if result.status[k] != 0:
+            continue
+        ev = stroboscopic_evidence(np.asarray(result.poincare[k], dtype=float))
+        if not all(math.isfinite(v) for v in ev.values()):
+            continue
+        if int(result.motion_class[k]) == QUASI_PERIODIC:
+            out["base_f2_order"][k] = ev["nu"]
+        out["strob_flatness"][k] = ev["flatness"]
+        out["strob_peak_fraction"][k] = ev["peak_fraction"]
+    return out
 
 
 def _extra(result) -> dict:
@@ -66,6 +99,7 @@ def _extra(result) -> dict:
     for k, v in result.metrics.items():
         v = np.asarray(v)
         out[k] = v if v.dtype.kind == "i" else _finite(v)
+    out.update(spectral_evidence(result))
     return out
 
 
@@ -99,6 +133,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
     metrics = sorted(result.metrics)
     extra = result.motion_class is not None
     w.writerow(CSV_COLUMNS + tuple(metrics) if extra else CSV_COLUMNS[:12])
+    spectral = spectral_evidence(result) if extra else {}
     for k in range(result.param.size):
         row = [str(result.direction[k]), int(result.index[k]), float(result.param[k]),
                float(result.qmin[k]), float(result.qmax[k]), int(result.period_n[k]),
@@ -109,6 +144,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
             row += [result.motion_legend[int(result.motion_class[k])], float(result.lyapunov[k]),
                     float(ci[0]), float(ci[1]), int(result.transient_used[k]),
                     str(result.settled_by[k])]
+            row += [float(spectral[n][k]) for n in SPECTRAL_COLUMNS]
             row += [result.metrics[n][k].item() for n in metrics]
         w.writerow([_cell(v) for v in row])
     csv_path = atomic_write_bytes(out_dir / f"{stem}.csv", text.getvalue().encode())

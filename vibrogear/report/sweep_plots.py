@@ -6,7 +6,10 @@ interruption below it) or the clearance lines +-b_r.  Below it, the motion class
 point as a categorical colour band (one row per direction, and one per contact group and
 direction where the group's own class differs: a loaded mesh can be period-1 while a free
 gear rattles), with a legend.  Then one axis per mesh (two-sided contact): drive-flank
-(filled) and back-flank (open) impacts per excitation period; last, where any mesh
+(filled) and back-flank (open) impacts per excitation period; where the sweep has the
+stroboscopic spectral evidence (``strob_flatness``, ``base_f2_order``; sweep_io.py), the
+flatness of every non-periodic point's Poincare spectrum and a quasi-periodic point's
+second base frequency f2 / f1 (right axis); last, where any mesh
 rattles, the impact energy per period of each mesh (log scale; see solvers/sequential/motion.py).
 
 With ``branches`` (the arrays of a continuation's ``branch.npz``, same display unit) the
@@ -73,6 +76,30 @@ def _band(ax, param, rows):
               frameon=False, borderaxespad=0.0)
 
 
+def _spectral_panel(ax, data, param, direction, ok, mclass, dirs):
+    """Spectral evidence of the stroboscopic samples: their flatness (chaos: broadband) for
+    the points without a period, and a quasi-periodic point's f2 / f1 (right axis)."""
+    flat = _get(data, "strob_flatness").astype(float)
+    f2 = _get(data, "base_f2_order", np.zeros(param.size)).astype(float)
+    right = ax.twinx()
+    for d in dirs:
+        sel = ok & (direction == d) & (mclass != 1)
+        ax.plot(param[sel], flat[sel], _STYLE[d]["marker"], ms=3.5, color=_STYLE[d]["color"],
+                lw=0, mfc="none", label=f"{d}: flatness")
+        qp = ok & (direction == d) & (mclass == 2) & (f2 > 0)
+        right.plot(param[qp], f2[qp], "*", ms=5, color=_CATS[3][1], lw=0,
+                   label=f"{d}: quasi-periodic f2 / f1" if np.any(qp) else None)
+    ax.set_ylabel("Poincare spectrum\nflatness", fontsize=8)
+    ax.set_ylim(-0.02, 0.7)
+    right.set_ylim(0.0, 0.52)
+    right.set_ylabel("f2 / f1", fontsize=8)
+    ax.grid(alpha=0.3)
+    h1, l1 = ax.get_legend_handles_labels()
+    h2, l2 = right.get_legend_handles_labels()
+    ax.legend(h1 + h2, l1 + l2, loc="upper left", bbox_to_anchor=(1.06, 1.0), fontsize=7,
+              frameon=False, borderaxespad=0.0)
+
+
 def _rect(x, y, w, h, color):
     from matplotlib.patches import Rectangle
     return Rectangle((x, y), w, h, color=color, lw=0)
@@ -121,10 +148,15 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
     rattle = {g: _get(data, f"rattle_{g}").astype(float) for g in meshes
               if _get(data, f"rattle_{g}") is not None}
     rattle = {g: v for g, v in rattle.items() if np.any(v[ok] > 0)}
-    fig = new_figure((9.0, 6.4 + 1.1 * (len(meshes) + bool(rattle)) + 0.15 * len(rows)))
-    ratios = [3.0, 0.3 + 0.22 * len(rows)] + [1.0] * (len(meshes) + bool(rattle))
+    flat = _get(data, "strob_flatness")
+    spec = flat is not None and bool(np.any(ok & (mclass != 1)))
+    fig = new_figure((9.0, 6.4 + 1.1 * (len(meshes) + bool(rattle) + spec)
+                      + 0.15 * len(rows)))
+    ratios = [3.0, 0.3 + 0.22 * len(rows)] + [1.0] * (len(meshes) + bool(rattle) + spec)
     axes = fig.subplots(len(ratios), 1, sharex=True, gridspec_kw={"height_ratios": ratios})
     ax, axc, axm = axes[0], axes[1], axes[2:2 + len(meshes)]
+    if spec:
+        _spectral_panel(axes[2 + len(meshes)], data, param, direction, ok, mclass, dirs)
     if rattle:
         axr = axes[-1]
         for i, (g, v) in enumerate(rattle.items()):
