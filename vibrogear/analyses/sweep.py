@@ -20,14 +20,16 @@ import numpy as np
 from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
-from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND
+from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
+from ..solvers.sequential.spectral_lines import stroboscopic_evidence
 from ..solvers.status import Status
 from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
 from ..config.options import SweepOptions
 from .study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
-           "record_to_json", "record_from_json", "motion_summary"]
+           "record_to_json", "record_from_json", "motion_summary", "spectral_evidence",
+           "SPECTRAL_COLUMNS"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 #: sweep settings that do not change the results (left out of the resume signature)
@@ -130,6 +132,31 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                            warnings=tuple(warnings))
 
 
+#: the columns of :func:`spectral_evidence` (sweep.npz / sweep.csv)
+SPECTRAL_COLUMNS = ("base_f2_order", "strob_flatness", "strob_peak_fraction")
+
+
+def spectral_evidence(result) -> dict:
+    """Per point, from its stroboscopic samples ``poincare``
+    (:func:`~vibrogear.solvers.sequential.spectral_lines.stroboscopic_evidence`):
+    ``base_f2_order`` (a quasi-periodic point's second base frequency in orders of the
+    excitation, the rotation number in (0, 1/2]; 0 elsewhere), ``strob_flatness`` and
+    ``strob_peak_fraction``; 0 for failed points."""
+    N = result.param.size
+    out = {k: np.zeros(N) for k in SPECTRAL_COLUMNS}
+    for k in range(N):
+        if result.status[k] != 0:
+            continue
+        ev = stroboscopic_evidence(np.asarray(result.poincare[k], dtype=float))
+        if not all(math.isfinite(v) for v in ev.values()):
+            continue
+        if int(result.motion_class[k]) == QUASI_PERIODIC:
+            out["base_f2_order"][k] = ev["nu"]
+        out["strob_flatness"][k] = ev["flatness"]
+        out["strob_peak_fraction"][k] = ev["peak_fraction"]
+    return out
+
+
 def motion_summary(res: SweepResult, budget: int) -> dict:
     """Motion classes, the chaotic points with their exponents, transient lengths and,
     per contact metric, its largest value over the points (where, and its error)."""
@@ -137,10 +164,18 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
         return {}
     ok = res.status == 0
     names = [MOTION_LEGEND[int(c)] for c in res.motion_class]
+    ev = spectral_evidence(res)
     chaotic = [{"param": float(res.param[k]), "direction": str(res.direction[k]),
                 "lyapunov": float(res.lyapunov[k]),
-                "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]]}
+                "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]],
+                "strob_flatness": float(ev["strob_flatness"][k])}
                for k in np.flatnonzero(res.motion_class == CHAOTIC)]
+    # a quasi-periodic point names its base frequencies: the excitation's and f2
+    quasi = [{"param": float(res.param[k]), "direction": str(res.direction[k]),
+              "f2_order": float(ev["base_f2_order"][k]),
+              "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]],
+              "strob_flatness": float(ev["strob_flatness"][k])}
+             for k in np.flatnonzero(res.motion_class == QUASI_PERIODIC)]
     used = res.transient_used[ok]
     metrics = {}
     for key, v in res.metrics.items():
@@ -158,7 +193,7 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
         if tol is not None:
             metrics[key]["tol_err"] = _num(tol[k])
     return {"motion_classes": {n: names.count(n) for n in MOTION_LEGEND if n in names},
-            "chaotic_points": chaotic,
+            "chaotic_points": chaotic, "quasi_periodic_points": quasi,
             "transient": {"budget": int(budget), "mean_used": _num(np.mean(used))
                           if used.size else None,
                           "max_used": int(used.max()) if used.size else None,

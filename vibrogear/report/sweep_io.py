@@ -41,8 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
-from ..solvers.sequential.motion import QUASI_PERIODIC
-from ..solvers.sequential.spectral_lines import stroboscopic_evidence
+from ..analyses.sweep import SPECTRAL_COLUMNS, spectral_evidence
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "spectral_evidence"]
 
@@ -51,7 +50,6 @@ CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impac
                "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by",
                "base_f2_order", "strob_flatness", "strob_peak_fraction")
 #: the spectral evidence of the stroboscopic samples (:func:`spectral_evidence`)
-SPECTRAL_COLUMNS = CSV_COLUMNS[-3:]
 
 
 def _finite(a, fill=0.0) -> np.ndarray:
@@ -63,26 +61,6 @@ def _cell(x) -> str:
     if isinstance(x, (float, np.floating)):
         return repr(float(x)) if math.isfinite(x) else ""
     return str(x)
-
-
-def spectral_evidence(result) -> dict:
-    """Per point, from its stroboscopic samples ``poincare`` (module docstring):
-    ``base_f2_order`` (a quasi-periodic point's second base frequency in orders of the
-    excitation, the rotation number in (0, 1/2]; 0 elsewhere), ``strob_flatness`` and
-    ``strob_peak_fraction``; 0 for failed points."""
-    N = result.param.size
-    out = {k: np.zeros(N) for k in SPECTRAL_COLUMNS}
-    for k in range(N):
-        if result.status[k] != 0:
-            continue
-        ev = stroboscopic_evidence(np.asarray(result.poincare[k], dtype=float))
-        if not all(math.isfinite(v) for v in ev.values()):
-            continue
-        if int(result.motion_class[k]) == QUASI_PERIODIC:
-            out["base_f2_order"][k] = ev["nu"]
-        out["strob_flatness"][k] = ev["flatness"]
-        out["strob_peak_fraction"][k] = ev["peak_fraction"]
-    return out
 
 
 def _extra(result) -> dict:
