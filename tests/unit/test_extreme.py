@@ -16,7 +16,8 @@ from vibrogear.solvers.periodic.shooting import shoot
 from vibrogear.solvers.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.config.options import SweepOptions
-from vibrogear.verification.impact_exact import ImpactParams, linear_frf, periodic_orbit
+from vibrogear.verification.impact_exact import ImpactParams, linear_frf
+from vibrogear.verification.impact_orbits import periodic_orbit
 from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)

@@ -10,7 +10,8 @@ import numpy as np
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.special_points import grazing_note, switch_counts
-from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
+from vibrogear.verification.impact_exact import ImpactParams
+from vibrogear.verification.impact_orbits import periodic_orbit
 
 PAR = dict(zeta=0.05, kappa=0.5, f_m=0.2, f_p=0.3, b_r=1.0)
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)

@@ -15,7 +15,8 @@ from vibrogear.solvers.periodic.shooting import periodic_flow
 from vibrogear.solvers.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.config.options import SweepOptions
-from vibrogear.verification.impact_exact import ImpactParams, periodic_orbit
+from vibrogear.verification.impact_exact import ImpactParams
+from vibrogear.verification.impact_orbits import periodic_orbit
 
 # the default scene (configs/impact_pair.toml)
 PAR = dict(zeta=0.015, kappa=0.5, f_m=0.55, f_p=0.12, b_r=1.0)

@@ -29,7 +29,8 @@ from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrator.integrate import IntegrationOptions, integrate
 from ..solvers.periodic.shooting import shoot
 from ..solvers.static import static_equilibrium
-from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow, periodic_orbit
+from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow
+from ..verification.impact_orbits import periodic_orbit
 from ..config.options import ShootingOptions
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",
