@@ -125,7 +125,7 @@ def _main(argv: list[str] | None) -> int:
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
               f" output folder {out}/)")
         return EXIT_OK
-    from .runner import NumericalFailure, RunContext, run_scene
+    from .runner import NumericalFailure, RunContext, WriteFailure, run_scene
 
     from .pipeline.outcome import is_root_process
     from .pipeline.run_lock import FolderInUse, RunLock
@@ -146,6 +146,9 @@ def _main(argv: list[str] | None) -> int:
         return _interrupted_code(exc)
     except NumericalFailure as exc:
         _error("numerical failure", exc)
+        return EXIT_FAILED
+    except WriteFailure as exc:
+        _error("write failed", exc)
         return EXIT_FAILED
     except (NotImplementedError, ConfigError) as exc:   # ConfigError: found building the model
         _error("invalid input", exc)

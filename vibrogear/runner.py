@@ -24,7 +24,7 @@ from .config import Scene
 from .config.verbs import VERBS
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
-                               is_root_process)
+                               WriteFailure, is_root_process)
 from .report.html_report import write_html_report
 
 __all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure",
@@ -172,18 +172,60 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             if isinstance(exc, Terminated):
                 summary["signal"] = exc.name
             failure = exc
+        except Exception as exc:                # noqa: BLE001 - re-raised unless a file error
+            # a full disk, an I/O error, a folder made read-only (also inside a work unit's
+            # callback): the file and the reason
+            err = _os_error_of(exc)
+            if err is None:
+                raise
+            exc = WriteFailure(f"{name}: {_file_error(err)}; what finished is kept, run the "
+                               "same command again once it can be written")
+            summary["results"][name] = {"status": "failed", "message": str(exc)}
+            summary["status"] = "failed"
+            failure = exc
         summary["wall_time_s"][name] = time.perf_counter() - t0
         if study is not None and study.notes:
             summary["notes"] = list(study.notes)
-        write_summary(ctx.out, summary)
+        failure = _write_run_files(ctx.out, summary, failure, html=False)
         if failure is not None:
             break
     summary["wall_time_s"]["total"] = time.perf_counter() - t_all
-    write_summary(ctx.out, summary)
-    write_html_report(ctx.out, summary)     # report.html, also after a failure
+    failure = _write_run_files(ctx.out, summary, failure, html=True)
     if failure is not None:
         raise failure
     return summary
+
+
+def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
+    """summary.json (and report.html, also after a failure); a write error becomes the
+    run's failure unless it already has one (which is then the message that matters)."""
+    try:
+        write_summary(out, summary)
+        if html:
+            write_html_report(out, summary)
+    except OSError as exc:
+        if failure is None:
+            failure = WriteFailure(_file_error(exc))
+    return failure
+
+
+def _os_error_of(exc: BaseException) -> OSError | None:
+    """The OSError in ``exc``'s chain (None: not a file error)."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, OSError):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
+def _file_error(err: OSError) -> str:
+    import errno
+    where = err.filename or "a file"
+    verb = "could not write" if err.errno in (errno.ENOSPC, errno.EIO, errno.EROFS, errno.EACCES,
+                                              errno.EPERM, errno.EDQUOT) else "file error on"
+    return f"{verb} {where}: {err.strerror or err}"
 
 
 #: what an interrupted run says about resuming (summary.json and the command line)

@@ -16,6 +16,13 @@ __all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "finit
            "check_output_dir"]
 
 
+def _write(fh, data: bytes) -> None:
+    """The one place bytes reach an output file (a test injects ENOSPC / EIO here)."""
+    fh.write(data)
+    fh.flush()
+    os.fsync(fh.fileno())
+
+
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file, fsync and an atomic rename."""
     path = Path(path)
@@ -23,13 +30,13 @@ def atomic_write_bytes(path, data: bytes) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
+            _write(fh, data)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and exc.filename is None:
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc   # name the file
         raise
     return path
 

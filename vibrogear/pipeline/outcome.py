@@ -19,7 +19,8 @@ from typing import Any
 from .executors import is_root
 from .progress import Progress
 
-__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "Terminated", "is_root_process"]
+__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "Terminated", "WriteFailure",
+           "is_root_process"]
 
 
 class Terminated(KeyboardInterrupt):
@@ -32,6 +33,12 @@ class Terminated(KeyboardInterrupt):
         self.signum = int(signum)
         self.name = signal.Signals(self.signum).name
         super().__init__(self.name)
+
+
+class WriteFailure(RuntimeError):
+    """A file could not be written (a full disk, an I/O error, a folder that became
+    read-only): the message names the file and the system's reason.  Exit code 1; every
+    file is written atomically, so none is left half-written, and the same command resumes."""
 
 
 class NumericalFailure(RuntimeError):

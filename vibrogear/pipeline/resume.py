@@ -123,13 +123,21 @@ class PartialStore:
 
     def _append(self, obj: dict) -> None:
         line = json.dumps(obj, allow_nan=False, separators=(",", ":")) + "\n"
-        with open(self.path, "a", encoding="utf-8") as fh:
-            fh.write(line)
-            fh.flush()
-            os.fsync(fh.fileno())
+        try:
+            with open(self.path, "a", encoding="utf-8") as fh:
+                _write_line(fh, line)
+        except OSError as exc:          # name the file (a full disk leaves a torn line: cut
+            raise OSError(exc.errno, exc.strerror, str(self.path)) from exc   # on resume)
 
     def append(self, item: dict) -> None:
         self._append({"kind": "point", **item})
+
+
+def _write_line(fh, line: str) -> None:
+    """The one place a partial file grows (a test injects ENOSPC / EIO here)."""
+    fh.write(line)
+    fh.flush()
+    os.fsync(fh.fileno())
 
 
 def _truncate_torn_tail(path: Path) -> None:

@@ -9,6 +9,8 @@ from typing import Sequence
 
 import numpy as np
 
+from .figure import write_figure
+
 __all__ = ["plot_mode_previews", "plot_sweep", "plot_error_vs_time"]
 
 
@@ -40,7 +42,7 @@ def plot_mode_previews(res, path: Path, *, n: int = 6, title: str = "") -> Path:
         ax.set_axis_off()
     fig.suptitle(title or f"housing master modes (P{res.degree}, {res.n_dofs} DOF)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    write_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -57,7 +59,7 @@ def plot_sweep(param: str, values: Sequence[float], freqs: np.ndarray, path: Pat
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    write_figure(fig, path, dpi=110)
     plt.close(fig)
     return path
 
@@ -80,6 +82,6 @@ def plot_error_vs_time(rows: Sequence[dict], path: Path, *, target: float = 0.01
         ax.grid(alpha=0.3, which="both")
         ax.legend()
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    write_figure(fig, path, dpi=110)
     plt.close(fig)
     return path

@@ -38,6 +38,7 @@ stable and unstable alike).
 from __future__ import annotations
 
 import io
+import os
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +66,18 @@ def write_surface_velocity(path, vertices, triangles, v_rms) -> Path:
     mesh = meshio.Mesh(np.asarray(vertices, dtype=float),
                        [("triangle", np.asarray(triangles, dtype=np.int64))],
                        cell_data={"v_rms": [np.asarray(v_rms, dtype=float)]})
-    meshio.write(path, mesh, file_format="xdmf")
+    # written in a temporary folder beside it, then moved: the HDF5 file first, the XDMF that
+    # names it last, so the pair is whole or the XDMF absent
+    import shutil
+    import tempfile
+
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", dir=path.parent))
+    try:
+        meshio.write(tmp / path.name, mesh, file_format="xdmf")
+        for f in sorted(tmp.iterdir(), key=lambda f: f.suffix == ".xdmf"):
+            os.replace(f, path.parent / f.name)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
     return path
 
 

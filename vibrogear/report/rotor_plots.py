@@ -5,6 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import write_figure
+
 __all__ = ["plot_campbell", "plot_mode_shapes"]
 
 _WHIRL_STYLE = {"forward": ("tab:blue", "-"), "backward": ("tab:red", "--"),
@@ -23,7 +25,7 @@ def _save(plt, fig, path: Path) -> list[Path]:
     out = [path.with_suffix(".png"), path.with_suffix(".svg")]
     fig.tight_layout()
     for p in out:
-        fig.savefig(p, dpi=150)
+        write_figure(fig, p, dpi=150)
     plt.close(fig)
     return out
 
