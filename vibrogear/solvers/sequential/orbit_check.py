@@ -10,15 +10,24 @@ u(nT; u0) - u0) for n = 1, 2:
 
 * converged and stable (every nontrivial Floquet multiplier inside the unit circle): the
   point is periodic; the record is taken again on the orbit and its multipliers reported;
-* converged and unstable: the class stands (the motion does not stay on the orbit) and
-  the orbit is reported beside it (its period, largest multiplier, extrema);
+* converged and unstable: the next period is tried (beyond a period doubling the period-2
+  orbit holds the attractor); if none is stable the class stands (the motion does not stay
+  on the orbit) and the shortest unstable orbit is reported beside it (its period, largest
+  multiplier, extrema);
 * not converged within ``MAX_ITER`` iterations: no orbit near the settled state.
 
-The residual tolerance is the sweep's ``period_tol`` (the same test that calls a
-stroboscopic map periodic), on the sweep's integrator options.
+Only periods over which the record's stroboscopic samples drift by at most :data:`NEAR` are
+tried (:func:`near_periods`): the drift of a slow transient is small, that of a torus or of
+chaos is the attractor's size, and a gearbox's Newton iteration costs a full monodromy.
+
+The tolerance is the sweep's ``period_tol`` in the units the stroboscopic map is judged in
+(each block's largest |value|: positions, velocities), a tenth of it for margin, converted to
+the shooting residual |u(nT) - u0| / (1 + |u0|): a gearbox's states are ~1e-5, where an
+unscaled 1e-4 would accept any state.  On the sweep's integrator options.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -28,11 +37,22 @@ import numpy as np
 from ...config.options import IntegrationOptions, ShootingOptions
 from ..periodic.floquet import split_trivial
 from ..periodic.shooting import shoot
+from .motion import _scaled
 
-__all__ = ["OrbitCheck", "check_orbit", "MAX_ITER"]
+__all__ = ["OrbitCheck", "check_orbit", "near_periods", "MAX_ITER", "NEAR", "PROBE_ITER",
+           "PROBE_DROP"]
 
 #: Newton iterations per period tried (a slow transient's settled state is close)
-MAX_ITER = 8
+MAX_ITER = 6
+#: a period is tried only where the record's stroboscopic samples drift by at most this
+#: (scaled as the period test scales them) over one period: a slow transient drifts little,
+#: chaos and tori by the size of the attractor.  Each Newton iteration of a large model
+#: integrates the full variational equations, so chaos is not shot at.
+NEAR = 0.05
+#: the probe: Newton iterations before it must show quadratic convergence ...
+PROBE_ITER = 2
+#: ... by a residual below this fraction of the record's drift over the period
+PROBE_DROP = 1e-2
 
 
 @dataclass(frozen=True, eq=False)
@@ -57,27 +77,70 @@ class OrbitCheck:
                 "orbit_qmin": self.qmin, "orbit_qmax": self.qmax}
 
 
+def near_periods(samples, periods=(1, 2), near: float = NEAR) -> tuple[int, ...]:
+    """The periods n whose stroboscopic drift max_k |x_{k+n} - x_k| of the positions (in
+    units of their largest |value|, as the period test scales them) is at most ``near``.
+    Positions only: the velocities at phase 0 can be near zero on the orbit itself, which
+    makes their scaled drift large on any transient."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim != 2 or s.shape[0] < 2 or not np.all(np.isfinite(s)):
+        return ()
+    z = _scaled(s[:, :max(s.shape[1] // 2, 1)], None)
+    return tuple(n for n in periods if n < s.shape[0]
+                 and float(np.max(np.abs(z[n:] - z[:-n]))) <= near)
+
+
 def check_orbit(model, param: float, u_settled, *, period_tol: float,
-                options: IntegrationOptions, periods=(1, 2)) -> OrbitCheck:
+                options: IntegrationOptions, periods=(1, 2), drift=None) -> OrbitCheck:
     """Shoot from ``u_settled`` (phase 0) for each period in ``periods``, shortest first;
-    the first converged orbit is returned (module docstring)."""
+    the first converged orbit is returned (module docstring).  ``drift``: the record's
+    stroboscopic states (ending at ``u_settled``): Newton stops after :data:`PROBE_ITER`
+    iterations unless its residual fell below :data:`PROBE_DROP` of the record's own
+    drift over the period (quadratic convergence near an orbit; none near chaos)."""
     wall = time.perf_counter()
-    shooting = ShootingOptions(tol=float(period_tol), max_iter=MAX_ITER)
+    u = np.asarray(u_settled, dtype=float)
+    m = u.size // 2
+    scale = min(float(np.max(np.abs(u[:m]))), float(np.max(np.abs(u[m:]))))
+    tol = 0.1 * float(period_tol) * max(scale, 1e-300) / (1.0 + float(np.linalg.norm(u)))
+    shooting = ShootingOptions(tol=min(tol, 0.1 * float(period_tol)), max_iter=MAX_ITER)
     iters, calls, last, residual = 0, 0, "no period tried", math.nan
+    unstable = None
+    norm = 1.0 + float(np.linalg.norm(u))
     for n in periods:
-        sh = shoot(model, param, np.asarray(u_settled, dtype=float), n_periods=int(n),
-                   options=options, shooting=shooting)
-        iters += sh.iterations
-        calls += sh.rhs_calls
+        start, probe = u, None
+        if drift is not None and len(drift) > n:
+            r0 = float(np.linalg.norm(np.asarray(drift[-1]) - np.asarray(drift[-1 - n]))) / norm
+            probe = shoot(model, param, u, n_periods=int(n), options=options,
+                          shooting=ShootingOptions(tol=shooting.tol, max_iter=PROBE_ITER))
+            iters += probe.iterations
+            calls += probe.rhs_calls
+            if not probe.converged and not probe.residual < PROBE_DROP * r0:
+                residual, last = float(probe.residual), f"period {n}: no convergence"
+                continue
+            start = probe.u0
+        if probe is not None and probe.converged:
+            sh = probe
+        else:
+            sh = shoot(model, param, start, n_periods=int(n), options=options, shooting=shooting)
+            iters += sh.iterations
+            calls += sh.rhs_calls
         residual = float(sh.residual)
         if sh.converged:
             nontrivial = np.abs(split_trivial(sh.floquet, sh.neutral)[0])
-            return OrbitCheck(int(n), bool(sh.stable),
-                              float(nontrivial.max()) if nontrivial.size else math.nan,
-                              residual, sh.u0.copy(), float(sh.monitor_min),
-                              float(sh.monitor_max), iters, calls,
-                              time.perf_counter() - wall,
-                              f"period-{n} orbit, {'stable' if sh.stable else 'unstable'}")
+            found = OrbitCheck(int(n), bool(sh.stable),
+                               float(nontrivial.max()) if nontrivial.size else math.nan,
+                               residual, sh.u0.copy(), float(sh.monitor_min),
+                               float(sh.monitor_max), iters, calls,
+                               time.perf_counter() - wall,
+                               f"period-{n} orbit, {'stable' if sh.stable else 'unstable'}")
+            if found.stable:
+                return found
+            # unstable (e.g. beyond a period doubling): the next period may hold the attractor
+            unstable = unstable or found
+            continue
         last = f"period {n}: {sh.message}"
+    if unstable is not None:
+        return dataclasses.replace(unstable, iterations=iters, rhs_calls=calls,
+                                   wall_s=time.perf_counter() - wall)
     return OrbitCheck(0, False, math.nan, residual, None, math.nan, math.nan, iters, calls,
                       time.perf_counter() - wall, f"no orbit near the settled state ({last})")

@@ -56,8 +56,8 @@ from ...models.contact_law import flank
 from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
-from .orbit_check import check_orbit
-from .motion import (FAILED, best_defect, classify_period, contact_groups, count_clusters,
+from .orbit_check import check_orbit, near_periods
+from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from ..status import Status
 
@@ -301,19 +301,6 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
 
     # ---- class and evidence
     n, defect = classify_period(states, max_period, period_tol, split=m)
-    orbit = None
-    if n == 0 and settings.shoot:
-        # a slow transient or an attractor without a period? (orbit_check.py)
-        orbit = check_orbit(model, param, seed, period_tol=period_tol, options=options)
-        counts[2] += orbit.rhs_calls
-        if orbit.stable:
-            again = _record(model, param, orbit.u0, R, T, chunk, groups, options, counts,
-                            has_monitor)
-            if not isinstance(again, tuple):
-                n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
-                if n2 > 0:
-                    u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
-                    chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
     lam, ci = math.nan, (math.nan, math.nan)
     msg = "ok"
     if n == 0 and settings.lyapunov and len(chunks) >= 2:
@@ -333,6 +320,23 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             logs.append(g)
         if logs:
             lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+    orbit = None
+    near = near_periods(states) if n == 0 and settings.shoot else ()
+    if near and motion_class(n, ci, budget_used=settled_by == "budget") != CHAOTIC:
+        # a slow transient or an attractor without a period? (orbit_check.py; a positive
+        # exponent has already shown chaos)
+        orbit = check_orbit(model, param, seed, period_tol=period_tol, options=options,
+                            periods=near, drift=states)
+        counts[2] += orbit.rhs_calls
+        if orbit.stable:
+            again = _record(model, param, orbit.u0, R, T, chunk, groups, options, counts,
+                            has_monitor)
+            if not isinstance(again, tuple):
+                n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
+                if n2 > 0:
+                    u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
+                    chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
+                    lam, ci = math.nan, (math.nan, math.nan)   # periodic: multipliers instead
     cls = motion_class(n, ci, budget_used=settled_by == "budget")
     metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
         if has_monitor else {}
