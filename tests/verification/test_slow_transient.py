@@ -54,3 +54,19 @@ def test_without_the_check_the_same_point_has_no_period():
     assert r.period_n[0] == 0 and r.motion_class[0] != PERIODIC
     # the recorded extrema are off the orbit by the undecayed free vibration
     assert abs(r.qmax[0] - (Q_S + AMP)) > 1e-5
+
+
+def test_a_large_models_slow_transient_is_found_by_extrapolation(monkeypatch):
+    """Above NEWTON_MAX_STATES (a gearbox) no Newton iteration is paid: the fixed point of
+    the record's stroboscopic map is extrapolated (RRE) and checked by one plain period.
+    The same closed-form orbit, and the decay rate of the record towards it estimates the
+    largest multiplier exp(-zeta T)."""
+    from vibrogear.solvers.sequential import orbit_check
+    monkeypatch.setattr(orbit_check, "NEWTON_MAX_STATES", 0)
+    r = _point(shoot=True)
+    assert r.motion_class[0] == PERIODIC and r.period_n[0] == 1
+    assert r.settled_by[0] == "shooting" and r.metrics["orbit_newton"][0] == 0.0
+    assert r.qmin[0] == pytest.approx(Q_S - AMP, abs=1e-9)
+    assert r.qmax[0] == pytest.approx(Q_S + AMP, abs=1e-9)
+    T = 2 * math.pi / OMEGA
+    assert r.metrics["orbit_max_multiplier"][0] == pytest.approx(math.exp(-ZETA * T), rel=2e-3)
