@@ -9,7 +9,9 @@ export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
 .PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
-.PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
+.PHONY: nnm nnm-impact-pair
+.PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
+.PHONY: optimize-damping optimize-two-stage
 
 setup: $(STAMP)
 
@@ -66,6 +68,14 @@ map: $(STAMP)
 map-gear-pair: $(STAMP)
 	$(VG) map configs/gear_pair.toml --out $(OUT)/gear_pair_map
 
+## nonlinear normal modes ([nnm], docs/nnm.md): gear_pair's G1 mesh-mode backbone over its forced
+## branch (out/gear_pair_nnm/nnm_backbone.png); the impact pair's over its primary resonance
+nnm: $(STAMP)
+	$(VG) run configs/gear_pair_nnm.toml --out $(OUT)/gear_pair_nnm
+
+nnm-impact-pair: $(STAMP)
+	$(VG) run configs/impact_pair_nnm.toml --out $(OUT)/impact_pair_nnm
+
 ## run-up / run-down transients ([runup]) in the scene's own output folder, so that the
 ## envelope figure overlays the sweep and branches of `make two-stage` / `make gear-pair`
 runup: $(STAMP)
@@ -96,6 +106,11 @@ bench-rhs: $(STAMP)
 	$(PY) benchmarks/bench_gearbox_integrator.py --model bench_gearbox:two_stage_short_case \
 	  --periods 1 --record-periods 1 --out benchmarks/results/bench_gearbox_equal_accuracy_two_stage.json
 
+## the seed's Fig. 2 on its gearbox (configs/two_stage_seed.toml): sweep min/max, zero line,
+## continuation branches, motion classes -> $(OUT)/two_stage_seed/fig2.png (docs/gearbox.md)
+fig2: $(STAMP)
+	$(VG) run configs/two_stage_seed.toml --out $(OUT)/two_stage_seed
+
 ## impact-pair figures (paper Figs 4-8)
 figures: fig4 fig5 fig7
 
@@ -115,6 +130,15 @@ report: $(STAMP)
 ## damping at which the two folds of the primary resonance meet (bisection of continuations)
 critical-zeta: $(STAMP)
 	$(VG) run configs/impact_pair.toml --set 'scene.analyses=["critical_damping"]' --out $(OUT)/critical_zeta
+
+## [optimize]: the least damping without a fold of the impact pair's primary resonance
+## (the cusp, zeta_c = 0.03375 of critical-zeta; docs/optimize.md)
+optimize-damping: $(STAMP)
+	$(VG) optimize configs/optimize_impact_damping.toml --out $(OUT)/optimize_impact_damping
+
+## [optimize]: two-stage housing wall and free-gear drag against the peak radiated power (2 workers)
+optimize-two-stage: $(STAMP)
+	$(VG) optimize configs/optimize_two_stage.toml --out $(OUT)/optimize_two_stage
 
 ## rotor scenes: Friswell Example 5.9.1 and a stepped hollow shaft with a free gear
 rotor: $(STAMP)

@@ -82,12 +82,13 @@ def _handle_stop_signals() -> None:
     import signal
     import threading
 
-    from .pipeline.outcome import Terminated
+    from .pipeline.outcome import Terminated, request_stop
 
     if threading.current_thread() is not threading.main_thread():
         return
 
     def stop(signum, _frame):
+        request_stop(signum)
         # worker processes (run_units) get the signal too, as a terminal's Ctrl-C reaches
         # the whole process group; the pool then ends instead of finishing its units
         import multiprocessing

@@ -16,7 +16,7 @@ from vibrogear.config import load_scene
 from vibrogear.solvers.periodic.continuation import ContinuationOptions, PseudoArclength
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.status import Status
-from vibrogear.verification import impact_exact as ex
+from reference import impact_exact as ex  # the flow and the periodic orbits
 
 SCENE = "configs/impact_pair.toml"
 ZETA_C = 0.033752

@@ -17,7 +17,7 @@ from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.config.options import SweepOptions
-from vibrogear.verification import impact_exact as ex
+from reference import impact_exact as ex  # the flow and the periodic orbits
 
 #: tests/verification/test_sweep_evidence.py's double-sided orbit and chaotic pair
 P_A = (0.05, 0.5, 0.2, 0.2, 0.5)

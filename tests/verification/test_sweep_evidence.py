@@ -23,7 +23,7 @@ from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
 from vibrogear.solvers.sequential.motion import CHAOTIC, PERIODIC
 from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.config.options import SweepOptions
-from vibrogear.verification import impact_exact as ex
+from reference import impact_exact as ex  # the flow and the periodic orbits
 from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)

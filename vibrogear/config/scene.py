@@ -12,6 +12,8 @@ from .housing import HousingConfig, resolve_file
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
 from .map_section import MapConfig
 from .nvh_section import NvhConfig
+from .nnm_section import NnmConfig
+from .optimize_section import OptimizeConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
@@ -54,6 +56,8 @@ class Scene:
     nvh: NvhConfig | None = spec(None)
     map: MapConfig | None = spec(None)
     runup: RunupConfig | None = spec(None)
+    nnm: NnmConfig | None = spec(None)
+    optimize: OptimizeConfig | None = spec(None)
 
     @property
     def parameter(self) -> Parameter | None:
@@ -95,6 +99,8 @@ class Scene:
             self.map.check_couplings(self.gearbox, "map")
         from .layout import check_layout        # checks across sections, in one place
         check_layout(self)
+        if self.optimize is not None:           # the evaluated scene at the variables' bounds
+            self.optimize.check_scene(self, scene_from_dict, "optimize")
 
 
 @dataclass(frozen=True)

@@ -69,6 +69,10 @@ _VERBS = (
          _both("continuation:run", "branch_report:write",
                ("branch.npz", "branch.csv", "branch_max.png", "branch_min.png")), command="continue",
          reads_saved=("sweep",)),
+    Verb("nnm", "nonlinear normal modes: backbones of the conservative model by continuation",
+         "nnm", _both("nnm:run", "nnm_report:write",
+                      ("nnm.npz", "nnm.csv", "nnm_fep.png", "nnm_backbone.png")),
+         command="nnm"),
     Verb("report", "work-precision study: integrator tolerance and shooting residual against run "
          "time", "report",
          {"impact_pair": Run("impact_report:run_report", "precision_report:write",
@@ -114,6 +118,11 @@ _VERBS = (
          {"gearbox": Run("runup:run", "runup_report:write",
                          ("runup.npz", "runup.csv", "runup_envelope.png", "runup_waterfall.png"),
                          study=True)}, command="runup"),
+    Verb("optimize", "design optimisation: the variables (any --set key) that minimise or "
+         "maximise an analysis's metric under constraints", "optimize",
+         {kind: Run("optimize:run", "optimize_report:write",
+                    ("optimize.csv", "optimize.json", "best_scene.toml",
+                     "optimize_convergence.png")) for kind in MODEL_KINDS}, command="optimize"),
 )
 
 #: verb name -> Verb, in the order the README and the CLI help list them

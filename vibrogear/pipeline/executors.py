@@ -16,7 +16,9 @@ so it is the one writer of files.  The backend is chosen automatically:
   ``workers = min(len(units), os.cpu_count())``.  Items come back through a queue;
   an exception in a worker (or a worker that dies) stops the others and raises
   :class:`UnitError` in the parent.  Workers die with the parent (``PR_SET_PDEATHSIG``).
-* **serial** when ``workers == 1`` (or one unit): same calls, in unit order.
+* **serial** when ``workers == 1`` (or one unit): same calls, in unit order; also for a
+  :func:`run_units` called inside a unit that runs on a worker process or an MPI rank (e.g.
+  the sweep of one evaluation of ``vibrogear optimize``): nested parallelism stays serial.
 
 Workers set ``OPENBLAS_NUM_THREADS=1``.  Results depend only on the units, never on the
 backend or the number of workers, as long as ``fn`` is deterministic.
@@ -29,7 +31,8 @@ import queue as _queue
 import signal
 import traceback
 
-from .units_base import UnitError, _comm, _deliver, _run_serial, _transportable
+from .units_base import (UnitError, _comm, _deliver, _run_serial, _transportable, in_unit,
+                         inside_unit, raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers", "blas_threads"]
@@ -72,6 +75,8 @@ def default_workers(n_units: int) -> int:
 
 def backend_for(n_units: int, workers: int | None = None) -> str:
     """'mpi', 'processes' or 'serial': what :func:`run_units` will use."""
+    if inside_unit():
+        return "serial"
     if under_mpi():
         return "mpi"
     w = default_workers(n_units) if workers is None else min(int(workers), max(int(n_units), 1))
@@ -123,6 +128,8 @@ def _die_with_parent() -> None:
 def _process_worker(fn, units, tasks, results, parent_pid) -> None:
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    for sig in (signal.SIGTERM, signal.SIGHUP):   # the parent's handlers (cli.py) are not
+        signal.signal(sig, signal.SIG_DFL)        # a worker's: terminate() just ends it
     _die_with_parent()
     if os.getppid() != parent_pid:
         os._exit(1)
@@ -138,7 +145,8 @@ def _process_worker(fn, units, tasks, results, parent_pid) -> None:
             results.put(("item", i, item))
 
         try:
-            out = fn(units[i], emit)
+            with in_unit():
+                out = fn(units[i], emit)
         except BaseException as exc:            # noqa: BLE001 - sent back to the parent
             results.put(("error", i, (traceback.format_exc(), _transportable(exc))))
             break
@@ -161,9 +169,11 @@ def _run_processes(fn, units, workers, on_result, order) -> list:
         for i in [*order, *([None] * workers)]:
             tasks.put(i)                        # after the forks: no feeder thread yet
         while finished < len(units):
+            raise_if_stopped()                  # a signal swallowed while the workers forked
             try:
                 kind, i, payload = res_q.get(timeout=0.2)
             except _queue.Empty:
+                raise_if_stopped()              # workers ended by the stop signal
                 dead = [p for p in procs if p.exitcode not in (None, 0)]
                 lost = [i for i, pid in owner.items() if any(p.pid == pid for p in dead)]
                 if lost or (dead and all(p.exitcode is not None for p in procs)):

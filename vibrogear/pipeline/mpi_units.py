@@ -10,7 +10,7 @@ import os
 import time
 import traceback
 
-from .units_base import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable
+from .units_base import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable, in_unit
 
 __all__ = ["run_mpi"]
 
@@ -124,7 +124,8 @@ class _MpiRoot:
                 raise _Stop
 
         try:
-            self.results[i] = self.fn(self.units[i], emit)
+            with in_unit():
+                self.results[i] = self.fn(self.units[i], emit)
         except _Stop:
             pass
         except Exception as exc:                # noqa: BLE001 - ends every rank as a worker's
@@ -175,7 +176,8 @@ def _mpi_worker(comm, fn) -> None:
                 raise _Stop
 
         try:
-            out = fn(unit, emit)
+            with in_unit():
+                out = fn(unit, emit)
         except _Stop:                           # interrupted (stopping is set)
             continue
         except Exception as exc:                # noqa: BLE001 - sent back to rank 0

@@ -17,22 +17,13 @@ from pathlib import Path
 from typing import Any
 
 from .executors import is_root
+from .units_base import Terminated, clear_stop, raise_if_stopped, request_stop  # noqa: F401
 from .progress import Progress
 
 __all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "Terminated", "WriteFailure",
-           "is_root_process"]
+           "is_root_process", "request_stop", "raise_if_stopped", "clear_stop"]
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM or SIGHUP (``kill``, ``docker stop``, SLURM, a closed terminal), raised by the
-    command line's handler and handled exactly as Ctrl-C: what finished is kept, the run
-    says how to resume; the exit code is 128 + the signal number."""
-
-    def __init__(self, signum: int):
-        import signal
-        self.signum = int(signum)
-        self.name = signal.Signals(self.signum).name
-        super().__init__(self.name)
 
 
 class WriteFailure(RuntimeError):

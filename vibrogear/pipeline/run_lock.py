@@ -33,10 +33,12 @@ class RunLock:
         self.path = Path(out) / LOCK_NAME
         self.wait, self.poll_s, self.enabled = wait, poll_s, enabled
         self._fd: int | None = None
+        self._created = False
 
     def __enter__(self) -> "RunLock":
         if not self.enabled:
             return self
+        self._created = not self.path.parent.exists()
         self.path.parent.mkdir(parents=True, exist_ok=True)
         fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
         while True:
@@ -64,6 +66,14 @@ class RunLock:
             fcntl.flock(self._fd, fcntl.LOCK_UN)
             os.close(self._fd)
             self._fd = None
+            # a run that wrote nothing (refused input) leaves no folder it created
+            folder = self.path.parent
+            if self._created and [p.name for p in folder.iterdir()] == [LOCK_NAME]:
+                self.path.unlink(missing_ok=True)
+                try:
+                    folder.rmdir()
+                except OSError:
+                    pass
 
 
 def _holder(path: Path) -> str:

@@ -5,7 +5,29 @@ transport of an exception between processes.  Its own module so that
 backend) import it and not each other."""
 from __future__ import annotations
 
-__all__ = ["UnitError"]
+from contextlib import contextmanager
+
+__all__ = ["UnitError", "in_unit", "inside_unit", "Terminated", "request_stop", "raise_if_stopped",
+           "clear_stop"]
+
+#: units of a parallel run_units (a worker process or an MPI rank) running in this process
+_DEPTH = [0]
+
+
+@contextmanager
+def in_unit():
+    """Marks a unit running on a worker process or MPI rank: a run_units called inside it
+    (a sweep inside an optimiser's evaluation) runs serially there (a daemonic worker cannot
+    start processes; the MPI ranks are busy with the outer units)."""
+    _DEPTH[0] += 1
+    try:
+        yield
+    finally:
+        _DEPTH[0] -= 1
+
+
+def inside_unit() -> bool:
+    return _DEPTH[0] > 0
 
 
 class UnitError(RuntimeError):
@@ -51,3 +73,37 @@ def _transportable(exc: BaseException):
         return pickle.loads(pickle.dumps(exc))
     except Exception:
         return None
+
+
+# ---------------------------------------------------------------- stop signals
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM or SIGHUP (``kill``, ``docker stop``, SLURM, a closed terminal), raised by the
+    command line's handler and handled exactly as Ctrl-C: what finished is kept, the run
+    says how to resume; the exit code is 128 + the signal number."""
+
+    def __init__(self, signum: int):
+        import signal
+        self.signum = int(signum)
+        self.name = signal.Signals(self.signum).name
+        super().__init__(self.name)
+
+
+#: signals received and not yet acted on (see :func:`request_stop`)
+_PENDING: list[int] = []
+
+
+def request_stop(signum: int) -> None:
+    """Record a stop signal.  The handler also raises :class:`Terminated` at once, but a raise
+    that lands inside an at-fork hook (a worker pool starting) is swallowed by Python; the
+    loops that wait on workers call :func:`raise_if_stopped`, so the signal is never lost."""
+    _PENDING.append(int(signum))
+
+
+def raise_if_stopped() -> None:
+    if _PENDING:
+        raise Terminated(_PENDING[0])
+
+
+def clear_stop() -> None:
+    _PENDING.clear()

@@ -5,13 +5,15 @@ unit, with the sweep points overlaid when the scene ran ``sweep`` before; with a
 before in the same scene, or its ``sweep.npz`` already in the output folder) also
 ``bifurcation_branches.png/.svg``: the sweep's bifurcation diagram (points up and down,
 motion-class band, impacts per period of each mesh, rattle intensity) with the branches
-overlaid (stable solid, unstable dashed, LP / PD / NS marked)."""
+overlaid (stable solid, unstable dashed, LP / PD / NS marked), and ``fig2.png/.svg``: the
+seed's Fig. 2 (sweep minima / maxima, zero line, branches, motion-class band; :mod:`.fig2`)."""
 from __future__ import annotations
 
 from pathlib import Path
 
 from .bifurcation_figures import display_arrays, plot_branch_figures, plot_combined
 from .branch_io import write_branches
+from .fig2 import write_fig2
 from .sweep_io import read_sweep_npz, sweep_arrays
 
 __all__ = ["write", "plot_branch_figures", "plot_combined"]
@@ -40,4 +42,5 @@ def write(scene, outcome, out, previous=None) -> dict:
     files["png"] = [str(Path(out) / "branch_max.png"), str(Path(out) / "branch_min.png")]
     if data is not None:
         files["branches_png"] = str(plot_combined(r, out, data)[0])
+        files["fig2_png"] = str(write_fig2(r, out, data)[0])
     return files

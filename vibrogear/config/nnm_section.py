@@ -1,0 +1,88 @@
+"""[nnm]: nonlinear normal modes of a reduced model by continuation (``vibrogear nnm SCENE``).
+
+The start mode is one linear mode of the conservative model linearised at the loaded static
+state: ``mode`` (its index among the elastic modes, 0 = lowest), or the mode nearest
+``frequency`` (Hz for a gearbox; for the impact pair its circular frequency in the unit of
+Omega), or the mode with the largest strain-energy share of mesh ``mesh`` (gearbox); none
+given: the impact pair's one mode, a gearbox's mesh mode of its monitored mesh.
+``second_mode`` (an elastic-mode index) continues a second backbone.
+
+The branch runs over the energy range [``energy_min``, ``energy_max``] above the static
+state, in multiples of the start mode's contact-switch energy (``energy_unit = "onset"``:
+the energy at which the linear mode first makes a contact switch, from the static state) or
+absolute (``"absolute"``: J for a gearbox, model units for the impact pair); or, instead,
+over the amplitude range [``amplitude_min``, ``amplitude_max``] of the monitored contact's
+excursion max |delta - delta_s| (um for a gearbox, model units for the impact pair; the
+start energy from the linear mode).  Steps ``ds``, ``ds_min``, ``ds_max`` are relative:
+times the orbit's distance from the static state in state space.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .base import ConfigError, spec
+
+__all__ = ["NnmConfig"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class NnmConfig:
+    """[nnm]: start mode, energy or amplitude range, steps, tolerances."""
+    mode: int | None = spec(None, ge=0, le=100_000, doc="start mode: index among the "
+                            "elastic modes (0 = lowest)")
+    frequency: float | None = spec(None, gt=0.0, le=1e9, doc="start mode: the one nearest "
+                                   "this frequency (Hz; impact pair: circular, unit of Omega)")
+    mesh: str | None = spec(None, doc="start mode: the one with the largest strain-energy "
+                            "share of this mesh (gearbox)")
+    second_mode: int | None = spec(None, ge=0, le=100_000, doc="a second backbone from this "
+                                   "elastic mode")
+    energy_unit: str = spec("onset", choices=("onset", "absolute"), doc="energies in "
+                            "multiples of the contact-switch energy, or absolute (J / model)")
+    energy_min: float | None = spec(None, gt=0.0, le=1e30, doc="start energy above the "
+                                    "static state")
+    energy_max: float | None = spec(None, gt=0.0, le=1e30, doc="end energy")
+    amplitude_min: float | None = spec(None, gt=0.0, le=1e30, doc="instead of energies: "
+                                       "start excursion of the monitored contact (um / model)")
+    amplitude_max: float | None = spec(None, gt=0.0, le=1e30, doc="end excursion")
+    ds: float = spec(0.05, gt=0.0, le=10.0, doc="first relative step")
+    ds_min: float = spec(1e-4, gt=0.0, le=10.0, doc="smallest relative step")
+    ds_max: float = spec(0.3, gt=0.0, le=10.0, doc="largest relative step")
+    max_points: int = spec(200, ge=2, le=1_000_000, doc="points per backbone")
+    phase: str = spec("monitor", choices=("monitor", "mode"), doc="phase condition: the "
+                      "velocity of the monitored contact's deformation (or of the start "
+                      "mode's coordinate) zero at t = 0")
+    rtol: float = spec(1e-9, gt=0.0, lt=1e-3, doc="integrator rtol (atol = 1e-6 rtol for a "
+                       "gearbox, 1e-2 rtol for the impact pair)")
+    tol: float = spec(1e-7, gt=0.0, lt=1.0, doc="periodicity residual relative to the "
+                      "orbit's size")
+    stability_tol: float = spec(1e-6, gt=0.0, lt=1.0, doc="a nontrivial multiplier with "
+                                "|mu| > 1 + stability_tol makes the orbit unstable")
+    rational_max: int = spec(5, ge=1, le=20, doc="largest p, q of an internal resonance p:q")
+    rational_tol: float = spec(0.01, gt=0.0, lt=0.5, doc="relative distance of a frequency "
+                               "ratio from p/q that labels an internal resonance")
+    shape_energies: tuple[float, ...] = spec((), max_len=20, gt=0.0, le=1e30,
+                                             doc="energies (energy_unit) at which the orbit "
+                                             "(mode shape over one period) is written")
+    shape_samples: int = spec(64, ge=4, le=4096, doc="samples per period of a mode shape")
+
+    def validate(self, path: str) -> None:
+        given = [k for k in ("mode", "frequency", "mesh") if getattr(self, k) is not None]
+        if len(given) > 1:
+            raise ConfigError(f"{path}.{given[1]}", f"give one of mode, frequency, mesh "
+                              f"(got {', '.join(given)})")
+        if not self.ds_min <= self.ds <= self.ds_max:
+            raise ConfigError(f"{path}.ds", f"expected ds_min <= ds <= ds_max "
+                              f"({self.ds_min:g} <= {self.ds:g} <= {self.ds_max:g})")
+        amp = (self.amplitude_min is not None, self.amplitude_max is not None)
+        en = (self.energy_min is not None, self.energy_max is not None)
+        if any(amp) and any(en):
+            raise ConfigError(f"{path}.amplitude_min", "give an energy range or an amplitude "
+                              "range, not both")
+        lo, hi, name = (("amplitude_min", "amplitude_max", "amplitude") if any(amp)
+                        else ("energy_min", "energy_max", "energy"))
+        a, b = getattr(self, lo), getattr(self, hi)
+        if a is None or b is None:
+            raise ConfigError(f"{path}.{lo if a is None else hi}", f"missing: the {name} "
+                              f"range needs both {lo} and {hi} (numbers > 0)")
+        if not a < b:
+            raise ConfigError(f"{path}.{hi}", f"expected {hi} > {lo} = {a:g}, got {b:g}")
