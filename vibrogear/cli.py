@@ -82,7 +82,7 @@ def _handle_stop_signals() -> None:
     import signal
     import threading
 
-    from .pipeline.outcome import Terminated, request_stop
+    from .pipeline.units_base import Terminated, request_stop, stop_deferred
 
     if threading.current_thread() is not threading.main_thread():
         return
@@ -94,7 +94,8 @@ def _handle_stop_signals() -> None:
         import multiprocessing
         for child in multiprocessing.active_children():
             child.terminate()
-        raise Terminated(signum)
+        if not stop_deferred():                 # else the pool's wait loop raises it
+            raise Terminated(signum)
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, stop)
 

@@ -32,7 +32,7 @@ import signal
 import traceback
 
 from .units_base import (UnitError, _comm, _deliver, _run_serial, _transportable, in_unit,
-                         inside_unit, raise_if_stopped)
+                         inside_unit, deferred_stop, raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers", "blas_threads"]
@@ -164,8 +164,9 @@ def _run_processes(fn, units, workers, on_result, order) -> list:
     owner: dict[int, int] = {}                  # unit -> pid while it runs
     finished = 0
     try:
-        for p in procs:
-            p.start()
+        with deferred_stop():                   # no raise inside the fork's hooks
+            for p in procs:
+                p.start()
         for i in [*order, *([None] * workers)]:
             tasks.put(i)                        # after the forks: no feeder thread yet
         while finished < len(units):

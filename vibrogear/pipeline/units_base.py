@@ -8,7 +8,7 @@ from __future__ import annotations
 from contextlib import contextmanager
 
 __all__ = ["UnitError", "in_unit", "inside_unit", "Terminated", "request_stop", "raise_if_stopped",
-           "clear_stop"]
+           "clear_stop", "deferred_stop", "stop_deferred"]
 
 #: units of a parallel run_units (a worker process or an MPI rank) running in this process
 _DEPTH = [0]
@@ -94,10 +94,29 @@ _PENDING: list[int] = []
 
 
 def request_stop(signum: int) -> None:
-    """Record a stop signal.  The handler also raises :class:`Terminated` at once, but a raise
-    that lands inside an at-fork hook (a worker pool starting) is swallowed by Python; the
-    loops that wait on workers call :func:`raise_if_stopped`, so the signal is never lost."""
+    """Record a stop signal.  The handler also raises :class:`Terminated` at once, except
+    inside :func:`deferred_stop` (worker processes being forked: a raise there lands in an
+    at-fork hook, where Python prints it and drops it); the loops that wait on workers call
+    :func:`raise_if_stopped`, so the signal is never lost."""
     _PENDING.append(int(signum))
+
+
+#: > 0 while worker processes are forked: a handler must not raise there (see request_stop)
+_DEFER: list[int] = [0]
+
+
+@contextmanager
+def deferred_stop():
+    """A stop signal inside this block is only recorded; the caller acts on it after."""
+    _DEFER[0] += 1
+    try:
+        yield
+    finally:
+        _DEFER[0] -= 1
+
+
+def stop_deferred() -> bool:
+    return _DEFER[0] > 0
 
 
 def raise_if_stopped() -> None:
