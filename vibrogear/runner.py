@@ -211,13 +211,7 @@ def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
 
 def _os_error_of(exc: BaseException) -> OSError | None:
     """The OSError in ``exc``'s chain (None: not a file error)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, OSError):
-            return exc
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return None
+    return _in_chain(exc, OSError)
 
 
 def _file_error(err: OSError) -> str:
@@ -234,26 +228,25 @@ RESUME_HINT = ("finished results and partial files are kept; run the same comman
                "reused")
 
 
-def _interrupt_of(exc: BaseException) -> KeyboardInterrupt:
-    """The KeyboardInterrupt (or :class:`Terminated`) in ``exc``'s chain."""
+def _in_chain(exc: BaseException | None, kind: type):
+    """The first exception of type ``kind`` in ``exc``'s cause / context chain, or None."""
     seen = set()
     while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
+        if isinstance(exc, kind):
             return exc
         seen.add(id(exc))
         exc = exc.__cause__ or exc.__context__
-    return KeyboardInterrupt()
+    return None
+
+
+def _interrupt_of(exc: BaseException) -> KeyboardInterrupt:
+    """The KeyboardInterrupt (or :class:`Terminated`) in ``exc``'s chain."""
+    return _in_chain(exc, KeyboardInterrupt) or KeyboardInterrupt()
 
 
 def is_interrupt(exc: BaseException) -> bool:
     """Whether ``exc`` is, or was caused by, a KeyboardInterrupt (Ctrl-C)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        if isinstance(exc, KeyboardInterrupt):
-            return True
-        seen.add(id(exc))
-        exc = exc.__cause__ or exc.__context__
-    return False
+    return _in_chain(exc, KeyboardInterrupt) is not None
 
 
 def _versions() -> dict[str, str]:

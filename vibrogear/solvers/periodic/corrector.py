@@ -70,9 +70,14 @@ class CorrectorProblem:
     def neutral(self, f: PeriodicFlow) -> int:
         return f.neutral(self.model)[0].shape[1]
 
+    def borders(self, f: PeriodicFlow) -> tuple[np.ndarray, np.ndarray]:
+        """(V, B) of the bordered Jacobian: the orbit family's neutral directions."""
+        return f.neutral(self.model)
+
     def jac(self, f: PeriodicFlow) -> np.ndarray:
-        """[[dH/du0, dH/dp, B], [V^T, 0, 0]]: (n + k) x (n + 1 + k), k neutral directions."""
-        V, B = f.neutral(self.model)
+        """[[dH/du0, dH/dp, B], [V^T, 0, 0]]: (n + k) x (n + 1 + k), k bordered directions
+        (:meth:`borders`)."""
+        V, B = self.borders(f)
         n, k = f.G.size, V.shape[1]
         J = np.zeros((n + k, n + 1 + k))
         J[:n, :n] = f.dG_du0

@@ -220,13 +220,3 @@ class NnmCorrectorProblem(CorrectorProblem):
         Br = np.zeros_like(Vr)
         Br[m:] = Vr[:m]
         return (np.column_stack([self.v_phase, Vr]), np.column_stack([g, Br]))
-
-    def jac(self, f) -> np.ndarray:
-        V, B = self.borders(f)
-        n, k = f.G.size, V.shape[1]
-        J = np.zeros((n + k, n + 1 + k))
-        J[:n, :n] = f.dG_du0
-        J[:n, n] = f.dG_dparam * self.scale
-        J[:n, n + 1:] = B
-        J[n:, :n] = V.T
-        return J
