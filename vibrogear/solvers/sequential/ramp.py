@@ -42,7 +42,7 @@ inertia torque exceeds its drag at 3000 rpm/s, moving it to its other flank in a
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -158,21 +158,17 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
     rows = np.arange(ct.count) if rows is None else np.asarray(rows, dtype=int)
     m = model.n_modes
     C = ct.directions[rows]
-    u = np.array(u0, dtype=float)
+    run = _Run(u=np.array(u0, dtype=float))
     a_W = model.omega_per_param
-    counters = np.zeros(4, dtype=np.int64)     # steps, rejected, rhs calls, events
-    err = 0.0
-    status, message, settle_steps = Status.OK, "ok", 0
     if settle_periods > 0:
         p0 = float(profile.params[0])
-        tr = integrate(model, p0, u, 0.0, settle_periods * model.excitation_period(p0),
+        tr = integrate(model, p0, run.u, 0.0, settle_periods * model.excitation_period(p0),
                        options=options)
-        settle_steps = tr.steps
-        counters += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
-        err += tr.error_estimate
+        run.settle_steps = tr.steps
+        run.add(tr)
         if not tr.ok:
-            status, message = tr.status, f"settling at the start speed: {tr.message}"
-        u = tr.u_end
+            run.status, run.message = tr.status, f"settling at the start speed: {tr.message}"
+        run.u = tr.u_end
     dphi = 2 * np.pi / chunks_per_period
     spc = samples_per_period // chunks_per_period
     dphi_s = 2 * np.pi / samples_per_period
@@ -181,9 +177,7 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
     rates = np.abs(slopes) * a_W                                             # |dW/dt|
     accelerated = {}                                 # slope -> model with the inertia force
     t, k = 0.0, 0
-    parts, chunk = [], []
-    deviation = 0.0
-    while status == Status.OK and t < T_end * (1 - 1e-13):
+    while run.status == Status.OK and t < T_end * (1 - 1e-13):
         W = a_W * float(profile.at(t))
         dt = dphi / W
         if midpoint:
@@ -199,28 +193,26 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
         t_eval = t0 + np.arange(n) * dphi_s / W
         chunk_model = model if inertia_force is None else _with_inertia(
             model, inertia_force, _chunk_slope(profile, slopes, t, dt), accelerated)
-        tr = integrate(chunk_model, p, u, t0, t0 + dt, t_eval=t_eval, options=options)
-        counters += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
-        err += tr.error_estimate
+        tr = integrate(chunk_model, p, run.u, t0, t0 + dt, t_eval=t_eval, options=options)
+        run.add(tr)
         if not tr.ok:
-            status = tr.status
-            message = f"chunk {k} at t = {t:.6g}, {model.param_name} = {p:.6g}: {tr.message}"
+            run.status = tr.status
+            run.message = f"chunk {k} at t = {t:.6g}, {model.param_name} = {p:.6g}: {tr.message}"
             break
         x, v = tr.u[:, :m], tr.u[:, m:]
-        parts.append((t + (t_eval - t0), np.full(n, p), C @ x.T, C @ v.T))
-        chunk.append((t, p, tr.monitor_min, tr.monitor_max, tr.monitor_losses))
+        run.parts.append((t + (t_eval - t0), np.full(n, p), C @ x.T, C @ v.T))
+        run.chunk.append((t, p, tr.monitor_min, tr.monitor_max, tr.monitor_losses))
         i = np.searchsorted(profile.times, t + 0.5 * dt) - 1
         rate = float(np.max(rates[max(i - 1, 0):i + 2]))
-        deviation = max(deviation, rate * dt * dt / (8.0 if midpoint else 2.0))
-        u = tr.u_end
+        run.deviation = max(run.deviation, rate * dt * dt / (8.0 if midpoint else 2.0))
+        run.u = tr.u_end
         t += dt
         k += 1
         if callback is not None and callback(t, p) is False:
-            status = Status.STOPPED_BY_CALLBACK
-            message = f"{status.message} at t = {t:.6g}"
+            run.status = Status.STOPPED_BY_CALLBACK
+            run.message = f"{run.status.message} at t = {t:.6g}"
             break
-    res = _result(model, profile, rows, parts, chunk, u, status, message, counters, err,
-                  deviation, samples_per_period, chunks_per_period, midpoint, settle_steps,
+    res = _result(model, profile, rows, run, samples_per_period, chunks_per_period, midpoint,
                   time.perf_counter() - wall)
     return replace(res, inertia_torque=inertia_force is not None)
 
@@ -248,10 +240,30 @@ def _with_inertia(model: ReducedModel, force, slope: float, cache: dict) -> Redu
     return out
 
 
-def _result(model, profile, rows, parts, chunk, u, status, message, counters, err, deviation,
-            sps, cpp, midpoint, settle_steps, wall) -> RampResult:
+@dataclass
+class _Run:
+    """What the chunk loop accumulates: samples, chunk records, the state, the outcome and
+    the counters (summed in :meth:`add`, the one place)."""
+    u: np.ndarray
+    parts: list = field(default_factory=list)
+    chunk: list = field(default_factory=list)
+    status: Status = Status.OK
+    message: str = "ok"
+    counters: np.ndarray = field(default_factory=lambda: np.zeros(4, dtype=np.int64))
+    err: float = 0.0
+    deviation: float = 0.0
+    settle_steps: int = 0
+
+    def add(self, tr) -> None:
+        """Count an integration: steps, rejected, rhs calls, events; its error estimate."""
+        self.counters += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+        self.err += tr.error_estimate
+
+
+def _result(model, profile, rows, run: _Run, sps, cpp, midpoint, wall) -> RampResult:
     ct = model.contacts
     nr = rows.size
+    parts, chunk, counters = run.parts, run.chunk, run.counters
     if parts:
         t = np.concatenate([q[0] for q in parts])
         held = np.concatenate([q[1] for q in parts])
@@ -272,8 +284,8 @@ def _result(model, profile, rows, parts, chunk, u, status, message, counters, er
         profile=profile, rows=rows, t=t, param=profile.at(t), held=held, phase=phase,
         delta=delta, delta_dot=delta_dot, samples_per_period=sps, chunks_per_period=cpp,
         midpoint=midpoint, chunk_t=ch[:, 0], chunk_param=ch[:, 1], monitor_min=ch[:, 2],
-        monitor_max=ch[:, 3], monitor_losses=ch[:, 4].astype(np.int64), u_end=u,
-        status=status, message=message if status else "ok", chunks=len(chunk),
+        monitor_max=ch[:, 3], monitor_losses=ch[:, 4].astype(np.int64), u_end=run.u,
+        status=run.status, message=run.message if run.status else "ok", chunks=len(chunk),
         steps=int(counters[0]), rejected=int(counters[1]), rhs_calls=int(counters[2]),
-        events=int(counters[3]), wall_time=wall, error_estimate=float(err),
-        phase_deviation=float(deviation), settle_steps=settle_steps)
+        events=int(counters[3]), wall_time=wall, error_estimate=float(run.err),
+        phase_deviation=float(run.deviation), settle_steps=run.settle_steps)
