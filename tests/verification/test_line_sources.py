@@ -9,7 +9,7 @@ import numpy as np
 
 from vibrogear.config.options import IntegrationOptions, SweepOptions
 from vibrogear.models.impact_pair import impact_pair_model
-from vibrogear.analyses.sweep import spectral_evidence
+from vibrogear.solvers.sequential.strob_evidence import spectral_evidence
 from vibrogear.solvers.integrator.integrate import integrate
 from vibrogear.solvers.sequential.motion import CHAOTIC
 from vibrogear.solvers.sequential.spectral_lines import (Source, broadband_fraction,

@@ -21,15 +21,14 @@ from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
-from ..solvers.sequential.spectral_lines import stroboscopic_evidence
+from ..solvers.sequential.strob_evidence import spectral_evidence
 from ..solvers.status import Status
 from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
 from ..config.options import SweepOptions
 from .study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
-           "record_to_json", "record_from_json", "motion_summary", "spectral_evidence",
-           "SPECTRAL_COLUMNS"]
+           "record_to_json", "record_from_json", "motion_summary"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 #: sweep settings that do not change the results (left out of the resume signature)
@@ -130,31 +129,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
                            partial_files=() if keep else (store.path,),
                            warnings=tuple(warnings))
-
-
-#: the columns of :func:`spectral_evidence` (sweep.npz / sweep.csv)
-SPECTRAL_COLUMNS = ("base_f2_order", "strob_flatness", "strob_peak_fraction")
-
-
-def spectral_evidence(result) -> dict:
-    """Per point, from its stroboscopic samples ``poincare``
-    (:func:`~vibrogear.solvers.sequential.spectral_lines.stroboscopic_evidence`):
-    ``base_f2_order`` (a quasi-periodic point's second base frequency in orders of the
-    excitation, the rotation number in (0, 1/2]; 0 elsewhere), ``strob_flatness`` and
-    ``strob_peak_fraction``; 0 for failed points."""
-    N = result.param.size
-    out = {k: np.zeros(N) for k in SPECTRAL_COLUMNS}
-    for k in range(N):
-        if result.status[k] != 0:
-            continue
-        ev = stroboscopic_evidence(np.asarray(result.poincare[k], dtype=float))
-        if not all(math.isfinite(v) for v in ev.values()):
-            continue
-        if int(result.motion_class[k]) == QUASI_PERIODIC:
-            out["base_f2_order"][k] = ev["nu"]
-        out["strob_flatness"][k] = ev["flatness"]
-        out["strob_peak_fraction"][k] = ev["peak_fraction"]
-    return out
 
 
 def motion_summary(res: SweepResult, budget: int) -> dict:

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
-from ..analyses.sweep import SPECTRAL_COLUMNS, spectral_evidence
+from ..solvers.sequential.strob_evidence import SPECTRAL_COLUMNS, spectral_evidence
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "spectral_evidence"]
 
