@@ -117,6 +117,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "points_with_contact_loss": int(np.sum(res.impacts > 0)),
         "steps": res.steps, "rhs_calls": res.rhs_calls, "events": res.events,
         "solver_wall_s": res.wall_time,
+        "point_wall_split_s": {k: round(v, 3) for k, v in res.timings.items()},
         "jumps_up": jumps(res.param[up], res.qmax[up]),
         "jumps_down": jumps(res.param[~up], res.qmax[~up]),
         "error_estimate": res.error_estimate,
@@ -205,7 +206,8 @@ def record_to_json(r: PointRecord) -> dict:
          "wall_time": _num(r.wall_time), "motion_class": int(r.motion_class),
          "lyapunov": _num(r.lyapunov), "lyapunov_ci": _arr(r.lyapunov_ci),
          "transient_used": int(r.transient_used), "settled_by": r.settled_by,
-         "metrics": {k: _num(v) for k, v in r.metrics.items()}}
+         "metrics": {k: _num(v) for k, v in r.metrics.items()},
+         "timings": {k: _num(v) for k, v in r.timings.items()}}
     if r.states is not None:
         d["states_shape"] = list(np.shape(r.states))
         d["states"] = _arr(r.states)
@@ -228,4 +230,5 @@ def record_from_json(d: dict) -> PointRecord:
         lyapunov_ci=tuple(_a(d.get("lyapunov_ci") or [None, None])),
         transient_used=int(d.get("transient_used", 0)), settled_by=d.get("settled_by", ""),
         metrics={k: (int(v) if k.startswith(("period_n_", "motion_class_")) and v is not None
-                     else _f(v)) for k, v in (d.get("metrics") or {}).items()})
+                     else _f(v)) for k, v in (d.get("metrics") or {}).items()},
+        timings={k: _f(v) for k, v in (d.get("timings") or {}).items()})

@@ -121,7 +121,13 @@ class SweepOptions:
                        "transient, not a torus); an unstable one is reported beside the class")
     second_tolerance: bool = spec(False, doc="record every point's window again at rtol/10 "
                                   "from the same settled state; the change of each statistic "
-                                  "is reported as its tolerance error (<name>_tol_err)")
+                                  "is reported as its tolerance error (<name>_tol_err); not on "
+                                  "chaotic points, where two records differ by sampling alone "
+                                  "(the batch-means <name>_err covers it; tol_err_measured = 0)")
+    settle_window: int | None = spec(None, ge=4, le=100000, doc="periods per window of the "
+                                     "transient's statistics test (three windows at least "
+                                     "before a transient can stop; default max(record_periods, "
+                                     "32))")
 
     @classmethod
     def of(cls, section) -> "SweepOptions":

@@ -111,10 +111,11 @@ JAC_AUTO, JAC_LOOPS, JAC_BLAS = -1, 0, 1
 #: what the loop returns: status code, end time and state, tangent [d u / d u0 | d u / d p],
 #: dense output, counters (steps, rejected, rhs calls, events, losses of the monitored
 #: contact), event log (time, contact, new mode), monitored extrema, final modes, u' at
-#: the end, sum of the local error estimates
+#: the end, sum of the local error estimates, the step the controller proposes next (the
+#: last step before it was cut to end at t1: a run that continues this one starts there)
 LoopResult = namedtuple("LoopResult", [
     "status", "t", "y", "Phi", "u_eval", "counters", "ev_t", "ev_j", "ev_m", "mon_min",
-    "mon_max", "mode", "f_end", "err_sum"])
+    "mon_max", "mode", "f_end", "err_sum", "h_next"])
 
 
 def loop_inputs(**kw) -> tuple:
@@ -188,6 +189,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     accel(t, y, mode, A, Om, cs, sn, K[0], CxS[0], CvS[0], kdS[0], cdS[0], tmp)
     nfev += 1
     h = h0
+    h_free = h0       # the last step as the controller proposed it (before a cut at t1)
     while ie < ne and t_eval[ie] <= t0:
         u_eval[ie] = y
         ie += 1
@@ -197,6 +199,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
             break
         if h > hmax:
             h = hmax
+        h_free = h
         last = False
         if t + h >= t1 or t + 1.01 * h >= t1:
             h = t1 - t
@@ -304,4 +307,4 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     # a plain tuple (LoopResult._make on the Python side): boxing a namedtuple runs Python
     # code, where a pending Ctrl-C raised inside numba's boxing crashed the process
     return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end,
-            err_sum)
+            err_sum, max(h, h_free))

@@ -52,6 +52,9 @@ class Trajectory:
     #: run is INACCURATE above ``options.max_error`` (solvers/integrator/trust.py); NaN where the loop
     #: failed
     relative_error: float = float("nan")
+    #: the step size the controller proposes after t_end: ``first_step`` of a run that
+    #: continues this one
+    h_next: float = float("nan")
 
     @property
     def ok(self) -> bool:
@@ -79,7 +82,8 @@ def _initial_step(model: ReducedModel, param: float, span: float, rtol: float) -
 def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
               t_eval=None, options: IntegrationOptions = IntegrationOptions(),
               variational: bool = False, record_from: float | None = None,
-              jacobian: str = "auto", columns: tuple[int, int] | None = None) -> Trajectory:
+              jacobian: str = "auto", columns: tuple[int, int] | None = None,
+              first_step: float | None = None) -> Trajectory:
     """Integrate u' = f(t, u; param) from (t0, u0) to t1.
 
     ``t_eval``: sorted times for dense output.  ``variational``: also integrate the
@@ -92,6 +96,9 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     only the columns [c0, c1) of the tangent [d u / d u0 | d u / d param] (n + 1 columns),
     returned in ``tangent_columns``: the state and its steps do not depend on which
     columns ride along (:mod:`.split_flow` shares them between two processes).
+    ``first_step``: the first trial step (e.g. ``h_next`` of the run this one continues;
+    default a step well below the model's fastest time scale, from which the controller
+    grows it over the first steps).
     """
     wall = time.perf_counter()
     if jacobian not in _JACOBIAN:
@@ -113,7 +120,8 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
     hmax = span
     if Om > 0:
         hmax = min(span, options.max_step_periods * 2 * np.pi / Om)
-    h0 = min(_initial_step(model, param, span, options.rtol), hmax)
+    h0 = min(_initial_step(model, param, span, options.rtol) if first_step is None
+             else float(first_step), hmax, span)
     mon = model.monitor if model.contacts.count else -1
     rec = t0 if record_from is None else float(record_from)
     fin, iin = loop_inputs(Om=Om, dOm=dOm, dspin=dspin, t0=t0, t1=t1, rtol=options.rtol,
@@ -147,5 +155,5 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         dparam=Phi[:, n].copy() if whole else None,
         tangent_columns=Phi if variational and not whole else None,
         wall_time=time.perf_counter() - wall, error_estimate=float(res.err_sum),
-        relative_error=rel,
+        relative_error=rel, h_next=float(res.h_next),
     )

@@ -79,7 +79,7 @@ def _modal_part(X, V, OX, OV, w2, damp):
             ovi[c] = -a * xi[c] - b * vi[c]
 
 
-@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+@njit(cache=True, _nrt=False, fastmath=FAST)
 def jac_times(Phi, mode, A, kd, cd, out, W):
     """out = J Phi for the Jacobian J at a state whose kd, cd were filled by ``accel``.
 

@@ -37,7 +37,7 @@ from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
 from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
 from ..status import Status
-from .sweep_point import PointRecord, run_point
+from .sweep_point import PHASES, PointRecord, run_point
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
            "count_clusters", "monitored_deformation", "assemble_result", "MOTION_LEGEND"]
@@ -82,6 +82,9 @@ class SweepResult:
     transient_used: np.ndarray | None = None  # (N,) transient periods integrated
     settled_by: np.ndarray | None = None      # (N,) "map" / "statistics" / "budget"
     metrics: dict = field(default_factory=dict)   # {name: (N,)} per-group classes, metrics
+    #: {phase: wall seconds summed over the points} (sweep_point.PHASES; resumed points
+    #: count as recorded)
+    timings: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> np.ndarray:
@@ -246,4 +249,5 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
         motion_class=i("motion_class"), lyapunov=f("lyapunov"),
         lyapunov_ci=np.array([r.lyapunov_ci for r in recs], dtype=float).reshape(N, 2),
         transient_used=i("transient_used"),
-        settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics)
+        settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics,
+        timings={k: float(sum(r.timings.get(k, 0.0) for r in recs)) for k in PHASES})

@@ -62,7 +62,10 @@ from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_grou
 from ..status import Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "onset_speeds", "SETTLE_TOL", "NO_CONTRACTION",
-           "SETTLE_WINDOW"]
+           "SETTLE_WINDOW", "PHASES"]
+
+#: the phases of a point whose wall time :attr:`PointRecord.timings` reports
+PHASES = ("transient", "record", "lyapunov", "orbit_check", "metrics", "second_tolerance")
 
 #: settled statistics: mean and std of two windows within this fraction of the range
 SETTLE_TOL = 0.1
@@ -102,6 +105,8 @@ class PointRecord:
     transient_used: int = 0            # transient periods integrated
     settled_by: str = ""               # "map", "statistics", "budget"
     metrics: dict = field(default_factory=dict)  # per-group classes and contact metrics
+    #: wall seconds by phase (PHASES): where the point's time went
+    timings: dict = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -116,6 +121,18 @@ def failed_point(direction, index, param, R, status, message, u_seed, counts=Non
                        nan, nan, 0, int(status), message, np.array(u_seed, dtype=float),
                        steps=int(c[0]), rejected=int(c[1]), rhs_calls=int(c[2]),
                        events=int(c[3]), wall_time=wall, transient_used=int(used))
+
+
+class _Clock:
+    """Wall time by phase: :meth:`lap` books the time since the last lap to a phase."""
+
+    def __init__(self, start: float):
+        self.last, self.laps = start, {}
+
+    def lap(self, phase: str) -> None:
+        now = time.perf_counter()
+        self.laps[phase] = self.laps.get(phase, 0.0) + now - self.last
+        self.last = now
 
 
 def _count(counts, tr):
@@ -247,6 +264,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
               settle: bool = True) -> PointRecord:
     """One sweep point (module docstring) with ``settings`` (:class:`SweepOptions`)."""
     wall = time.perf_counter()
+    clock = _Clock(wall)
     max_period, period_tol = settings.max_period, settings.period_tol
     R = settings.record_periods
     counts = np.zeros(4, dtype=np.int64)   # steps, rejected, rhs calls, events
@@ -265,7 +283,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     # ---- transient, stopped when settled
     budget = settings.transient_periods + settings.extra_transient_periods
     block = max(int(max_period) + 2, 8)
-    W = max(R, SETTLE_WINDOW)
+    W = settings.settle_window or max(R, SETTLE_WINDOW)
     strob, dense = [seed], []
     used, settled_by = 0, "budget"
     while used < budget:
@@ -290,6 +308,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             settled_by = "statistics"
             break
 
+    clock.lap("transient")
     # ---- record in chunks
     u_rec = seed.copy()
     groups = contact_groups(model)
@@ -298,6 +317,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     if isinstance(rec, tuple):
         return fail(*rec, used)
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
+    clock.lap("record")
 
     # ---- class and evidence
     n, defect = classify_period(states, max_period, period_tol, split=m)
@@ -320,6 +340,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             logs.append(g)
         if logs:
             lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+    clock.lap("lyapunov")
     orbit = None
     near = near_periods(states) if n == 0 and settings.shoot else ()
     if near and motion_class(n, ci, budget_used=settled_by == "budget") != CHAOTIC:
@@ -337,6 +358,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                     u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
                     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
                     lam, ci = math.nan, (math.nan, math.nan)   # periodic: multipliers instead
+    clock.lap("orbit_check")
     cls = motion_class(n, ci, budget_used=settled_by == "budget")
     metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
         if has_monitor else {}
@@ -352,7 +374,16 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                        for k, v in metrics.items()}
     if orbit is not None:
         metrics.update(orbit.as_metrics())
-    if settings.second_tolerance:
+    clock.lap("metrics")
+    if settings.second_tolerance and cls == CHAOTIC:
+        # two records of a chaotic motion diverge whatever the tolerance: their difference
+        # is a sampling difference, of the size of the batch-means errors (_err), and says
+        # nothing about the tolerance; not measured (NaN), flagged
+        metrics.update({f"{k}_tol_err": math.nan for k in ("qmin", "qmax")})
+        metrics.update({f"{k}_tol_err": math.nan for k in list(metrics)
+                        if not k.endswith("_err") and f"{k}_err" in metrics})
+        metrics["tol_err_measured"] = 0.0
+    elif settings.second_tolerance:
         # the record window again at rtol / 10 from the same settled state: the change of
         # each statistic is its tolerance error
         fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
@@ -367,6 +398,8 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                 tol_err.update({k: abs(v - metrics[k]) for k, v in m2.items()
                                 if not k.endswith("_err") and k in metrics})
         metrics.update({f"{k}_tol_err": float(v) for k, v in tol_err.items()})
+        metrics["tol_err_measured"] = 1.0
+    clock.lap("second_tolerance")
     delta = monitored_deformation(model, param, np.zeros(R), states)
     qmin, qmax = _extrema(model, param, rec, has_monitor)
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
@@ -376,4 +409,5 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                        wall_time=time.perf_counter() - wall,
                        states=states.copy() if keep_states else None, motion_class=int(cls),
                        lyapunov=float(lam), lyapunov_ci=tuple(float(c) for c in ci),
-                       transient_used=int(used), settled_by=settled_by, metrics=metrics)
+                       transient_used=int(used), settled_by=settled_by, metrics=metrics,
+                       timings=clock.laps)
