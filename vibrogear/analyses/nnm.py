@@ -122,6 +122,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
         e_on = 0.5 * omega[j] ** 2 * a_on ** 2
         onsets.append(e_on * es)
         lo, hi, stop = _energy_range(cfg, cm, phi[:, j], omega[j], e_on, es, mon.scale, us)
+        _check_energy_floor(cfg, cm, us, lo, hi, es, eunit)
         method = NnmMethod(energy_min=lo, energy_max=hi, integration=opts, tol=cfg.tol,
                            ds=cfg.ds, ds_min=cfg.ds_min, ds_max=cfg.ds_max,
                            max_points=cfg.max_points, phase=cfg.phase,
@@ -178,8 +179,41 @@ def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):
         if not np.isfinite(e_on):
             raise ConfigError("nnm.energy_unit", "'onset': the start mode never makes a "
                               "contact switch (a linear model); give absolute energies")
+        if not e_on > 0.0:
+            raise ConfigError("nnm.energy_unit", "'onset': the static state sits on a "
+                              "contact switch (a contact exactly at its gap, e.g. an unloaded "
+                              "mesh), so the contact-switch energy is 0 and cannot scale the "
+                              "range; give absolute energies")
         return cfg.energy_min * e_on, cfg.energy_max * e_on, None
     return cfg.energy_min / es, cfg.energy_max / es, None
+
+
+#: the energy above the static state is a difference of terms of the size of the static
+#: state's energy: below this fraction of them it is round-off (measured: 1e-16 of them)
+ENERGY_FLOOR = 1e-10
+
+
+def _check_energy_floor(cfg, cm, us, lo, hi, es, eunit) -> None:
+    """A ConfigError naming the range's start where the start energy ``lo`` (model units)
+    is below what the energy above the static state resolves in double precision
+    (:data:`ENERGY_FLOOR` times the size of the static state's energy terms): the backbone
+    there would be round-off (energies of either sign reported as orbits)."""
+    m = cm.n_modes
+    x = us[:m]
+    size = abs(float(cm.forcing.F0 @ x)) + 0.5 * abs(float(x @ (cm.omega2 * x)))
+    floor = ENERGY_FLOOR * size
+    key = "amplitude_min" if cfg.amplitude_min is not None else "energy_min"
+    if not (np.isfinite(lo) and lo < hi):
+        raise ConfigError(f"nnm.{key}", f"the start energy {lo * es:.3g} {eunit} is not "
+                          f"below the end energy {hi * es:.3g} {eunit} (model units overflow); "
+                          f"lower {key}")
+    if lo > floor:
+        return
+    raise ConfigError(f"nnm.{key}", f"the start energy {lo * es:.3g} {eunit} is below the "
+                      f"{floor * es:.3g} {eunit} that the energy above the static state "
+                      f"resolves ({ENERGY_FLOOR:g} of the static state's energy terms, "
+                      f"{size * es:.3g} {eunit}): the orbits there are round-off; raise "
+                      f"{key}")
 
 
 def _shapes(cfg, cm, br, b, e_on, es, opts) -> list[dict]:
@@ -190,7 +224,7 @@ def _shapes(cfg, cm, br, b, e_on, es, opts) -> list[dict]:
     energies = br.array("energy")
     for e in cfg.shape_energies:
         target = e * e_on if cfg.energy_unit == "onset" else e / es
-        k = int(np.argmin(np.abs(np.log(energies / target))))
+        k = int(np.argmin(np.abs(np.log(np.maximum(energies, 1e-300) / target))))
         p = br.points[k]
         t = np.linspace(0.0, p.period, cfg.shape_samples + 1)
         tr = integrate(cm, p.omega, p.u0, 0.0, p.period, t_eval=t, options=opts)

@@ -36,7 +36,7 @@ from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.integrator.contact_eval import contact_history
 from ..solvers.integrator.integrate import integrate
-from ..solvers.sequential.motion import MOTION_LEGEND, contact_groups
+from ..solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
 from ..solvers.status import Status
 from ..solvers.sequential.sweep import assemble_result, sweep_units
 from ..solvers.sequential.sweep_point import run_point
@@ -105,15 +105,21 @@ def grid_array(m: OperatingMap, name: str) -> np.ndarray:
 # ---------------------------------------------------------------- work units
 
 def _max_mesh_force(model, param, u, meshes, periods, samples, options, force_unit):
-    """{max_force_<mesh>: largest |force| [N]} over ``periods`` mesh periods from ``u``."""
+    """{max_force_<mesh>: largest |force| [N]} over ``periods`` mesh periods from ``u``
+    (NaN where that integration fails: :func:`_mesh_force_run` also returns it)."""
+    return _mesh_force_run(model, param, u, meshes, periods, samples, options, force_unit)[0]
+
+
+def _mesh_force_run(model, param, u, meshes, periods, samples, options, force_unit):
+    """(:func:`_max_mesh_force`'s dict, the integration's result)."""
     T = model.excitation_period(param)
     t = np.arange(1, periods * samples + 1) * (T / samples)
     tr = integrate(model, param, u, 0.0, periods * T, t_eval=t, options=options)
     if not tr.ok:
-        return {f"max_force_{k}": np.nan for k in meshes}
+        return {f"max_force_{k}": np.nan for k in meshes}, tr
     force = contact_history(model, param, tr.t, tr.u)[2]
     return {f"max_force_{k}": float(np.max(np.abs(force[idx[0]])) * force_unit)
-            for k, idx in meshes.items()}
+            for k, idx in meshes.items()}, tr
 
 
 def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
@@ -128,11 +134,18 @@ def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
         if rec is None:
             rec = run_point(m, float(p), seed, direction, i, settings, **kw)
             if rec.ok:
-                force = _max_mesh_force(m, float(p), rec.u_end, **extra)
+                force, tr = _mesh_force_run(m, float(p), rec.u_end, **extra)
                 rec = dataclasses.replace(rec, metrics={**rec.metrics, **force})
+                if not tr.ok:
+                    # the motion settled but its largest mesh force is unknown: the point
+                    # is not ok (a NaN force would be written as 0 N beside status 0)
+                    rec = dataclasses.replace(
+                        rec, status=int(tr.status), message=f"largest mesh force "
+                        f"({extra['periods']} mesh periods from the settled state): "
+                        f"{tr.message}")
             emit((row, rec))
             new += 1
-        if rec.ok:
+        if rec.ok or rec.motion_class != FAILED:      # the motion settled: its end seeds
             seed = np.array(rec.u_end, dtype=float)
     return new
 

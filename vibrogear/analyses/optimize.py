@@ -71,13 +71,20 @@ def violation(cfg, constraint_values) -> float:
     return float(total)
 
 
+#: |f| is capped here: a huge penalty times a huge violation (or the worst f plus the
+#: penalty) would overflow to inf, which the methods and the files do not take
+F_CAP = 1e300
+
+
 def penalised(cfg, record: dict, worst: float) -> float:
-    """The value the method minimises (module docstring); ``worst``: the largest finite f
-    of the evaluations before this one (0 if none)."""
+    """The value the method minimises (module docstring), capped to [-F_CAP, F_CAP];
+    ``worst``: the largest finite f of the evaluations before this one (0 if none)."""
     if record["status"] != "ok":
-        return float(worst + cfg.penalty)
-    s = 1.0 if cfg.objective.sense == "min" else -1.0
-    return float(s * record["objective"] + cfg.penalty * violation(cfg, record["constraints"]))
+        f = float(worst) + cfg.penalty
+    else:
+        s = 1.0 if cfg.objective.sense == "min" else -1.0
+        f = s * record["objective"] + cfg.penalty * violation(cfg, record["constraints"])
+    return float(min(max(f, -F_CAP), F_CAP))      # NaN cannot occur: penalty > 0, finite metrics
 
 
 def _key(values: dict) -> tuple:

@@ -15,6 +15,7 @@ its field does not allow, are found by ``vibrogear check`` (exit 2).
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass
 
 from .base import ConfigError, as_data, parse_override, set_path, spec
@@ -48,6 +49,9 @@ class OptimizeVariable:
                               f"{self.max:g}")
         if self.log and not self.min > 0:
             raise ConfigError(f"{path}.min", f"log = true needs min > 0, got {self.min:g}")
+        if self.integer and not math.ceil(self.min) <= math.floor(self.max):
+            raise ConfigError(f"{path}.max", f"integer = true needs an integer in [min, max] = "
+                              f"[{self.min:g}, {self.max:g}]")
         if self.start is not None and not self.min <= self.start <= self.max:
             raise ConfigError(f"{path}.start", f"must lie in [min, max] = [{self.min:g}, "
                               f"{self.max:g}], got {self.start:g}")
@@ -55,7 +59,9 @@ class OptimizeVariable:
     def value(self, x: float):
         """The value set in the scene: ``x`` clipped to the bounds (rounded if integer)."""
         x = min(max(float(x), self.min), self.max)
-        return int(round(x)) if self.integer else x
+        if self.integer:         # the nearest integer inside the bounds
+            return min(max(int(round(x)), math.ceil(self.min)), math.floor(self.max))
+        return x
 
 
 @dataclass(frozen=True)
@@ -116,6 +122,11 @@ class OptimizeConfig:
             if self.analysis_of(item) is None and item.metric not in keys:
                 raise ConfigError(f"{path}.{name}.analysis", "missing: the analysis whose "
                                   f"metric {item.metric!r} is read (or name a variable's key)")
+        if not self.evaluated_analyses():
+            raise ConfigError(f"{path}.objective.analysis", "missing: nothing to evaluate, "
+                              "the objective and every constraint read variables; name the "
+                              "analysis of a metric (objective.analysis, a constraint's "
+                              "analysis) or give analyses")
         from .verbs import VERBS
         for i, a in enumerate(self.evaluated_analyses()):
             if a not in VERBS or a == "optimize":

@@ -79,10 +79,21 @@ class RunupConfig:
             for i, (_, rpm) in enumerate(self.table):
                 if not rpm > 0.0:
                     raise ConfigError(f"{p}table[{i}][1]", f"rpm must be > 0, got {rpm:g}")
+        for i, d in enumerate(self.directions):
+            if d in self.directions[:i]:
+                raise ConfigError(f"{p}directions[{i}]", f"{d!r} is given twice: give \"up\", "
+                                  "\"down\" or both, once each")
         if self.samples_per_period % self.chunks_per_period:
             raise ConfigError(f"{p}samples_per_period", f"must be a multiple of "
                               f"chunks_per_period = {self.chunks_per_period}, got "
                               f"{self.samples_per_period}")
+        nyquist = self.samples_per_period / 2
+        for i, h in enumerate(self.mesh_orders):
+            if not h < nyquist:
+                raise ConfigError(f"{p}mesh_orders[{i}]", f"harmonic {h} of the mesh frequency "
+                                  f"is not below the Nyquist limit of samples_per_period = "
+                                  f"{self.samples_per_period} samples per mesh period (harmonics "
+                                  f"< {nyquist:g}); raise samples_per_period or drop the order")
 
     def profile(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
         """(times s, rpm) of the profile as given (direction "up")."""
