@@ -32,12 +32,13 @@ from ..solvers.static import static_equilibrium
 from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow
 from ..verification.impact_orbits import periodic_orbit
 from ..config.options import ShootingOptions
+from .study import ATOL_PER_RTOL_BY_MODEL
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",
            "ATOL_PER_RTOL", "SAMPLES_PER_PERIOD", "PrecisionResult"]
 
-#: atol = rtol * ATOL_PER_RTOL in both studies
-ATOL_PER_RTOL = 1e-2
+#: atol = rtol * ATOL_PER_RTOL in both studies: the impact pair's, of the one rule
+ATOL_PER_RTOL = ATOL_PER_RTOL_BY_MODEL["impact_pair"]
 #: dense-output samples per excitation period on which the error is measured
 SAMPLES_PER_PERIOD = 64
 #: periods integrated from the static state before the periodic orbit is sought

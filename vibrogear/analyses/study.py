@@ -22,7 +22,8 @@ from ..pipeline.resume import fingerprint
 
 __all__ = ["Study", "Monitor", "build_study", "integration_options", "start_state",
            "within_limit", "lowest_param",
-           "tolerances_for", "rtol_given", "ACCURACY_RULE", "ATOL_PER_RTOL"]
+           "tolerances_for", "rtol_given", "ACCURACY_RULE", "ATOL_PER_RTOL",
+           "ATOL_PER_RTOL_BY_MODEL", "atol_for"]
 
 
 @dataclass(frozen=True)
@@ -109,8 +110,17 @@ def start_state(model: ReducedModel, param: float, *, strict: bool = True) -> np
 #: for: it covers that worst point with a margin of 1.5.  (two_stage rattles chaotically over
 #: its whole speed range: its error stays 0.3-0.7 at every rtol, so no rule exists for it.)
 ACCURACY_RULE = {"coefficient": 0.238, "exponent": 0.991, "safety": 10.0}
-#: atol / rtol of the rule (the gearbox scenes' 1e-12 / 1e-6: modal coordinates ~1e-6)
-ATOL_PER_RTOL = 1e-6
+#: atol / rtol by model kind, the one rule for every analysis that sets an rtol: the size of
+#: the model's states (a gearbox's modal coordinates ~1e-6, the gearbox scenes' 1e-12 / 1e-6;
+#: the impact pair's nondimensional ones ~1e-2, its scenes' 1e-10 / 1e-8)
+ATOL_PER_RTOL_BY_MODEL = {"gearbox": 1e-6, "impact_pair": 1e-2}
+#: the gearbox's (the accuracy rule's)
+ATOL_PER_RTOL = ATOL_PER_RTOL_BY_MODEL["gearbox"]
+
+
+def atol_for(model_kind: str, rtol: float) -> float:
+    """atol that goes with ``rtol`` on a model of this kind (:data:`ATOL_PER_RTOL_BY_MODEL`)."""
+    return ATOL_PER_RTOL_BY_MODEL.get(model_kind, ATOL_PER_RTOL) * rtol
 #: the rule's rtol is kept inside this range
 RTOL_RANGE = (1e-10, 1e-3)
 
@@ -137,7 +147,7 @@ def integration_options(scene, *, record: bool = False, period_tol: float | None
     """The integrator's options of one analysis: the one rule, in this order.
 
     1. ``section.rtol`` where the analysis's own section has one and it is set ([continuation],
-       [reduction_accuracy], [map], [runup]): that rtol, atol = ATOL_PER_RTOL * rtol.
+       [reduction_accuracy], [map], [runup], [nnm]): that rtol, atol = :func:`atol_for`.
     2. ``record=True`` (sweep, map, run-up, time response, spectra: results read from recorded
        motion) on a gearbox scene whose [integration] rtol is not given (:func:`rtol_given`):
        rtol and atol from the accuracy asked for (``section.accuracy`` where the section has
@@ -158,7 +168,7 @@ def _requested_options(scene, record, period_tol, section) -> IntegrationOptions
     opts = scene.integration
     own = getattr(section, "rtol", None)
     if own is not None:
-        return dataclasses.replace(opts, rtol=own, atol=ATOL_PER_RTOL * own)
+        return dataclasses.replace(opts, rtol=own, atol=atol_for(scene.model_kind, own))
     if not record or scene.gearbox is None or rtol_given(scene):
         return opts
     from ..config.options import SweepOptions
