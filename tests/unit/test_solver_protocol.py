@@ -154,3 +154,68 @@ def test_gearbox_scene_rejects_omega_keys_in_the_message():
 @pytest.mark.parametrize("path", CONFIGS, ids=[p.stem for p in CONFIGS])
 def test_every_config_passes_check(path, capsys):
     assert main(["check", str(path)]) == 0, capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- one result convention
+
+def _check_outcome(res, counters: set):
+    """``res.outcome``: a Status, a message, integer counters (at least ``counters``, all
+    >= 0), a wall time >= 0 and an error estimate of floats or None."""
+    from vibrogear.solvers.status import Outcome
+
+    out = res.outcome
+    assert isinstance(out, Outcome) and isinstance(out.status, Status)
+    assert isinstance(out.message, str) and out.message
+    assert counters <= set(out.counters) and all(
+        type(v) is int and v >= 0 for v in out.counters.values())
+    assert out.wall_s >= 0.0 and out.error_estimate
+    assert all(v is None or isinstance(v, float) for v in out.error_estimate.values())
+    return out
+
+
+def test_every_solver_result_shows_one_outcome(orbit):
+    """Integration, static equilibrium, shooting, Lyapunov, run-up, sweep, continuation,
+    rotor modes and Campbell: the same five fields; the status is the result's own, the
+    counters are the result's own numbers."""
+    from tests.rotor_fixtures import friswell_two_disc
+    from vibrogear.config.options import SweepOptions
+    from vibrogear.solvers.periodic.shooting import shoot
+    from vibrogear.solvers.rotor.campbell import campbell_diagram
+    from vibrogear.solvers.rotor.modes import rotor_modes
+    from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
+    from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
+    from vibrogear.solvers.sequential.sweep import sweep
+    from vibrogear.solvers.static import static_equilibrium
+
+    model, p0, u0 = orbit.model, orbit.param, orbit.u0
+    tr = integrate(model, p0, u0, 0.0, 2 * np.pi / p0)
+    out = _check_outcome(tr, {"steps", "rhs_calls", "events"})
+    assert out.counters["steps"] == tr.steps and out.status == tr.status == Status.OK
+    assert out.error_estimate["accumulated_local_error"] == tr.error_estimate
+    st = static_equilibrium(model, p0)
+    assert _check_outcome(st, {"iterations"}).ok
+    sh = shoot(model, p0, u0)
+    out = _check_outcome(sh, {"iterations", "flows", "rhs_calls"})
+    assert out.ok and out.error_estimate["periodicity_residual"] == sh.residual
+    ly = largest_lyapunov(model, p0, sh.u0, 16, chunk=4)
+    out = _check_outcome(ly, {"rhs_calls", "periods"})
+    assert out.counters["periods"] == 16
+    assert out.error_estimate["exponent_ci_half_width"] == pytest.approx(
+        (ly.ci[1] - ly.ci[0]) / 2)
+    rp = ramp(model, SpeedProfile(np.array([0.0, 60.0]), np.array([p0, 1.2])), sh.u0,
+              chunks_per_period=1, samples_per_period=8)
+    assert _check_outcome(rp, {"chunks", "steps"}).counters["chunks"] == rp.chunks
+    sw = sweep(model, np.array([1.3, 1.25]), SweepOptions(directions=("up",), workers=1,
+                                                           transient_periods=20,
+                                                           record_periods=8), u0=sh.u0)
+    out = _check_outcome(sw, {"points", "failed_points", "steps"})
+    assert out.counters["points"] == 2 and out.status == sw.status_code
+    co = continuation(orbit, PseudoArclength(), ContinuationOptions(
+        param_min=0.45, param_max=1.3, ds=0.02, ds_max=0.05, max_points=4))
+    out = _check_outcome(co, {"points", "flows"})
+    assert out.status == Status.MAX_POINTS and not out.ok
+    rotor = friswell_two_disc()
+    rm = rotor_modes(rotor, 1000.0, count=4)
+    assert _check_outcome(rm, {"modes"}).status == Status.OK
+    cb = campbell_diagram(rotor, np.array([0.0, 2000.0]), n_modes=4)
+    assert _check_outcome(cb, {"speeds"}).counters["speeds"] == 2

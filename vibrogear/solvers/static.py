@@ -13,7 +13,7 @@ import numpy as np
 
 from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
-from .status import Status
+from .status import Outcome, Status
 
 __all__ = ["StaticResult", "static_equilibrium"]
 
@@ -39,6 +39,11 @@ class StaticResult:
     @property
     def error_estimate(self) -> dict:
         return {"relative_force_residual": self.residual}
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message, self.counters, self.wall_time,
+                       self.error_estimate)
 
 
 def _forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):

@@ -1,7 +1,10 @@
 """One status enumeration for every solver, with one table of messages.
 
 Every solver result (integration, shooting, static equilibrium, sweep, continuation)
-carries a :class:`Status` and a message that starts from :data:`MESSAGES`.  The compiled
+carries a :class:`Status` and a message that starts from :data:`MESSAGES`, and shows the
+same face, :class:`Outcome`, through its ``outcome`` property: status, message, counters,
+wall time and error estimate, of one shape everywhere (what post-processing and the run
+summary read; the result's own fields keep their detail).  The compiled
 integrator loop returns plain negative integers (numba has no enums); they are the values
 of the integrator members below and become a :class:`Status` in one place,
 :func:`from_code`.  The integers are also what ``sweep.npz`` stores per point, so the files
@@ -10,9 +13,11 @@ solver above the integrator.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
 from enum import IntEnum
 
-__all__ = ["Status", "MESSAGES", "from_code", "SUCCESS"]
+__all__ = ["Status", "MESSAGES", "from_code", "SUCCESS", "Outcome"]
 
 
 class Status(IntEnum):
@@ -83,6 +88,32 @@ MESSAGES = {
 }
 
 SUCCESS = frozenset({Status.OK, Status.LEFT_RANGE, Status.REJOINED, Status.GRAZING_END})
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """The one face of a solver result (its ``outcome`` property).
+
+    ``counters``: {name: int} (steps, rhs calls, iterations, flows, ... as the solver has
+    them); ``error_estimate``: {name: float or None} (None: not available for this run);
+    ``wall_s``: the solver's wall time."""
+    status: Status
+    message: str
+    counters: dict
+    wall_s: float
+    error_estimate: dict
+
+    def __post_init__(self):
+        object.__setattr__(self, "status", Status(self.status))
+        object.__setattr__(self, "counters", {str(k): int(v) for k, v in self.counters.items()})
+        object.__setattr__(self, "error_estimate", {
+            str(k): (None if v is None or not math.isfinite(float(v)) else float(v))
+            for k, v in self.error_estimate.items()})
+        object.__setattr__(self, "wall_s", float(self.wall_s))
+
+    @property
+    def ok(self) -> bool:
+        return self.status.success
 
 
 def from_code(code: int) -> Status:

@@ -11,7 +11,7 @@ from ...config.options import IntegrationOptions   # defined once, with the [int
 from ...models.reduced import ReducedModel
 from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, LoopResult, dopri_loop, loop_inputs
 from .kernels import model_arrays
-from ..status import Status, from_code
+from ..status import Outcome, Status, from_code
 from .trust import assess
 
 __all__ = ["IntegrationOptions", "Trajectory", "integrate"]
@@ -59,6 +59,14 @@ class Trajectory:
     @property
     def ok(self) -> bool:
         return self.status == Status.OK
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message, {
+            "steps": self.steps, "rejected": self.rejected, "rhs_calls": self.rhs_calls,
+            "events": self.events}, self.wall_time, {
+            "accumulated_local_error": self.error_estimate,
+            "relative_error": self.relative_error})
 
 
 _JACOBIAN = {"auto": JAC_AUTO, "loops": JAC_LOOPS, "blas": JAC_BLAS}

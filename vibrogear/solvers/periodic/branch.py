@@ -13,7 +13,7 @@ import numpy as np
 from ...config.options import IntegrationOptions
 from ...models.reduced import ReducedModel
 from .floquet import split_trivial, stability
-from ..status import Status
+from ..status import Outcome, Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "BranchPoint", "Branch", "SpecialPoint",
            "ContinuationResult", "stability_notes"]
@@ -139,6 +139,12 @@ class ContinuationResult:
         return {"max_periodicity_residual": max((p.residual for p in pts), default=None),
                 "max_integration_error": max((p.integration_error for p in pts), default=None),
                 "liouville_det_error": max(dets) if dets else None}
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message,
+                       {k: v for k, v in self.counters.items() if isinstance(v, (int, np.integer))
+                        and not isinstance(v, bool)}, self.wall_time, self.error_estimate)
 
 
 def stability_notes(pts, name: str) -> str:

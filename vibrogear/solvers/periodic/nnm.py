@@ -34,7 +34,7 @@ import numpy as np
 
 from ...config.options import IntegrationOptions
 from ...pipeline.executors import blas_threads
-from ..status import Status
+from ..status import Outcome, Status
 from .branch import PseudoArclength
 from .corrector import QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK, correct, tangent
 from .floquet import liouville_error, split_trivial
@@ -120,6 +120,12 @@ class NnmBranch:
 
     def array(self, name: str) -> np.ndarray:
         return np.array([getattr(p, name) for p in self.points])
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message,
+                       {k: v for k, v in self.counters.items() if isinstance(v, (int, np.integer))
+                        and not isinstance(v, bool)}, self.wall_time, self.error_estimate)
 
     @property
     def error_estimate(self) -> dict:

@@ -45,7 +45,7 @@ from ...models.reduced import ReducedModel
 from .floquet import (floquet_multipliers, liouville_error, neutral_directions, split_trivial,
                       stability)
 from ..integrator.integrate import IntegrationOptions, Trajectory, integrate
-from ..status import Status
+from ..status import Outcome, Status
 from ...config.options import ShootingOptions
 
 __all__ = ["PeriodicFlow", "periodic_flow", "periodic_residual", "ShootingResult", "shoot",
@@ -181,6 +181,11 @@ class ShootingResult:
         return {"periodicity_residual": self.residual,
                 "integration_error": self.integration_error,
                 "liouville_det_error": self.liouville_det_error}
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message, self.counters, self.wall_time,
+                       self.error_estimate)
 
 
 def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,

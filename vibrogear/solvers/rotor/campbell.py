@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ...models.rotor.model import RotorModel
-from .modes import (MODE_TYPES, RPM, _residuals, _solve_reduced, _status,
+from .modes import (MODE_TYPES, RPM, _residuals, _solve_reduced, _status, rotor_outcome,
                           basis_error_estimate, classify_whirl, modal_energy_share, reduce_rotor)
 
 __all__ = ["CampbellResult", "CriticalSpeed", "campbell_diagram"]
@@ -45,6 +45,12 @@ class CampbellResult:
     status: str = "ok"
     message: str = ""
     timings: dict = field(default_factory=dict)
+
+    @property
+    def outcome(self):
+        return rotor_outcome(self, {"speeds": self.speeds_rpm.size, "basis": self.n_basis},
+                             {"reduction_error": self.error_estimate,
+                              "max_residual": self.max_residual})
 
 
 def _mac(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -22,6 +22,7 @@ import scipy.linalg as sla
 
 from ...models.rotor.model import RotorModel, dof_groups, lowest_modes
 from ...models.rotor.elements import PHI, THETA, U, V
+from ..status import Outcome, Status
 
 __all__ = ["RotorModes", "ReducedRotor", "reduce_rotor", "rotor_modes", "classify_whirl",
            "modal_energy_share", "RPM", "basis_error_estimate", "MODE_TYPES", "ERROR_LIMIT"]
@@ -147,6 +148,23 @@ class RotorModes:
     status: str = "ok"
     message: str = ""
     timings: dict = field(default_factory=dict)
+
+    @property
+    def outcome(self) -> Outcome:
+        return rotor_outcome(self, {"modes": self.frequencies_hz.size, "basis": self.n_basis},
+                             {"reduction_error": self.error_estimate,
+                              "max_residual": float(np.max(self.residuals, initial=0.0))})
+
+
+#: the rotor solvers' status words as the one Status
+ROTOR_STATUS = {"ok": Status.OK, "inaccurate": Status.INACCURATE, "failed": Status.NONFINITE}
+
+
+def rotor_outcome(res, counters: dict, error_estimate: dict) -> Outcome:
+    """:class:`Outcome` of a rotor result (its status word mapped by :data:`ROTOR_STATUS`)."""
+    st = ROTOR_STATUS[res.status]
+    return Outcome(st, res.message or st.message, counters,
+                   res.timings.get("total_s", 0.0), error_estimate)
 
 
 def classify_whirl(model: RotorModel, shapes: np.ndarray, *, tol: float = 0.02):

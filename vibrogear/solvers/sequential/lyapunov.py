@@ -29,7 +29,7 @@ import numpy as np
 
 from ...models.reduced import ReducedModel
 from ..integrator.integrate import IntegrationOptions, integrate
-from ..status import Status
+from ..status import Outcome, Status
 
 __all__ = ["LyapunovResult", "largest_lyapunov", "tangent_chunk", "block_estimate",
            "state_scale", "initial_direction", "D0", "CHUNK"]
@@ -55,6 +55,14 @@ class LyapunovResult:
     @property
     def ok(self) -> bool:
         return self.status == Status.OK
+
+    @property
+    def outcome(self) -> Outcome:
+        """The error estimate is the half width of the exponent's 95 % interval."""
+        lo, hi = self.ci
+        return Outcome(self.status, self.message, {"rhs_calls": self.rhs_calls,
+                                                   "periods": self.log_growth.size},
+                       self.wall_time, {"exponent_ci_half_width": (hi - lo) / 2})
 
 
 def state_scale(samples, m: int) -> np.ndarray:

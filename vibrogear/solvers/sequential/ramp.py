@@ -54,7 +54,7 @@ from ...config.options import IntegrationOptions
 from ...models.contact_law import harmonic_series
 from ...models.reduced import Forcing, ReducedModel
 from ..integrator.integrate import integrate
-from ..status import Status
+from ..status import Outcome, Status
 
 __all__ = ["SpeedProfile", "RampResult", "ramp"]
 
@@ -130,6 +130,14 @@ class RampResult:
     phase_deviation: float      # max over chunks of |applied - exact phase| inside a chunk [rad]
     settle_steps: int = 0
     inertia_torque: bool = False  # the inertia force of the acceleration was applied
+
+    @property
+    def outcome(self) -> Outcome:
+        return Outcome(self.status, self.message, {
+            "chunks": self.chunks, "steps": self.steps, "rejected": self.rejected,
+            "rhs_calls": self.rhs_calls, "events": self.events}, self.wall_time,
+            {"accumulated_local_error": self.error_estimate,
+             "phase_deviation_rad": self.phase_deviation})
 
     @property
     def ok(self) -> bool:

@@ -36,7 +36,7 @@ from ...models.reduced import ReducedModel
 from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
 from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
-from ..status import Status
+from ..status import Outcome, Status
 from .sweep_point import PHASES, PointRecord, run_point
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
@@ -102,6 +102,16 @@ class SweepResult:
         return {"rtol": self.rtol, "atol": self.atol, "period_tol": self.period_tol,
                 "max_periodicity_defect": float(d.max()) if d.size else None,
                 "failed_points": int(np.sum(self.status != 0))}
+
+    @property
+    def outcome(self) -> Outcome:
+        """The sweep as a whole (``status`` holds each point's)."""
+        e = self.error_estimate
+        return Outcome(self.status_code, self.status_message, {
+            "points": self.param.size, "failed_points": e["failed_points"],
+            "steps": self.steps, "rejected": self.rejected, "rhs_calls": self.rhs_calls,
+            "events": self.events}, self.wall_time,
+            {k: e[k] for k in ("rtol", "atol", "period_tol", "max_periodicity_defect")})
 
 
 # ---------------------------------------------------------------- the sweep
