@@ -40,7 +40,8 @@ def _args(verb, scene, out, overrides):
 # ------------------------------------------------------------------ rejected input (exit 2)
 
 #: (id, scene, overrides, field, found by `vibrogear check` (else only once the model is
-#: built, still before anything is written))
+#: built, still before anything is written)); mesh names, the impact pair's one mode and the
+#: unloaded gearbox's onset unit are decided from the config (NnmConfig.check_model)
 BAD = [
     ("energy-min-above-max", IMPACT, ["nnm.energy_min=10", "nnm.energy_max=1"],
      "nnm.energy_max", True),
@@ -61,13 +62,18 @@ BAD = [
     ("energy-and-amplitude", IMPACT, ["nnm.amplitude_min=1", "nnm.amplitude_max=2"],
      "nnm.amplitude_min", True),
     ("mode-and-mesh", GEAR, ['nnm.mode=1'], "nnm.mesh", True),
-    ("mode-beyond-the-model", IMPACT, IP + ["nnm.mode=5"], "nnm.mode", False),
+    ("mode-beyond-the-model", IMPACT, IP + ["nnm.mode=5"], "nnm.mode", True),
     ("second-mode-beyond-the-model", IMPACT, IP + ["nnm.second_mode=3"], "nnm.second_mode",
-     False),
-    ("unknown-mesh", GEAR, GP + ['nnm.mesh="G9"'], "nnm.mesh", False),
+     True),
+    ("unknown-mesh", GEAR, GP + ['nnm.mesh="G9"'], "nnm.mesh", True),
+    # regression: ignored (the impact pair's one mode was taken)
+    ("mesh-of-the-impact-pair", IMPACT, IP + ['nnm.mesh="clearance"'], "nnm.mesh", True),
+    # a gearbox's elastic-mode count is known only after the reduction
+    ("second-mode-beyond-the-gearbox", GEAR, GP + ["nnm.second_mode=100000"],
+     "nnm.second_mode", False),
     # regression: an unloaded mesh sits on its contact switch, the onset energy is 0 and
     # the energy range [0, 0] was a ValueError traceback (NnmMethod)
-    ("onset-energy-of-an-unloaded-mesh", GEAR, GP + UNLOADED, "nnm.energy_unit", False),
+    ("onset-energy-of-an-unloaded-mesh", GEAR, GP + UNLOADED, "nnm.energy_unit", True),
     # regression: energies below the round-off of the energy about the static state gave
     # backbones of noise (1e-16 for 1e-30 asked) reported as ok, and negative energies
     ("energy-below-round-off", IMPACT, ['nnm.energy_unit="absolute"', "nnm.energy_min=1e-30",
@@ -91,6 +97,31 @@ def test_degenerate_input_exits_2_naming_the_field(tmp_path, capsys, scene, over
     err = capsys.readouterr().err
     assert f"invalid input: {field}" in err, err
     assert not out.exists()
+
+
+def test_check_refuses_the_onset_unit_of_an_unloaded_gearbox(tmp_path, capsys, monkeypatch):
+    """No static load and no contact off its switch at x = 0: the onset energy is 0, decided
+    from the config (no model built) by `vibrogear check` and the `nnm` verb; absolute
+    energies, or a bearing with a clearance (the analysis decides), pass the check."""
+    import vibrogear.analyses.study as study
+
+    def no_build(*_a, **_k):
+        raise AssertionError("the model was built")
+    monkeypatch.setattr(study, "build_study", no_build)
+    out = tmp_path / "out"
+    for verb in ("check", "nnm"):
+        assert main(_args(verb, GEAR, out, GP + UNLOADED)) == 2
+        err = capsys.readouterr().err
+        assert "invalid input: nnm.energy_unit: 'onset': the gearbox has no static load" in err
+    assert not out.exists()
+    assert main(_args("check", GEAR, out, GP + UNLOADED + ['nnm.energy_unit="absolute"'])) == 0
+    assert main(_args("check", GEAR, out, GP + UNLOADED + ['gearbox.bearings[0].type="linear"',
+                                                           "gearbox.bearings[0].clearance=1e-5",
+                                                           "gearbox.bearings[0].elements=8"])
+                ) == 0
+    # nnm not among the analyses: check leaves [nnm] alone
+    assert main(_args("check", GEAR, out, GP + UNLOADED + ['scene.analyses=["continuation"]'])
+                ) == 0
 
 
 # ------------------------------------------------------------------ extreme but valid input

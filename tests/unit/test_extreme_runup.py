@@ -46,7 +46,8 @@ def _args(verb, scene, out, overrides):
 # ------------------------------------------------------------------ rejected input (exit 2)
 
 #: (id, overrides, field, the table scene, found by `vibrogear check` (else once the model
-#: is built, still before anything is written))
+#: is built, still before anything is written)); the run's length is decided from the config
+#: (RunupConfig.check_gearbox), so `vibrogear check` finds every case
 BAD = [
     ("rate-0", ["runup.rate=0"], "runup.rate", False, True),
     ("rate-negative", ["runup.rate=-5"], "runup.rate", False, True),
@@ -77,14 +78,14 @@ BAD = [
     # regression: a run shorter than one mesh period was a ValueError traceback (a spline
     # through fewer than two samples)
     ("shorter-than-a-mesh-period", ["runup.rpm_end=5100", "runup.rate=1e9"], "runup.rate",
-     False, False),
-    ("table-of-0.1-us", ["runup.table=[[0,5000],[1e-7,5001]]"], "runup.table", True, False),
+     False, True),
+    ("table-of-0.1-us", ["runup.table=[[0,5000],[1e-7,5001]]"], "runup.table", True, True),
     ("1-to-2-rpm-in-10-ms", ["runup.rpm_start=1", "runup.rpm_end=2", "runup.rate=100"],
-     "runup.rate", False, False),
+     "runup.rate", False, True),
     # regression: a run-up of 1e7 s (3e10 mesh periods) started and could not end
     ("rate-1e-6-rpm-per-s", ["runup.rpm_end=5010", "runup.rate=1e-6"], "runup.rate", False,
-     False),
-    ("table-of-1e9-s", ["runup.table=[[0,5000],[1e9,5001]]"], "runup.table", True, False),
+     True),
+    ("table-of-1e9-s", ["runup.table=[[0,5000],[1e9,5001]]"], "runup.table", True, True),
 ]
 
 
@@ -104,6 +105,59 @@ def test_degenerate_input_exits_2_naming_the_field(tmp_path, capsys, table_scene
     err = capsys.readouterr().err
     assert f"invalid input: {field}" in err, err
     assert not out.exists()
+
+
+LENGTH = [
+    ("shorter-than-a-mesh-period", ["runup.rpm_end=5100", "runup.rate=1e9"], "runup.rate",
+     "the run lasts 1e-07 s: 0.000337 mesh periods, less than the one whole mesh period"),
+    ("rate-1e-6-rpm-per-s", ["runup.rpm_end=5010", "runup.rate=1e-6"], "runup.rate",
+     "the run lasts 1e+07 s: 3.337e+10 mesh periods x 64 samples x 1 meshes x 2 runs need "
+     "1.91e+05 GiB; at most 16 GiB"),
+]
+
+
+@pytest.mark.parametrize("overrides, field, message", [c[1:] for c in LENGTH],
+                         ids=[c[0] for c in LENGTH])
+def test_check_reports_the_run_length_from_the_config(tmp_path, capsys, monkeypatch, overrides,
+                                                      field, message):
+    """The run's length is decided from [gearbox] and [runup] alone: `vibrogear check` (with
+    runup among the analyses) and the `vibrogear runup` verb (which runs it unlisted) exit 2
+    with the numbers, before any model is built."""
+    import vibrogear.analyses.study as study
+
+    def no_build(*_a, **_k):
+        raise AssertionError("the model was built")
+    monkeypatch.setattr(study, "build_study", no_build)
+    out = tmp_path / "out"
+    overrides = ["runup.rpm_start=5000", *overrides]
+    assert main(_args("check", GEAR_PAIR, out, ['scene.analyses=["runup"]', *overrides])) == 2
+    err = capsys.readouterr().err
+    assert f"invalid input: {field}" in err and message in err, err
+    # gear_pair does not list runup: check leaves [runup] alone, the verb checks it
+    assert main(_args("check", GEAR_PAIR, out, overrides)) == 0
+    capsys.readouterr()
+    assert main(_args("runup", GEAR_PAIR, out, overrides)) == 2
+    err = capsys.readouterr().err
+    assert f"invalid input: {field}" in err and message in err, err
+    assert not out.exists()
+
+
+def test_mesh_periods_from_the_config_match_the_model():
+    """RunupConfig.mesh_periods (rpm / 60 x teeth x |speed ratio| of meshes[0].gear_a)
+    equals the count of the model's excitation phase (omega_per_param = teeth RPM /
+    OMEGA_REF per rpm, in model time units of 1 / OMEGA_REF s) for gear_pair's short run:
+    66.68 periods, of which the run reports 66 whole ones (test below)."""
+    from vibrogear.config.scene import scene_from_dict
+    from vibrogear.models.gearbox.model import OMEGA_REF, RPM
+
+    data = read_toml(GEAR_PAIR)
+    data["runup"].update(rpm_start=5000.0, rpm_end=5002.0, rate=100.0)
+    scene = scene_from_dict(data)
+    teeth = 40
+    model = np.trapz([5000.0, 5002.0], [0.0, 0.02 * OMEGA_REF]) * teeth * RPM / OMEGA_REF \
+        / (2 * np.pi)
+    assert scene.runup.mesh_periods(scene.gearbox) == pytest.approx(model, rel=1e-12)
+    assert scene.runup.check_gearbox(scene.gearbox) == pytest.approx(66.68, rel=1e-12)
 
 
 # ------------------------------------------------------------------ extreme but valid input

@@ -62,9 +62,12 @@ def _mesh_shares(model, x_s, omega, phi, contact: int) -> np.ndarray:
 
 
 def start_mode(cfg, study, model, x_s, omega, phi, freq_scale) -> int:
-    """The elastic-mode index [nnm] asks for (module docstring of the section)."""
+    """The elastic-mode index [nnm] asks for (module docstring of the section).  The scene's
+    validation (:meth:`~vibrogear.config.nnm_section.NnmConfig.check_model`) has checked
+    what the config decides: ``mesh`` names a mesh, the impact pair's one mode; a gearbox's
+    number of elastic modes is known only here, after the reduction."""
     if cfg.mode is not None:
-        if cfg.mode >= omega.size:
+        if cfg.mode >= omega.size:          # needs the model: its elastic-mode count
             raise ConfigError("nnm.mode", f"expected an elastic-mode index 0 .. "
                               f"{omega.size - 1}, got {cfg.mode}")
         return int(cfg.mode)
@@ -73,14 +76,10 @@ def start_mode(cfg, study, model, x_s, omega, phi, freq_scale) -> int:
     if omega.size == 1 or not model.contacts.count:
         return 0
     contact = model.monitor
-    if cfg.mesh is not None:
+    if cfg.mesh is not None:         # a mesh of [gearbox.meshes] (checked with the config)
         names = tuple(model.contacts.names)
-        if cfg.mesh not in names or "mesh" not in study.contact_groups or \
-                names.index(cfg.mesh) not in set(study.contact_groups["mesh"].tolist()):
-            meshes = [names[j] for j in study.contact_groups.get("mesh", [])]
-            raise ConfigError("nnm.mesh", f"expected the name of a mesh ({', '.join(meshes)}), "
-                              f"got {cfg.mesh!r}")
-        contact = names.index(cfg.mesh)
+        mesh_rows = study.contact_groups.get("mesh", ())
+        contact = int(next(j for j in mesh_rows if names[j] == cfg.mesh))
     return int(np.argmax(_mesh_shares(model, x_s, omega, phi, contact)))
 
 
@@ -93,6 +92,7 @@ def _units(study, model):
 
 def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.nnm
+    cfg.check_model(scene.impact_pair, scene.gearbox, "nnm")   # as the scene's validation
     t0 = time.perf_counter()
     cm, skew = conservative_model(study.model)
     st = static_equilibrium(cm, 0.0)
@@ -115,7 +115,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     branches, onsets, notes, shapes = [], [], [], []
     mon = study.monitor
     for b, j in enumerate(modes):
-        if j >= omega.size:
+        if j >= omega.size:                 # needs the model: its elastic-mode count
             raise ConfigError("nnm.second_mode", f"expected an elastic-mode index 0 .. "
                               f"{omega.size - 1}, got {j}")
         a_on = onset_amplitude(cm, us[:m], phi[:, j])
@@ -176,6 +176,9 @@ def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):
             return max(abs(p.qmax - d_s), abs(p.qmin - d_s)) <= amax
         return 0.5 * om ** 2 * a ** 2, 1e30, stop
     if cfg.energy_unit == "onset":
+        # needs the model: the config refuses the unloaded gearbox (every contact on its
+        # switch, NnmConfig.check_model); a loaded model can still give 0 (a contact exactly
+        # at its gap in the static state) or inf (a start mode that moves no contact)
         if not np.isfinite(e_on):
             raise ConfigError("nnm.energy_unit", "'onset': the start mode never makes a "
                               "contact switch (a linear model); give absolute energies")

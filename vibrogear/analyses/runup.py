@@ -28,6 +28,7 @@ from functools import partial
 
 import numpy as np
 
+from ..config.runup_section import MAX_RUNUP_BYTES, gearbox_orders
 from ..models.contact_law import flank
 from ..pipeline.executors import run_units
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
@@ -35,8 +36,8 @@ from ..solvers.sequential.ramp import RampResult, SpeedProfile, ramp
 from .order_tracking import Waterfall, order_tracks, waterfall
 from .study import Study, integration_options
 
-__all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "check_length",
-           "jump_speed", "run_key", "inertia_effect"]
+__all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed",
+           "run_key", "inertia_effect", "MAX_RUNUP_BYTES"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -79,19 +80,8 @@ def shaft_orders(scene, mesh_orders) -> tuple[tuple[str, ...], np.ndarray, int]:
     gb = scene.gearbox
     if gb is None:
         return tuple(f"excitation_{h}x" for h in mesh_orders), np.array(mesh_orders, float), 1
-    shaft_p, gear_p = gb.speed_ratios()
-    names, orders = [], []
-    for m in gb.meshes:
-        ka = gb.gear_index(m.gear_a, "")
-        f1 = gb.gears[ka].teeth * abs(gear_p[ka])
-        for h in mesh_orders:
-            names.append(f"{m.name}_{h}x")
-            orders.append(h * f1)
-    for sh, p in zip(gb.shafts, shaft_p):
-        names.append(f"{sh.name}_1x")
-        orders.append(abs(p))
-    teeth = gb.gears[gb.gear_index(gb.meshes[0].gear_a, "")].teeth if gb.meshes else 1
-    return tuple(names), np.array(orders, dtype=float), int(teeth)
+    names, orders, teeth = gearbox_orders(gb, mesh_orders)     # from the config alone
+    return names, np.array(orders, dtype=float), teeth
 
 
 def period_table(r: RampResult, monitor_row: int | None, gaps) -> tuple:
@@ -170,45 +160,6 @@ def _ramp_unit(model, kw, unit, emit):
     return ramp(model, prof, u0, callback=tick, inertia_force=force, **kw)
 
 
-#: bytes of the result per sample: time, profile and held speed, phase; per kept contact
-#: its deformation and rate (the run's peak, with the concatenation, is about twice this)
-_BYTES_PER_SAMPLE = 4 * 8
-_BYTES_PER_SAMPLE_ROW = 2 * 8
-#: the largest run-up result (all runs together) accepted: far above any run-up of minutes
-#: (gear_pair at 5 rpm/s over 800 rpm, up and down: 3.4 GB), far below a run of 1e7 s
-MAX_RUNUP_BYTES = 16 * 2**30
-
-
-def check_length(cfg, study, rows) -> float:
-    """The run's length in mesh periods; a ConfigError naming ``runup.rate`` (or
-    ``runup.table``) where it holds less than one whole mesh period (nothing to report) or
-    its samples would not fit in memory (:data:`MAX_RUNUP_BYTES`, summed over the runs)."""
-    from ..config.base import ConfigError
-
-    prof = _profile(cfg, study, "up")
-    periods = float(np.trapz(prof.params, prof.times) * study.model.omega_per_param
-                    / (2 * np.pi))
-    field = "runup.table" if cfg.table is not None else "runup.rate"
-    duration = prof.duration * study.time_unit_s
-    if not periods >= 1.0:
-        raise ConfigError(field, f"the run lasts {duration:.3g} s: {periods:.3g} mesh "
-                          "periods, less than the one whole mesh period a run-up reports; "
-                          + ("a longer table" if cfg.table is not None else
-                             "a slower rate or a wider speed range"))
-    runs = len(cfg.directions) * len(cfg.inertia_variants)
-    need = runs * periods * cfg.samples_per_period * (
-        _BYTES_PER_SAMPLE + _BYTES_PER_SAMPLE_ROW * len(rows))
-    if need > MAX_RUNUP_BYTES:
-        raise ConfigError(field, f"the run lasts {duration:.4g} s: {periods:.4g} mesh periods "
-                          f"x {cfg.samples_per_period} samples x {len(rows)} meshes x {runs} "
-                          f"runs need {need / 2**30:.3g} GiB; at most "
-                          f"{MAX_RUNUP_BYTES / 2**30:g} GiB: "
-                          + ("a shorter table" if cfg.table is not None else
-                             "a faster rate or a narrower speed range")
-                          + " (or fewer samples_per_period)")
-    return periods
-
-
 def _ramps(study, ctx, cfg, rows, opts) -> dict:
     """{(direction, inertia): RampResult} of the section's directions and inertia variants
     (``inertia_torque = "both"``: with and without), in parallel."""
@@ -243,27 +194,10 @@ def _ramps(study, ctx, cfg, rows, opts) -> dict:
     return got
 
 
-def _check_orders(cfg, names, orders, teeth) -> None:
-    """Every tracked order below the Nyquist order of the samples (samples_per_period per
-    mesh period of the first mesh: ``samples_per_period x teeth / 2`` per driving-shaft
-    revolution), else a ConfigError naming ``runup.mesh_orders`` (an order above it would be
-    read as its alias)."""
-    from ..config.base import ConfigError
-
-    nyquist = cfg.samples_per_period * teeth / 2
-    for name, o in zip(names, orders):
-        if not o < nyquist:
-            raise ConfigError("runup.mesh_orders", f"order {name} ({o:g} per driving-shaft "
-                              f"revolution) is not below the Nyquist order {nyquist:g} of "
-                              f"samples_per_period = {cfg.samples_per_period} samples per mesh "
-                              f"period ({teeth} mesh periods per revolution); raise "
-                              "samples_per_period or drop the order")
-
-
 def _one_run(study, cfg, key, r: RampResult, rows, orders, teeth) -> RunupRun:
     direction, inertia = key
     model = study.model
-    if r.periods == 0:               # check_length's estimate rounded up to one period
+    if r.periods == 0:               # the length check's estimate rounded up to one period
         raise NumericalFailure(f"runup {run_key(cfg, direction, inertia)}: the run holds no "
                                f"whole mesh period ({r.t.size} of {r.samples_per_period} "
                                "samples); a slower rate or a wider speed range")
@@ -305,8 +239,10 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     if rows.size == 0:
         raise NumericalFailure("runup: the model has no mesh contact to follow")
     names, orders, teeth = shaft_orders(scene, cfg.mesh_orders)
-    check_length(cfg, study, rows)
-    _check_orders(cfg, names, orders, teeth)
+    # the run's length (one mesh period at least, the result within MAX_RUNUP_BYTES) and the
+    # tracked orders below Nyquist: decided from the config, as the scene's validation does
+    # (vibrogear check); again here for a scene built without it
+    cfg.check_gearbox(scene.gearbox, "runup")
     opts = integration_options(scene, record=True, section=scene.runup, study=study)
     ramps = _ramps(study, ctx, cfg, rows, opts)
     runs = tuple(_one_run(study, cfg, k, r, rows, orders, teeth) for k, r in ramps.items())

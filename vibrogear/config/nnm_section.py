@@ -86,3 +86,50 @@ class NnmConfig:
                               f"range needs both {lo} and {hi} (numbers > 0)")
         if not a < b:
             raise ConfigError(f"{path}.{hi}", f"expected {hi} > {lo} = {a:g}, got {b:g}")
+
+    def check_model(self, impact_pair, gearbox, path: str = "nnm") -> None:
+        """The checks against the scene's model section that need no model build (the
+        scene's validation runs them when it runs nnm, so ``vibrogear check`` reports them):
+
+        * ``mesh`` names a mesh of [gearbox.meshes] (a gearbox option: the impact pair has
+          none);
+        * ``mode`` / ``second_mode`` within the elastic modes where their count is known from
+          the config: the impact pair has one (index 0);
+        * ``energy_unit = "onset"`` (an energy range) needs a static load on a gearbox whose
+          every contact sits on its switch when unloaded (meshes: gap_hi = 0; bearings of
+          clearance 0): without a load (every coupling's twist 0, no gravity, no free-gear
+          drag torque) the static state is x = 0, on every contact's switch, so the
+          contact-switch energy is 0 (inf for a mode that moves no contact) and cannot
+          scale the range.
+
+        What needs the model stays in :mod:`vibrogear.analyses.nnm`: a gearbox's number of
+        elastic modes (master modes, static correction, housing, rigid-body modes: known
+        after the reduction), and a zero or infinite contact-switch energy of a loaded model
+        (a contact exactly at its gap in the loaded static state, a linear start mode)."""
+        if self.mesh is not None:
+            meshes = [m.name for m in gearbox.meshes] if gearbox is not None else []
+            if self.mesh not in meshes:
+                raise ConfigError(f"{path}.mesh", (f"expected the name of a mesh of "
+                                  f"[gearbox.meshes] ({', '.join(meshes) or 'none'})"
+                                  if gearbox is not None else "a gearbox option: this model "
+                                  "has no mesh; give mode or frequency") +
+                                  f", got {self.mesh!r}")
+        if impact_pair is not None:
+            for key in ("mode", "second_mode"):
+                j = getattr(self, key)
+                if j is not None and j != 0:
+                    raise ConfigError(f"{path}.{key}", f"expected an elastic-mode index 0 .. 0 "
+                                      f"(the impact pair has one mode), got {j}")
+        if gearbox is not None and self.energy_unit == "onset" and self.amplitude_min is None:
+            loaded = (any(c.twist for c in gearbox.couplings) or any(gearbox.gravity)
+                      or any(g.free and g.drag_torque for g in gearbox.gears))
+            # a contact bearing with a clearance is off its switch at x = 0: the analysis
+            # decides from the model
+            off_switch = any(b.type != "spring" and b.clearance > 0 for b in gearbox.bearings)
+            if not loaded and not off_switch:
+                raise ConfigError(f"{path}.energy_unit", "'onset': the gearbox has no static "
+                                  "load (every coupling's twist is 0, no gravity, no drag "
+                                  "torque), so its static state sits on the contact switch of "
+                                  "every mesh (an unloaded mesh) and the contact-switch energy "
+                                  "is 0: it cannot scale the range; give absolute energies "
+                                  "(energy_unit = \"absolute\") or a static load")

@@ -15,9 +15,37 @@ from dataclasses import dataclass
 
 from .base import ConfigError, spec
 
-__all__ = ["RunupConfig"]
+__all__ = ["RunupConfig", "MAX_RUNUP_BYTES", "gearbox_orders"]
 
 _RAMP = ("rpm_start", "rpm_end", "rate")
+
+#: bytes of the result per sample: time, profile and held speed, phase; per kept contact
+#: its deformation and rate (the run's peak, with the concatenation, is about twice this)
+_BYTES_PER_SAMPLE = 4 * 8
+_BYTES_PER_SAMPLE_ROW = 2 * 8
+#: the largest run-up result (all runs together) accepted: far above any run-up of minutes
+#: (gear_pair at 5 rpm/s over 800 rpm, up and down: 3.4 GB), far below a run of 1e7 s
+MAX_RUNUP_BYTES = 16 * 2**30
+
+
+def gearbox_orders(gearbox, mesh_orders) -> tuple[tuple[str, ...], tuple[float, ...], int]:
+    """(names, orders per driving-shaft revolution, teeth of the excitation mesh's gear_a)
+    from the [gearbox] config alone (speed ratios from the tooth counts, no FE model): each
+    mesh's ``mesh_orders`` harmonics (``G1_1x``) and 1x of each shaft (``driving_1x``)."""
+    shaft_p, gear_p = gearbox.speed_ratios()
+    names, orders = [], []
+    for m in gearbox.meshes:
+        ka = gearbox.gear_index(m.gear_a, "")
+        f1 = gearbox.gears[ka].teeth * abs(gear_p[ka])
+        for h in mesh_orders:
+            names.append(f"{m.name}_{h}x")
+            orders.append(float(h * f1))
+    for sh, p in zip(gearbox.shafts, shaft_p):
+        names.append(f"{sh.name}_1x")
+        orders.append(float(abs(p)))
+    teeth = (gearbox.gears[gearbox.gear_index(gearbox.meshes[0].gear_a, "")].teeth
+             if gearbox.meshes else 1)
+    return tuple(names), tuple(orders), int(teeth)
 
 
 @dataclass(frozen=True)
@@ -107,6 +135,63 @@ class RunupConfig:
         """With / without the inertia torque: the runs of each direction (the first is the
         main one)."""
         return (True, False) if self.inertia_torque == "both" else (bool(self.inertia_torque),)
+
+    def mesh_periods(self, gearbox) -> float:
+        """Mesh periods of ``meshes[0]`` in the profile as given: the integral of rpm dt / 60
+        x teeth x |speed ratio| of its gear_a (the profile is linear between its points, so
+        the trapezoidal rule is exact)."""
+        times, rpm = self.profile()
+        revs = sum((times[i + 1] - times[i]) * (rpm[i] + rpm[i + 1]) / 2.0
+                   for i in range(len(times) - 1)) / 60.0
+        if not gearbox.meshes:
+            return revs
+        _, gear_p = gearbox.speed_ratios()
+        ka = gearbox.gear_index(gearbox.meshes[0].gear_a, "")
+        return revs * gearbox.gears[ka].teeth * abs(gear_p[ka])
+
+    def check_gearbox(self, gearbox, path: str = "runup") -> float:
+        """The checks of the run-up against the [gearbox] config (no FE model needed; the
+        scene's validation runs them when it runs runup, so ``vibrogear check`` reports them):
+        a mesh to follow; a run of at least one whole mesh period (nothing to report below)
+        whose samples fit in memory (:data:`MAX_RUNUP_BYTES`, summed over the runs), else a
+        ConfigError naming ``runup.rate`` (or ``runup.table``); every tracked order (each
+        mesh's harmonics, each shaft's 1x) below the samples' Nyquist order, else one naming
+        ``runup.mesh_orders`` (an order above it would be read as its alias).  Returns the
+        run's length in mesh periods."""
+        p = f"{path}." if path else ""
+        if not gearbox.meshes:
+            raise ConfigError("gearbox.meshes", f"[{path}] follows the mesh deformations: "
+                              "the gearbox needs at least one mesh")
+        periods = self.mesh_periods(gearbox)
+        field = f"{p}table" if self.table is not None else f"{p}rate"
+        duration = self.profile()[0][-1]
+        if not periods >= 1.0:
+            raise ConfigError(field, f"the run lasts {duration:.3g} s: {periods:.3g} mesh "
+                              "periods, less than the one whole mesh period a run-up reports; "
+                              + ("a longer table" if self.table is not None else
+                                 "a slower rate or a wider speed range"))
+        runs = len(self.directions) * len(self.inertia_variants)
+        rows = len(gearbox.meshes)
+        need = runs * periods * self.samples_per_period * (
+            _BYTES_PER_SAMPLE + _BYTES_PER_SAMPLE_ROW * rows)
+        if need > MAX_RUNUP_BYTES:
+            raise ConfigError(field, f"the run lasts {duration:.4g} s: {periods:.4g} mesh "
+                              f"periods x {self.samples_per_period} samples x {rows} meshes x "
+                              f"{runs} runs need {need / 2**30:.3g} GiB; at most "
+                              f"{MAX_RUNUP_BYTES / 2**30:g} GiB: "
+                              + ("a shorter table" if self.table is not None else
+                                 "a faster rate or a narrower speed range")
+                              + " (or fewer samples_per_period)")
+        names, orders, teeth = gearbox_orders(gearbox, self.mesh_orders)
+        nyquist = self.samples_per_period * teeth / 2
+        for name, o in zip(names, orders):
+            if not o < nyquist:
+                raise ConfigError(f"{p}mesh_orders", f"order {name} ({o:g} per driving-shaft "
+                                  f"revolution) is not below the Nyquist order {nyquist:g} of "
+                                  f"samples_per_period = {self.samples_per_period} samples per "
+                                  f"mesh period ({teeth} mesh periods per revolution); raise "
+                                  "samples_per_period or drop the order")
+        return periods
 
     @property
     def rpm_range(self) -> tuple[float, float]:

@@ -97,6 +97,12 @@ class Scene:
             self.housing_sweep.housing_points(self.housing, "housing_sweep")
         if self.map is not None and self.gearbox is not None and "map" in self.scene.analyses:
             self.map.check_couplings(self.gearbox, "map")
+        # scene.analyses is the verb alone for `vibrogear runup` / `vibrogear nnm` (the CLI
+        # rebuilds the scene with it), so these also run for a verb the scene does not list
+        if self.runup is not None and self.gearbox is not None and "runup" in self.scene.analyses:
+            self.runup.check_gearbox(self.gearbox, "runup")
+        if self.nnm is not None and "nnm" in self.scene.analyses:
+            self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
         from .layout import check_layout        # checks across sections, in one place
         check_layout(self)
         if self.optimize is not None:           # the evaluated scene at the variables' bounds
