@@ -48,8 +48,10 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     from dolfinx import fem  # after _assemble, which sets XDG_CACHE_HOME before the first dolfinx import
 
     t0 = time.perf_counter()
+    coords = V.tabulate_dof_coordinates()[:V.dofmap.index_map.size_local] if solver.endswith("_gamg") else None
     lam, Vloc, reason, nconv, status, message, info = _eigensolve(
-        K, M, count=count, cutoff_hz=cutoff_hz, max_count=max_count, tol=tol, comm=comm, solver=solver)
+        K, M, count=count, cutoff_hz=cutoff_hz, max_count=max_count, tol=tol, comm=comm, solver=solver,
+        coords=coords)
     timings["eigensolve"] = time.perf_counter() - t0
     timings.update({f"eigensolve_{k}": v for k, v in info.pop("timings").items()})
     if comm.rank == 0:

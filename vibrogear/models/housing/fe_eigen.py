@@ -1,7 +1,8 @@
 """Housing FE model, stage 2 of 3: the generalized eigen-problem K x = omega^2 M x.
 
-Block Lanczos on the CHOLMOD / MUMPS factor of K (default) or SLEPc Krylov-Schur in
-shift-and-invert; the distributed products and solves they share.  PETSc and SLEPc are
+Block Lanczos on the CHOLMOD / MUMPS factor of K (default), or a SLEPc method of
+:mod:`.fe_slepc` on that factor or on the AMG solver of :mod:`.fe_iterative`; the distributed
+products and solves they share.  PETSc and SLEPc are
 imported inside functions (see :mod:`.fe`).
 """
 from __future__ import annotations
@@ -100,18 +101,35 @@ def _block_lanczos(K, M, F, comm, *, want, max_dim, tol):
         seed=20261122 + comm.rank)
 
 
-def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block"):
-    """Lowest modes of K x = lambda M x: Cholesky of K (shift 0), then block Lanczos (default) or
-    SLEPc Krylov-Schur with shift-and-invert at 0 (``solver = "krylovschur"``, and the fallback).
+def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block", coords=None):
+    """Lowest modes of K x = lambda M x.  ``solver``: ``"block"`` (block Lanczos on the Cholesky
+    factor of K, falling back to SLEPc Krylov-Schur on a breakdown) or a SLEPc method of
+    :data:`.fe_slepc.SLEPC_SOLVERS`, with the factor or, for the ``*_gamg`` ones, the AMG solver of
+    :mod:`.fe_iterative` (``coords``: the owned nodes' coordinates, for its rigid-body modes).
 
     Returns (lam, X local rows (n_own x m), converged reason, n converged, status, message, info)."""
+    from .fe_slepc import SLEPC_SOLVERS, slepc_eigensolve
+
     timings = {}
-    t0 = time.perf_counter()
-    ksp = _factor(K, comm)
-    timings["factorization"] = time.perf_counter() - t0
+    info = {"solver": solver}
     lam_cut = None if cutoff_hz is None else (2 * np.pi * cutoff_hz) ** 2
     status, message = "ok", ""
-    info = {"solver": solver, "package": ksp.getPC().getFactorSolverType()}
+    t0 = time.perf_counter()
+    ns = None
+    if solver != "block" and SLEPC_SOLVERS[solver][2] == "amg":
+        from .fe_iterative import amg_ksp
+
+        if coords is None:
+            raise HousingSolveError(f"solver {solver!r} needs the node coordinates (rigid-body modes)")
+        method = SLEPC_SOLVERS[solver][0]
+        ksp, ns = amg_ksp(K, coords, comm, inner="cg" if method == "krylovschur" else "preonly",
+                          rtol=min(1e-3 * tol, 1e-10))
+        timings["preconditioner_setup"] = time.perf_counter() - t0
+        info["package"] = ksp.getPC().getType()
+    else:
+        ksp = _factor(K, comm)
+        timings["factorization"] = time.perf_counter() - t0
+        info["package"] = ksp.getPC().getFactorSolverType()
     if solver == "block":
         nev = count if cutoff_hz is None else max_count
         flag = {}
@@ -144,74 +162,23 @@ def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block")
                 status, message = "truncated", (f"max_count = {max_count} modes all lie below cutoff_hz = "
                                                 f"{cutoff_hz:g}; raise housing.modes.max_count")
             nconv = len(lam)
-            if lam_cut is None and nconv < count:
-                ksp.destroy()
-                raise HousingSolveError(f"block Lanczos converged {nconv} of {count} modes")
             ksp.destroy()
+            if lam_cut is None and nconv < count:
+                raise HousingSolveError(f"block Lanczos converged {nconv} of {count} modes")
             info["timings"] = timings
             return lam, X, "CONVERGED_TOL", nconv, status, message, info
     t0 = time.perf_counter()
-    lam, X, rname, nconv, status, message = _krylov_schur(K, M, ksp, count=count, cutoff_hz=cutoff_hz,
-                                                          max_count=max_count, tol=tol, comm=comm)
+    try:
+        lam, X, rname, nconv, status, message, st = slepc_eigensolve(
+            K, M, ksp, method=solver, count=count, cutoff_hz=cutoff_hz, max_count=max_count, tol=tol,
+            comm=comm)
+    finally:
+        ksp.destroy()
+        if ns is not None:
+            ns.destroy()
     timings["iterations"] = time.perf_counter() - t0
-    ksp.destroy()
-    n = K.getLocalSize()[0]
-    Xloc = np.empty((n, len(X)), order="F")
-    for i, x in enumerate(X):
-        Xloc[:, i] = x.array
-        x.destroy()
+    info.update(st)
+    if status == "failed":
+        raise HousingSolveError(message)
     info["timings"] = timings
-    return lam, Xloc, rname, nconv, status, message, info
-
-
-def _krylov_schur(K, M, ksp, *, count, cutoff_hz, max_count, tol, comm):
-    """SLEPc shift-and-invert Krylov-Schur at sigma = 0 reusing the factored ``ksp``."""
-    from petsc4py import PETSc
-    from slepc4py import SLEPc
-
-    eps = SLEPc.EPS().create(comm)
-    eps.setOptionsPrefix(_PREFIX)
-    eps.setOperators(K, M)
-    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
-    eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
-    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
-    eps.setTarget(0.0)
-    eps.setPurify(False)  # Dirichlet rows are 1 in K, 0 in M: no leakage onto clamped DOF
-    eps.setTolerances(tol, 500)
-    st = eps.getST()
-    st.setType(SLEPc.ST.Type.SINVERT)
-    st.setShift(0.0)
-    st.setKSP(ksp)
-    eps.setFromOptions()
-    nev = count if cutoff_hz is None else min(20, max_count)
-    lam_cut = None if cutoff_hz is None else (2 * np.pi * cutoff_hz) ** 2
-    status, message = "ok", ""
-    while True:
-        eps.setDimensions(nev, PETSc.DECIDE, PETSc.DECIDE)
-        eps.solve()
-        nconv = eps.getConverged()
-        lam = np.array([eps.getEigenvalue(i).real for i in range(nconv)])
-        if lam_cut is None or nconv < nev or (lam.size and lam.max() >= lam_cut):
-            break
-        if nev >= max_count:
-            status, message = "truncated", (f"max_count = {max_count} modes all lie below cutoff_hz = "
-                                            f"{cutoff_hz:g}; raise housing.modes.max_count")
-            break
-        nev = min(2 * nev, max_count)
-    reason = SLEPc.EPS.ConvergedReason
-    rname = {getattr(reason, k): k for k in dir(reason) if not k.startswith("_")}.get(
-        eps.getConvergedReason(), str(eps.getConvergedReason()))
-    order = np.argsort(lam)
-    want = order[:nev] if lam_cut is None else [i for i in order if lam[i] < lam_cut][:max_count]
-    if lam_cut is None and nconv < count:
-        eps.destroy()
-        raise HousingSolveError(f"SLEPc converged {nconv} of {count} modes ({rname})")
-    X = []
-    for i in want:
-        x = K.createVecRight()
-        eps.getEigenpair(int(i), x)
-        X.append(x)
-    eps.destroy()
-    return lam[list(want)], X, rname, nconv, status, message
-
-
+    return lam, X, rname, nconv, status, message, info

@@ -80,8 +80,9 @@ def _rank(comm) -> int:
 
 def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
     """The cache key of a housing stage, the one place it is defined: ``"mesh"`` depends on
-    the geometry and mesh sizes only; ``"modes"`` and ``"matrices"`` on the whole housing
-    config (and share its hash)."""
+    the geometry and the resolved mesh sizes only; ``"modes"`` and ``"matrices"`` on the whole
+    housing config (``modes.solver`` and ``tol`` included) plus the resolved mesh sizes (and
+    share its hash)."""
     if stage == "mesh":
         geo = cfg.key_data()
         for k in ("material", "modes", "support", "foundation_stiffness"):
@@ -90,7 +91,11 @@ def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
         return cache_key("housing-mesh", geo)
     if stage not in ("modes", "matrices"):
         raise ValueError(f"unknown housing cache stage {stage!r}")
-    return cache_key(f"housing-{stage}", {**cfg.key_data(), "entry_format": CACHE_FORMAT})
+    # the resolved mesh sizes too: a changed default rule (mesh.size / bore_size left out) must
+    # give a new key, not the entry solved on the old default mesh
+    return cache_key(f"housing-{stage}", {**cfg.key_data(), "entry_format": CACHE_FORMAT,
+                                          "resolved_mesh": {"size": cfg.mesh_size,
+                                                            "bore_size": cfg.bore_mesh_size}})
 
 
 def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
