@@ -21,12 +21,13 @@ $(STAMP): pyproject.toml constraints.txt scripts/setup.sh
 ## main job on the default scene: the two-stage gearbox (paper Figs 1-2; docs/gearbox.md)
 demo: two-stage
 
-## the CI test suite (fast; slow cases: make test-slow)
+## the CI test suite (fast; slow cases: make test-slow), one worker process per core
+## (pytest-xdist; a test file stays on one worker, so its module fixtures are built once)
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n auto --dist loadfile
 
 test-slow: $(STAMP)
-	$(PY) -m pytest -m slow
+	$(PY) -m pytest -m slow -n auto --dist loadfile
 
 ## only the tests that start mpirun themselves (2 ranks; also part of `make test`)
 test-mpi: $(STAMP)
