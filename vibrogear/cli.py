@@ -129,13 +129,15 @@ def _main(argv: list[str] | None) -> int:
         return EXIT_OK
     from .runner import NumericalFailure, RunContext, WriteFailure, run_scene
 
-    from .pipeline.outcome import is_root_process
+    from .pipeline.outcome import LostUnits, is_root_process
+    from .pipeline.compile_notice import compile_notice
     from .pipeline.run_lock import FolderInUse, RunLock
 
     ctx = RunContext(out=out, quiet=args.quiet)
     _handle_stop_signals()
     try:
-        with RunLock(out, wait=args.wait, enabled=is_root_process()):
+        # compile_notice: a line on stderr while numba compiles (cold cache), unless --quiet
+        with RunLock(out, wait=args.wait, enabled=is_root_process()), compile_notice(args.quiet):
             summary = run_scene(scene, ctx, source=str(args.scene))
     except FolderInUse as exc:
         _error("invalid input", exc)
@@ -146,6 +148,9 @@ def _main(argv: list[str] | None) -> int:
               f"{out}/. Run the same command again to resume: points computed with the same "
               "physics, grid, options and version are reused.", file=sys.stderr)
         return _interrupted_code(exc)
+    except LostUnits as exc:                   # an MPI rank died; the others finished
+        _error("lost MPI rank", exc)
+        return EXIT_FAILED
     except NumericalFailure as exc:
         _error("numerical failure", exc)
         return EXIT_FAILED

@@ -154,7 +154,8 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             # HousingNumericalError), raised below the analyses; reported with the analysis name
             if not isinstance(exc, NumericalFailure):
                 exc = NumericalFailure(f"{name}: {exc}")
-            summary["results"][name] = {"status": "failed", "message": str(exc)}
+            summary["results"][name] = {"status": "failed", "message": str(exc),
+                                        **getattr(exc, "record", {})}   # LostUnits: what and how
             summary["status"] = "failed"
             failure = exc
         except (KeyboardInterrupt, SystemError) as exc:

@@ -122,6 +122,13 @@ def _mesh_force_run(model, param, u, meshes, periods, samples, options, force_un
             for k, idx in meshes.items()}, tr
 
 
+def _describe_unit(unit) -> str:
+    """A unit as a lost-rank message names it: load row, direction, speed range, points."""
+    row, scale, direction, indices, rpm, _p_first, _done = unit
+    return (f"load row {row} (scale {scale:.6g}), {direction} over {rpm[0]:.6g} .. "
+            f"{rpm[-1]:.6g} rpm (points {indices[0]}..{indices[-1]})")
+
+
 def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
     """One unit (row, scale, direction, indices, params, first speed, done): the points of
     one direction (piece) of one load row, each new one emitted as (row, record)."""
@@ -199,7 +206,7 @@ def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, optio
             callback(row, rec)
 
     run_units(partial(_walk, model, scaling, settings, kw, extra), units, workers=settings.workers,
-              on_result=on_result)
+              on_result=on_result, describe=_describe_unit)
     if under_mpi() and not root:
         return broadcast(None)
     records = {**done, **new}

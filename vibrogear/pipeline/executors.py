@@ -11,7 +11,10 @@ so it is the one writer of files.  The backend is chosen automatically:
   computes; rank 0 also coordinates (hands out units, receives the items) between its
   own items.  Every rank must call :func:`run_units` (collective).  An exception in ``fn``
   comes back to rank 0, re-raised as :class:`UnitError` on every rank after an orderly
-  shutdown; any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs.
+  shutdown; any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs.  A rank
+  that dies (under ``mpirun --enable-recovery``; Open MPI's default ends the whole job):
+  the others finish every other unit, then :class:`~.outcome.LostUnits` names the units it
+  left (see :mod:`.mpi_units`).
 * **processes** (``multiprocessing``, ``fork`` context) when ``workers > 1``; default
   ``workers = min(len(units), os.cpu_count())``.  Items come back through a queue;
   an exception in a worker (or a worker that dies) stops the others and raises
@@ -31,7 +34,7 @@ import queue as _queue
 import signal
 import traceback
 
-from .units_base import (UnitError, _comm, _deliver, _run_serial, _transportable, in_unit,
+from .units_base import (UnitError, _deliver, _run_serial, _transportable, in_unit, is_root, under_mpi,
                          inside_unit, deferred_stop, raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
@@ -40,23 +43,13 @@ __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backe
 log = logging.getLogger(__name__)
 
 
-def under_mpi() -> bool:
-    """True under ``mpirun`` with more than one rank (environment only; no import)."""
-    size = os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))
-    try:
-        return int(size) > 1
-    except ValueError:
-        return False
-
-
-def is_root() -> bool:
-    """True except on the MPI ranks other than 0."""
-    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"
-
-
 def broadcast(value):
-    """``value`` from rank 0 on every rank under MPI; ``value`` itself otherwise."""
-    return _comm().bcast(value, root=0) if under_mpi() else value
+    """``value`` from rank 0 on every rank under MPI (every live rank, if one was lost);
+    ``value`` itself otherwise."""
+    if not under_mpi():
+        return value
+    from .mpi_units import bcast
+    return bcast(value)
 
 
 def blas_threads(n: int):
@@ -83,7 +76,8 @@ def backend_for(n_units: int, workers: int | None = None) -> str:
     return "processes" if w > 1 else "serial"
 
 
-def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=None) -> list:
+def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=None,
+              describe=None) -> list:
     """Run ``fn(unit, emit)`` for every unit; returns the list of ``fn``'s return values
     in unit order (None for units left unfinished after a stop).  ``on_result(i, item)``
     receives every emitted item in the coordinating process; returning ``False`` stops.
@@ -94,7 +88,9 @@ def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=No
     Units are handed out dynamically (a free process or rank takes the next one); with
     ``costs`` (one estimate per unit, any scale) the costliest go first, so that the
     short ones fill the end (longest-processing-time order).  Serial runs keep unit
-    order.  The results never depend on the order."""
+    order.  The results never depend on the order.  ``describe(unit) -> str`` names a unit
+    for the user (e.g. its parameter values) where one is reported lost with its MPI rank
+    (:class:`~.outcome.LostUnits`); without it, units are named by their index."""
     units = list(units)
     if workers is not None and int(workers) < 1:
         raise ValueError("run_units: workers must be >= 1 (or None: all cores)")
@@ -107,7 +103,7 @@ def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=No
     kind = backend_for(len(units), workers)
     if kind == "mpi":
         from .mpi_units import run_mpi
-        return run_mpi(fn, units, on_result, order)
+        return run_mpi(fn, units, on_result, order, describe)
     if kind == "processes":
         w = default_workers(len(units)) if workers is None else min(int(workers), len(units))
         return _run_processes(fn, units, w, on_result, order)

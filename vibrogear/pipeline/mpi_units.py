@@ -2,7 +2,33 @@
 rank 0 also coordinates (hands out units, receives the items) between its own items.  An
 exception in ``fn`` comes back to rank 0 and is re-raised as
 :class:`~vibrogear.pipeline.executors.UnitError` on every rank after an orderly shutdown;
-any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs."""
+any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs.
+
+**A lost rank** (killed, out of memory, a crash in compiled code).  Open MPI's ``mpirun``
+ends the whole job when one rank dies (SIGTERM to the others about 1 s later, SIGKILL 1 s
+after that), unless started with ``--enable-recovery``; either way every item rank 0
+received is already in the caller's partial file.  Under ``--enable-recovery`` the others
+go on (mpirun 4.1 then exits 0 whatever the ranks return: the run's status is in its
+message and ``summary.json``):
+
+* rank 0 notices the loss (it checks the pids of the ranks on its node while it waits and
+  between its own items), never talks to that rank again, gives the units it had queued
+  but not started to the others (itself included), and names the unit it was computing:
+  that unit's finished items are kept, the rest is not retried in this run (the unit may be
+  what killed the rank).  Once every other unit is done, :class:`LostUnits` (exit 1) is
+  raised on every live rank, naming the lost units; the same command resumes them.
+* a rank that loses rank 0 (the one that writes the files) raises :class:`LostUnits` at once.
+
+Every message to or from a rank that may die is non-blocking and polled with that check
+(a blocking call on a dead rank never returns), the final result and
+:func:`~vibrogear.pipeline.executors.broadcast` go point to point to the live ranks, and
+once a rank is lost MPI_Finalize gets a time limit at exit (Open MPI sometimes never
+returns from it then).  A rank on another node than the one watching it cannot be checked
+(it counts as alive, and rank 0 would wait for its unit): use ``--enable-recovery`` with
+every rank on one node.
+
+Test hook: ``VIBROGEAR_TEST_LOSE_RANK=R:N`` makes rank ``R`` kill itself (SIGKILL) right
+after it has handed over its ``N``-th item (tests/unit/test_mpi_lost_rank.py)."""
 from __future__ import annotations
 
 import logging
@@ -10,39 +36,51 @@ import os
 import time
 import traceback
 
+from .mpi_peers import (_AHEAD, _CHECK_S, _CTRL, _DATA, _LOST, _PEERS, _RESULT, _STOP,
+                        _mark_lost, _peers, _recv_root, _root_lost, _RootLost, _send, _test_hook,
+                        _wait, alive, bcast)
+from .outcome import LostUnits
 from .units_base import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable, in_unit
 
-__all__ = ["run_mpi"]
+__all__ = ["run_mpi", "bcast", "alive", "LostUnits"]
 
 log = logging.getLogger(__name__)
 
-_CTRL, _DATA, _STOP = 11, 12, 13
-#: units queued at a computing rank while enough are left (no rank waits for rank 0,
-#: which computes too and answers only between its own items)
-_AHEAD = 2
-
-
-def run_mpi(fn, units, on_result, order) -> list:
+def run_mpi(fn, units, on_result, order, describe=None) -> list:
     """The MPI backend of :func:`~.executors.run_units` (see its module docstring)."""
     comm = _comm()
     try:
         if comm.size < 2:
             return _run_serial(fn, units, on_result)
+        _peers(comm)
         if comm.rank == 0:
-            outcome = _MpiRoot(comm, fn, units, on_result, order).run()
+            root = _MpiRoot(comm, fn, units, on_result, order, describe)
+            outcome = root.run()
+            for r in root.workers:
+                if r not in _LOST and not _send(comm, outcome, r, _RESULT):
+                    _mark_lost(r)
         else:
-            _mpi_worker(comm, fn)
-            outcome = None
-        outcome = comm.bcast(outcome, root=0)
+            try:
+                _mpi_worker(comm, fn)
+                outcome = _recv_root(comm, _RESULT)
+            except _RootLost:
+                raise _root_lost() from None
+            for r in outcome["lost_ranks"]:
+                _mark_lost(r)
+    except LostUnits:
+        raise
     except BaseException:                       # noqa: BLE001 - never leave mpirun hanging
         log.critical("[rank %d] work-unit executor failed; aborting all ranks", comm.rank,
                      exc_info=True)
         comm.Abort(1)
         raise
-    if outcome[0] == "error":
-        _, i, text, exc = outcome
+    if outcome["error"] is not None:
+        i, text, exc = outcome["error"]
         raise UnitError(i, text, exc)
-    return outcome[1]
+    if outcome["lost_units"]:
+        raise LostUnits(outcome["message"], {"lost_ranks": outcome["lost_ranks"],
+                                             "lost_units": outcome["lost_units"]})
+    return outcome["results"]
 
 
 class _MpiRoot:
@@ -51,31 +89,48 @@ class _MpiRoot:
     delivers every item to ``on_result``.  ``on_result`` returning False interrupts every
     rank's unit (tag _STOP) and skips the queued ones; an error lets the units already
     handed out (at most _AHEAD per rank) finish, their items delivered; then every rank
-    ends (_CTRL)."""
+    ends (_CTRL).  A lost rank: see the module docstring."""
 
-    def __init__(self, comm, fn, units, on_result, order):
+    def __init__(self, comm, fn, units, on_result, order, describe):
         from collections import deque
         from mpi4py import MPI
 
         self.comm, self.fn, self.units, self.on_result = comm, fn, units, on_result
+        self.describe = describe
         self.todo, self.results = deque(order), [None] * len(units)
         self.workers = range(1, comm.size)
-        self.active, self.queued = set(self.workers), {r: 0 for r in self.workers}
-        self.ended: set[int] = set()            # ranks sent the final _CTRL stop
+        self.active = {r for r in self.workers if r not in _LOST}   # not yet said "bye"
+        self.queued = {r: deque() for r in self.workers}   # units sent, not finished
+        self.running: dict[int, int | None] = {r: None for r in self.workers}
+        self.items = [0] * len(units)            # items delivered per unit
+        self.ended: set[int] = set(_LOST)        # ranks sent the final _CTRL stop (or gone)
+        self.lost: list[tuple[int, int]] = []    # (rank, unit it was computing)
         self.stopping = self.interrupted = False   # interrupted: on_result asked to stop
         self.error, self.status, self.any_source = None, MPI.Status(), MPI.ANY_SOURCE
+        self.next_check = time.monotonic() + _CHECK_S
+
+    # ------------------------------------------------------------ messages
+
+    def to(self, r, obj, tag=_CTRL) -> bool:
+        if r in _LOST:
+            return False
+        if _send(self.comm, obj, r, tag):
+            return True
+        self.lose(r)
+        return False
 
     def feed(self, r):
         if self.stopping or r in self.ended:
             return
-        while self.todo and (self.queued[r] == 0 or (
-                self.queued[r] < _AHEAD and len(self.todo) > self.comm.size)):
+        while self.todo and (not self.queued[r] or (
+                len(self.queued[r]) < _AHEAD and len(self.todo) > self.comm.size)):
             i = self.todo.popleft()
-            self.comm.send(("unit", i, self.units[i]), dest=r, tag=_CTRL)
-            self.queued[r] += 1
+            self.queued[r].append(i)
+            if not self.to(r, ("unit", i, self.units[i])):
+                return                          # lose() gave i back to todo
         if not self.todo:
             self.ended.add(r)
-            self.comm.send(("stop",), dest=r, tag=_CTRL)
+            self.to(r, ("stop",))
 
     def stop(self, interrupt: bool = True):
         if self.stopping:
@@ -84,41 +139,122 @@ class _MpiRoot:
         self.todo.clear()
         for r in sorted(self.active):
             if interrupt:
-                self.comm.send(("stop",), dest=r, tag=_STOP)
+                self.to(r, ("stop",), _STOP)
             if r not in self.ended:
                 self.ended.add(r)
-                self.comm.send(("stop",), dest=r, tag=_CTRL)
+                self.to(r, ("stop",))
+
+    def deliver(self, i, item):
+        self.items[i] += 1
+        if not self.interrupted and not _deliver(self.on_result, i, item):
+            self.stop()
+
+    def handle(self, r, msg):
+        kind = msg[0]
+        if kind == "bye":
+            self.active.discard(r)
+        elif kind == "start":
+            self.running[r] = msg[1]
+        elif kind == "item":
+            self.deliver(msg[1], msg[2])
+        elif kind in ("done", "error"):
+            i = msg[1]
+            self.running[r] = None
+            if i in self.queued[r]:
+                self.queued[r].remove(i)
+            if kind == "done":
+                self.results[i] = msg[2]
+                self.feed(r)
+            else:
+                if self.error is None:
+                    self.error = (i, msg[2], msg[3])
+                self.stop(interrupt=False)
+
+    def receive(self, source) -> bool:
+        """Receive and handle one message from ``source`` (a rank or ANY_SOURCE) if there
+        is one; False if none (or its sender died while it came)."""
+        m = self.comm.improbe(source=source, tag=_DATA, status=self.status)
+        if m is None:
+            return False
+        r = self.status.Get_source()
+        ok, msg = _wait(m.irecv(), r)
+        if not ok:
+            self.lose(r)
+            return False
+        self.handle(r, msg)
+        return True
 
     def serve(self, block: bool):
-        """Handle the pending messages (at least one when ``block``)."""
+        """Handle the pending messages (at least one, or a lost rank, when ``block``)."""
         while True:
-            if not self.comm.iprobe(source=self.any_source, tag=_DATA, status=self.status):
-                if not block:
-                    return
-                time.sleep(0.002)               # leave the cores to the computing ranks
+            if self.receive(self.any_source):
+                block = False
                 continue
-            block = False
-            r = self.status.Get_source()
-            msg = self.comm.recv(source=r, tag=_DATA)
-            kind = msg[0]
-            if kind == "bye":
-                self.active.discard(r)
-            elif kind == "item":
-                if not self.interrupted and not _deliver(self.on_result, msg[1], msg[2]):
-                    self.stop()
-            elif kind == "done":
-                self.results[msg[1]] = msg[2]
-                self.queued[r] -= 1
-                self.feed(r)
-            elif kind == "error":
-                if self.error is None:
-                    self.error = ("error", msg[1], msg[2], msg[3])
-                self.stop(interrupt=False)
+            if self.watch() or not block:
+                return
+            time.sleep(0.002)                   # leave the cores to the computing ranks
+
+    # ------------------------------------------------------------ lost ranks
+
+    def watch(self) -> bool:
+        """Check (every _CHECK_S) that the ranks still working are alive; True if one was
+        lost now."""
+        now = time.monotonic()
+        if now < self.next_check:
+            return False
+        self.next_check = now + _CHECK_S
+        gone = [r for r in sorted(self.active) if not alive(r)]
+        for r in gone:
+            self.lose(r)
+        return bool(gone)
+
+    def lose(self, r):
+        """Rank ``r`` is gone: its running unit is lost, its queued ones go back to todo."""
+        if r in _LOST:
+            return
+        _mark_lost(r)
+        self.active.discard(r)
+        self.ended.add(r)
+        while self.receive(r):                  # what it sent before it died counts
+            pass
+        i = self.running[r]
+        if i is not None and i in self.queued[r]:
+            self.queued[r].remove(i)
+            self.lost.append((r, i))
+        if not self.stopping:
+            self.todo.extendleft(reversed(self.queued[r]))
+        self.queued[r].clear()
+        host, pid = _PEERS[r]
+        log.error("rank %d (pid %s on %s) was lost%s; the other ranks go on", r, pid, host,
+                  f" while computing work unit {i}" if i is not None else "")
+
+    def label(self, i) -> str:
+        text = f"work unit {i} of {len(self.units)}"
+        if self.describe is not None:
+            try:
+                text = f"{self.describe(self.units[i])} ({text})"
+            except Exception:                   # noqa: BLE001 - a label never fails a run
+                pass
+        return text
+
+    def lost_report(self) -> tuple[list, str]:
+        units = [{"unit": i, "rank": r, "host": _PEERS[r][0], "pid": _PEERS[r][1],
+                  "label": self.label(i), "items_kept": self.items[i]} for r, i in self.lost]
+        ranks = sorted({r for r, _ in self.lost})
+        parts = [f"{u['label']} on rank {u['rank']} (results of it kept: {u['items_kept']})"
+                 for u in units]
+        msg = (f"MPI rank{'s' if len(ranks) > 1 else ''} {', '.join(map(str, ranks))} "
+               f"{'were' if len(ranks) > 1 else 'was'} lost mid-run; the other ranks finished "
+               f"every other unit. Not computed: {'; '.join(parts)}. Run the same command "
+               "again to compute them: finished results are reused")
+        return units, msg
+
+    # ------------------------------------------------------------ rank 0's run
 
     def own_unit(self, i):
         def emit(item):
-            if not self.interrupted and not _deliver(self.on_result, i, item):
-                self.stop()
+            self.deliver(i, item)
+            _test_hook(0)
             self.serve(block=False)
             if self.interrupted:
                 raise _Stop
@@ -130,10 +266,10 @@ class _MpiRoot:
             pass
         except Exception as exc:                # noqa: BLE001 - ends every rank as a worker's
             if self.error is None:
-                self.error = ("error", i, traceback.format_exc(), _transportable(exc))
+                self.error = (i, traceback.format_exc(), _transportable(exc))
             self.stop(interrupt=False)
 
-    def run(self):
+    def run(self) -> dict:
         for r in self.workers:
             self.feed(r)
         while self.active or self.todo:         # a stop empties todo
@@ -143,12 +279,19 @@ class _MpiRoot:
                 if not self.todo:
                     for r in self.workers:
                         self.feed(r)            # the last units are out: end the idle ranks
-        return self.error if self.error is not None else ("ok", self.results)
+        lost_units, message = self.lost_report() if self.lost and not self.interrupted \
+            else ([], "")
+        return {"results": self.results, "error": self.error, "lost_units": lost_units,
+                "message": message, "lost_ranks": sorted(_LOST)}
 
 
 def _mpi_worker(comm, fn) -> None:
     os.environ["OPENBLAS_NUM_THREADS"] = "1"
     stopping = False
+
+    def send(msg) -> None:
+        if not _send(comm, msg, 0, _DATA):
+            raise _RootLost
 
     def interrupted() -> bool:                  # a pending interrupt (tag _STOP), received
         if comm.iprobe(source=0, tag=_STOP):
@@ -157,20 +300,22 @@ def _mpi_worker(comm, fn) -> None:
         return False
 
     while True:
-        msg = comm.recv(source=0, tag=_CTRL)
+        msg = _recv_root(comm, _CTRL)
         if msg[0] == "stop":
             while interrupted():                # nothing left unreceived
                 pass
-            comm.send(("bye",), dest=0, tag=_DATA)
+            send(("bye",))
             return
         _, i, unit = msg
         stopping = stopping or interrupted()
         if stopping:
             continue                            # a queued unit after an interrupt
+        send(("start", i))
 
         def emit(item, i=i):
             nonlocal stopping
-            comm.send(("item", i, item), dest=0, tag=_DATA)
+            send(("item", i, item))
+            _test_hook(comm.rank)
             if interrupted():
                 stopping = True
                 raise _Stop
@@ -181,7 +326,6 @@ def _mpi_worker(comm, fn) -> None:
         except _Stop:                           # interrupted (stopping is set)
             continue
         except Exception as exc:                # noqa: BLE001 - sent back to rank 0
-            comm.send(("error", i, traceback.format_exc(), _transportable(exc)), dest=0,
-                      tag=_DATA)
+            send(("error", i, traceback.format_exc(), _transportable(exc)))
             continue
-        comm.send(("done", i, out), dest=0, tag=_DATA)
+        send(("done", i, out))

@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .executors import is_root
-from .units_base import Terminated, clear_stop, raise_if_stopped, request_stop  # noqa: F401
+from .units_base import Terminated, clear_stop, is_root, raise_if_stopped, request_stop  # noqa: F401
 from .progress import Progress
 
-__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "Terminated", "WriteFailure",
+__all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "LostUnits", "Terminated",
+           "WriteFailure",
            "is_root_process", "request_stop", "raise_if_stopped", "clear_stop"]
 
 
@@ -35,6 +35,18 @@ class WriteFailure(RuntimeError):
 class NumericalFailure(RuntimeError):
     """A numerical failure that could not be recovered (exit code 1); the message says
     where and why."""
+
+
+class LostUnits(NumericalFailure):
+    """An MPI rank died mid-run (:mod:`vibrogear.pipeline.mpi_units`): the other ranks
+    finished every other unit; the message names the units left uncomputed and says how to
+    resume (exit code 1, what finished is kept).  ``record``: the same for ``summary.json``
+    (``lost_ranks``, ``lost_units`` with each unit's label and rank, ``resume``)."""
+
+    def __init__(self, message: str, record: dict | None = None):
+        super().__init__(message)
+        self.record = {**(record or {}), "resume": "run the same command again: finished "
+                       "results are reused, the lost units are computed"}
 
 
 #: True except on the MPI ranks other than 0 (only rank 0 writes files)

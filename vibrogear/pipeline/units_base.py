@@ -5,9 +5,11 @@ transport of an exception between processes.  Its own module so that
 backend) import it and not each other."""
 from __future__ import annotations
 
+import os
 from contextlib import contextmanager
 
 __all__ = ["UnitError", "in_unit", "inside_unit", "Terminated", "request_stop", "raise_if_stopped",
+           "under_mpi", "is_root",
            "clear_stop", "deferred_stop", "stop_deferred"]
 
 #: units of a parallel run_units (a worker process or an MPI rank) running in this process
@@ -126,3 +128,17 @@ def raise_if_stopped() -> None:
 
 def clear_stop() -> None:
     _PENDING.clear()
+
+
+def under_mpi() -> bool:
+    """True under ``mpirun`` with more than one rank (environment only; no import)."""
+    size = os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))
+    try:
+        return int(size) > 1
+    except ValueError:
+        return False
+
+
+def is_root() -> bool:
+    """True except on the MPI ranks other than 0."""
+    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"

@@ -127,6 +127,13 @@ def sweep_units(n_params: int, directions=DIRECTIONS, segments: int = 1) -> list
     return out
 
 
+def _describe_unit(param_name: str, unit) -> str:
+    """A unit as a lost-rank message names it: direction, parameter range, point indices."""
+    direction, indices, params, _seed, _done = unit
+    return (f"{direction} walk over {param_name} = {params[0]:.6g} .. {params[-1]:.6g} "
+            f"(points {indices[0]}..{indices[-1]})")
+
+
 def _walk_unit(model, settings, kw, unit, emit) -> int:
     """Walk one unit (direction, indices, params, seed, done): each new point goes to
     ``emit``; done points are skipped and their end states seed the next point."""
@@ -201,7 +208,8 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
     # shorter; the longest go first, the short ones fill the end)
     run_units(partial(_walk_unit, model, settings, kw), todo, workers=settings.workers,
               on_result=on_result,
-              costs=[len(u[1]) - len(u[4]) for u in todo])
+              costs=[len(u[1]) - len(u[4]) for u in todo],
+              describe=partial(_describe_unit, model.param_name))
     if under_mpi() and not is_root():
         return broadcast(None)                  # rank 0's result, identical everywhere
     records = [r for d, idx in layout for i in idx
