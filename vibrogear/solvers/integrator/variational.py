@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from .jacobian import accel_dparam, jac_times, jac_times_blas
-from .kernels import FAST, harmonics
+from .jacobian import accel_dparam, jac_times, jac_times_blas, row_axpy_1d
+from .kernels import harmonics
 from .tableau import DP_A, DP_B, DP_C
 
 __all__ = ["BLAS_MIN_WORK", "variational_step", "saltation"]
@@ -26,22 +26,22 @@ __all__ = ["BLAS_MIN_WORK", "variational_step", "saltation"]
 BLAS_MIN_WORK = 4096
 
 
-@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
+@njit(cache=True, _nrt=False, inline="always")
 def _stage_input(s, h, Phi, KP, Ph):
-    """Ph = Phi + h sum_{k < s} a_sk KP[k], entry by entry (the same operations per entry
-    as one whole-matrix axpy per stage, so the same numbers; scalar indexing, no row
-    views: a view costs more than a short row's products)."""
+    """Ph = Phi + h sum_{k < s} a_sk KP[k], row by row (the same operations per entry as
+    one whole-matrix axpy per stage, so the same numbers, with one pass over memory)."""
     for i in range(Phi.shape[0]):
-        for c in range(Phi.shape[1]):
-            acc = Phi[i, c]
-            for k in range(s):
-                a = h * DP_A[s, k]
-                if a != 0.0:
-                    acc += a * KP[k, i, c]
-            Ph[i, c] = acc
+        phr = Ph[i]
+        pir = Phi[i]
+        for c in range(phr.shape[0]):
+            phr[c] = pir[c]
+        for k in range(s):
+            a = h * DP_A[s, k]
+            if a != 0.0:
+                row_axpy_1d(a, KP[k, i], phr)
 
 
-@njit(cache=True, fastmath=FAST)
+@njit(cache=True)
 def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, cdS, cs, sn,
                      dfp, tmp, W, WS, use_blas, pcol):
     """Advance Phi (columns of [d u / d u0, d u / d param]; ``pcol``: the index of the
@@ -61,20 +61,12 @@ def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, c
                          tmp)
             for i in range(n):
                 KP[s, i, pcol] += dfp[i]
-    _combine(h_used, Phi, KP)
-
-
-@njit(cache=True, _nrt=False, inline="always", fastmath=FAST)
-def _combine(h, Phi, KP):
-    """Phi += h sum_k b_k KP[k] (entry by entry, as :func:`_stage_input`)."""
-    for i in range(Phi.shape[0]):
-        for c in range(Phi.shape[1]):
-            acc = Phi[i, c]
-            for k in range(6):
-                a = h * DP_B[k]
-                if a != 0.0:
-                    acc += a * KP[k, i, c]
-            Phi[i, c] = acc
+    for i in range(n):
+        pir = Phi[i]
+        for k in range(6):
+            a = h_used * DP_B[k]
+            if a != 0.0:
+                row_axpy_1d(a, KP[k, i], pir)
 
 
 @njit(cache=True, _nrt=False)
