@@ -14,6 +14,7 @@ Newton iteration starts from the predictor as before.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
 from .branch import PseudoArclength
 from .shooting import PeriodicFlow, periodic_flow, periodic_residual, residual_norm
@@ -90,9 +91,11 @@ class CorrectorProblem:
 def tangent(J: np.ndarray, prev: np.ndarray | None, nz: int | None = None) -> np.ndarray:
     """Unit null vector of the bordered Jacobian, its z = (u0, p) part (the leading ``nz``
     entries, default ``prev.size``; the k multipliers' entries are zero on a family),
-    oriented along ``prev``."""
-    _, _, vt = np.linalg.svd(J)
-    t = vt[-1][:prev.size if nz is None else nz]
+    oriented along ``prev``.  J (r x (r + 1)) has full row rank on a regular branch: the
+    last column of the full Q of J^T = Q R is orthogonal to every row of J (a QR costs a
+    third of the SVD: 3.6 against 11 ms at 292 states)."""
+    q, _ = scipy.linalg.qr(J.T, mode="full")
+    t = q[:, -1][:prev.size if nz is None else nz]
     if prev is not None and t @ prev < 0:
         t = -t
     return t / np.linalg.norm(t)
