@@ -32,7 +32,9 @@ from vibrogear.analyses.study import build_study, integration_options  # noqa: E
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.config.options import SweepOptions  # noqa: E402
 from vibrogear.solvers.integrator.integrate import integrate  # noqa: E402
-from vibrogear.solvers.sequential.sweep_point import PHASES, run_point  # noqa: E402
+from vibrogear.solvers.sequential.sweep_point import run_point  # noqa: E402
+
+PHASES = ("transient", "record", "lyapunov", "orbit_check", "metrics", "second_tolerance")
 
 
 def main(argv=None) -> dict:
@@ -67,7 +69,7 @@ def main(argv=None) -> dict:
         point_wall += w
         bare_wall += b
         periods += k
-        for ph, v in rec.timings.items():
+        for ph, v in getattr(rec, "timings", {}).items():   # (absent before 2026-11-25)
             split[ph] += v
         rows.append({"param": float(p), "wall_s": w, "bare_s": b, "periods": k,
                      "class": int(rec.motion_class), "settled_by": rec.settled_by})

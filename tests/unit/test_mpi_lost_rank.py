@@ -118,6 +118,7 @@ def test_a_sweep_that_loses_a_rank_names_the_unit_and_the_same_command_completes
     assert rec["resumed_points"] == kept and rec["points"] == 32
 
 
+@pytest.mark.slow   # the sweep case covers the same path in CI
 def test_a_map_that_loses_a_rank_names_the_unit_and_the_same_command_completes(tmp_path):
     _, rec = _lost_then_resumed(tmp_path, MAP, "map.partial.jsonl", total=12, unit_len=3,
                                 npz="map.npz")
@@ -139,6 +140,7 @@ def test_losing_rank_0_ends_the_others_without_a_hang_and_resumes(tmp_path):
     assert rec["resumed_points"] == len(lines) - 1 and rec["points"] == 32
 
 
+@pytest.mark.slow   # the sweep case covers the same path in CI
 def test_without_recovery_mpirun_ends_the_job_and_the_same_command_completes(tmp_path):
     """Open MPI's default: a rank's death ends the job (the others get SIGTERM, then SIGKILL,
     within about 2 s), mpirun exits non-zero; every point rank 0 received is in the partial
