@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_cases import cases, cli_args
+
 from vibrogear.analyses import operating_map
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
@@ -33,10 +35,7 @@ WRITTEN = ("qmin", "qmax", "impacts_drive_G1", "impacts_back_G1", "rattle_G1",
 
 
 def _args(verb, out, overrides):
-    args = [verb, GEAR_PAIR, "--quiet", "--out", str(out)]
-    for o in overrides:
-        args += ["--set", o]
-    return args
+    return cli_args(verb, GEAR_PAIR, out, overrides)
 
 
 # ------------------------------------------------------------------ rejected input (exit 2)
@@ -179,15 +178,7 @@ VALID = [
 ]
 
 
-def _cases(table):
-    """pytest.param entries (the slow ones) keep their marks; the id is the first value."""
-    out = []
-    for c in table:
-        if hasattr(c, "values"):
-            out.append(pytest.param(*c.values[1:], marks=c.marks, id=c.values[0]))
-        else:
-            out.append(pytest.param(*c[1:], id=c[0]))
-    return out
+_cases = cases
 
 
 @pytest.mark.parametrize("overrides, check", _cases(VALID))

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_cases import cli_args
+
 from vibrogear.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -30,11 +32,7 @@ UNLOADED = ["gearbox.couplings[0].twist=0", "gearbox.couplings[1].twist=0"]
 BRANCH_STATUS = ("left_range", "max_points", "ds_too_small")
 
 
-def _args(verb, scene, out, overrides):
-    args = [verb, scene, "--quiet", "--out", str(out)]
-    for o in overrides:
-        args += ["--set", o]
-    return args
+_args = cli_args
 
 
 # ------------------------------------------------------------------ rejected input (exit 2)

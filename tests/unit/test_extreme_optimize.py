@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pytest
 
+from cli_cases import cli_args
+
 from vibrogear.analyses.optimize import F_CAP, penalised
 from vibrogear.cli import main
 from vibrogear.config import load_scene
@@ -78,11 +80,7 @@ def scene(tmp_path) -> str:
     return str(p)
 
 
-def _args(verb, scene, out, overrides):
-    args = [verb, scene, "--quiet", "--out", str(out)]
-    for o in overrides:
-        args += ["--set", o]
-    return args
+_args = cli_args
 
 
 # ------------------------------------------------------------------ rejected input (exit 2)

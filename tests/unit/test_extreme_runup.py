@@ -15,6 +15,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from cli_cases import cases, cli_args
+
 from vibrogear.cli import main
 from vibrogear.config.scene import read_toml
 from vibrogear.report.optimize_report import toml_text
@@ -36,11 +38,7 @@ def table_scene(tmp_path_factory) -> str:
     return str(p)
 
 
-def _args(verb, scene, out, overrides):
-    args = [verb, scene, "--quiet", "--out", str(out)]
-    for o in overrides:
-        args += ["--set", o]
-    return args
+_args = cli_args
 
 
 # ------------------------------------------------------------------ rejected input (exit 2)
@@ -257,14 +255,7 @@ VALID = [
 ]
 
 
-def _cases(table):
-    out = []
-    for c in table:
-        if hasattr(c, "values"):
-            out.append(pytest.param(*c.values[1:], marks=c.marks, id=c.values[0]))
-        else:
-            out.append(pytest.param(*c[1:], id=c[0]))
-    return out
+_cases = cases
 
 
 @pytest.mark.parametrize("overrides, check, hi", _cases(VALID))

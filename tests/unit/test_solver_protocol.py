@@ -177,7 +177,7 @@ def test_every_solver_result_shows_one_outcome(orbit):
     """Integration, static equilibrium, shooting, Lyapunov, run-up, sweep, continuation,
     rotor modes and Campbell: the same five fields; the status is the result's own, the
     counters are the result's own numbers."""
-    from tests.rotor_fixtures import friswell_two_disc
+    from rotor_fixtures import friswell_two_disc
     from vibrogear.config.options import SweepOptions
     from vibrogear.solvers.periodic.shooting import shoot
     from vibrogear.solvers.rotor.campbell import campbell_diagram
