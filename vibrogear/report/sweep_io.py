@@ -14,7 +14,8 @@
   ``unloaded_<bearing>``), each with an ``_err`` companion (batch means over blocks of the
   record) and, with ``[sweep] second_tolerance``, a ``_tol_err`` companion (the change when
   the record window is integrated again at rtol / 10 from the same state; also
-  ``qmin_tol_err`` / ``qmax_tol_err``).  The spectral evidence of the class, from the
+  ``qmin_tol_err`` / ``qmax_tol_err``; not on chaotic points, where ``tol_err_measured`` is 0
+  and the ``_tol_err`` values are written as 0: read them with that flag).  The spectral evidence of the class, from the
   record's stroboscopic samples ``poincare`` (one per excitation period;
   :func:`~vibrogear.solvers.sequential.spectral_lines.stroboscopic_evidence`):
   ``base_f2_order``, a quasi-periodic point's two base frequencies being the excitation

@@ -9,8 +9,8 @@ periods T, so its end state is again at phase 0.
 
   - the stroboscopic map has converged: the last max_period + 2 samples have a period
     n <= max_period within ``period_tol`` (:func:`~.motion.classify_period`), or
-  - the statistics have settled (``settle``): with windows of W = max(record_periods,
-    ``SETTLE_WINDOW``) periods, the mean and the standard deviation of the monitored
+  - the statistics have settled (``settle``): with windows of W = ``settle_window``
+    (default max(record_periods, ``SETTLE_WINDOW``)) periods, the mean and the standard deviation of the monitored
     deformation (8 samples per period) over the last two windows differ by at most
     ``SETTLE_TOL`` of its range, and over the last three windows the distance of the
     stroboscopic samples from the nearest period (:func:`~.motion.best_defect`) has not
@@ -38,9 +38,11 @@ periods T, so its end state is again at phase 0.
   error over blocks of the record window.
 * **Second tolerance** (``second_tolerance``): the record window again at rtol / 10 (atol /
   10) from the same settled state; the change of the extrema and of each metric is its
-  tolerance error (``<name>_tol_err`` in the metrics).  On a periodic point it estimates
-  the integration error; on a chaotic one the two records diverge and it is a sampling
-  difference of the same size as the batch-means error.
+  tolerance error (``<name>_tol_err`` in the metrics).  On a periodic or quasi-periodic
+  point it estimates the integration error.  On a chaotic point the two records would
+  diverge and differ by sampling alone, as much as the batch-means error says: it is not
+  run there (``_tol_err`` NaN, ``tol_err_measured`` = 0).
+* **Timings**: the wall time of each phase (:data:`PHASES`) in ``PointRecord.timings``.
 """
 from __future__ import annotations
 
