@@ -197,3 +197,24 @@ def test_runup_verb_writes_its_files(tmp_path):
             assert 0 < z[f"{d}_order_G1_G1_1x"].max() <= 0.5 * swing
     rows = (out / "runup.csv").read_text().splitlines()
     assert len(rows) == 1 + 2 * 333
+
+
+def test_a_continued_run_starts_with_the_proposed_step():
+    """integrate(first_step=h_next) of the run before: fewer steps than a fresh start from
+    the tiny default step, the same end state within the tolerance, and a bad first step
+    refused."""
+    from vibrogear.models.impact_pair import impact_pair_model
+    from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
+
+    model = impact_pair_model(0.05, 0.5, 0.55, 0.12, 1.0)
+    om = 1.1
+    T = 2 * np.pi / om
+    opts = IntegrationOptions(rtol=1e-8, atol=1e-10)
+    first = integrate(model, om, np.array([0.5, 0.0]), 0.0, 20 * T, options=opts)
+    assert np.isfinite(first.h_next) and first.h_next > 0
+    fresh = integrate(model, om, first.u_end, 0.0, T, options=opts)
+    cont = integrate(model, om, first.u_end, 0.0, T, options=opts, first_step=first.h_next)
+    assert cont.steps < fresh.steps
+    assert np.allclose(cont.u_end, fresh.u_end, rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match="first_step"):
+        integrate(model, om, first.u_end, 0.0, T, options=opts, first_step=float("nan"))

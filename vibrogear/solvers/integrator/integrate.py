@@ -116,6 +116,8 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         raise ValueError(f"u0 must have {model.n_states} entries")
     if not t1 > t0:
         raise ValueError("t1 must be greater than t0")
+    if first_step is not None and not (np.isfinite(first_step) and first_step > 0):
+        raise ValueError(f"first_step must be finite and > 0, not {first_step!r}")
     n = model.n_states
     c0, c1 = (0, n + 1) if columns is None else (int(columns[0]), int(columns[1]))
     if not 0 <= c0 < c1 <= n + 1:
