@@ -21,7 +21,6 @@ from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
-from ..solvers.sequential.strob_evidence import spectral_evidence
 from ..solvers.status import Status
 from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
 from ..config.options import SweepOptions
@@ -139,7 +138,7 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
         return {}
     ok = res.status == 0
     names = [MOTION_LEGEND[int(c)] for c in res.motion_class]
-    ev = spectral_evidence(res)
+    ev = res.spectral
     chaotic = [{"param": float(res.param[k]), "direction": str(res.direction[k]),
                 "lyapunov": float(res.lyapunov[k]),
                 "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]],

@@ -42,15 +42,13 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes
-from ..solvers.sequential.strob_evidence import SPECTRAL_COLUMNS, spectral_evidence
 
-__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "spectral_evidence"]
+__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
 
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
                "clusters", "defect", "status", "message", "wall_time", "motion_class",
                "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by",
                "base_f2_order", "strob_flatness", "strob_peak_fraction")
-#: the spectral evidence of the stroboscopic samples (:func:`spectral_evidence`)
 
 
 def _finite(a, fill=0.0) -> np.ndarray:
@@ -78,7 +76,7 @@ def _extra(result) -> dict:
     for k, v in result.metrics.items():
         v = np.asarray(v)
         out[k] = v if v.dtype.kind == "i" else _finite(v)
-    out.update(spectral_evidence(result))
+    out.update(result.spectral)
     return out
 
 
@@ -112,7 +110,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
     metrics = sorted(result.metrics)
     extra = result.motion_class is not None
     w.writerow(CSV_COLUMNS + tuple(metrics) if extra else CSV_COLUMNS[:12])
-    spectral = spectral_evidence(result) if extra else {}
+    spectral = result.spectral if extra else {}
     for k in range(result.param.size):
         row = [str(result.direction[k]), int(result.index[k]), float(result.param[k]),
                float(result.qmin[k]), float(result.qmax[k]), int(result.period_n[k]),
@@ -123,7 +121,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
             row += [result.motion_legend[int(result.motion_class[k])], float(result.lyapunov[k]),
                     float(ci[0]), float(ci[1]), int(result.transient_used[k]),
                     str(result.settled_by[k])]
-            row += [float(spectral[n][k]) for n in SPECTRAL_COLUMNS]
+            row += [float(v[k]) for v in spectral.values()]
             row += [result.metrics[n][k].item() for n in metrics]
         w.writerow([_cell(v) for v in row])
     csv_path = atomic_write_bytes(out_dir / f"{stem}.csv", text.getvalue().encode())

@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -36,6 +36,7 @@ from ...models.reduced import ReducedModel
 from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
 from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
+from .strob_evidence import spectral_evidence
 from ..status import Outcome, Status
 from .sweep_point import PHASES, PointRecord, run_point
 
@@ -102,6 +103,13 @@ class SweepResult:
         return {"rtol": self.rtol, "atol": self.atol, "period_tol": self.period_tol,
                 "max_periodicity_defect": float(d.max()) if d.size else None,
                 "failed_points": int(np.sum(self.status != 0))}
+
+    @cached_property
+    def spectral(self) -> dict:
+        """The spectral evidence of each point's class (:func:`.strob_evidence.spectral_evidence`:
+        ``base_f2_order``, ``strob_flatness``, ``strob_peak_fraction``), computed once per
+        result for the summary, the files and the figures."""
+        return spectral_evidence(self) if self.motion_class is not None else {}
 
     @property
     def outcome(self) -> Outcome:
