@@ -59,6 +59,7 @@ from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
+from .record_window import RecordWindow, count, onset_speeds, record_extrema, record_window
 from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from ..status import Status
@@ -76,7 +77,6 @@ NO_CONTRACTION = 0.95
 #: shortest window of the statistics test (periods)
 SETTLE_WINDOW = 32
 _S_TRANSIENT = 8      # dense samples per period for the transient's statistics
-_S_RECORD = 16        # dense samples per period in the record (impact-speed starts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -137,10 +137,6 @@ class _Clock:
         self.last = now
 
 
-def _count(counts, tr):
-    counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
-
-
 def _settled(dense, strob, W: int, max_period: int) -> bool:
     """The statistics test of the module docstring on the last three windows of W
     periods: the last two have equal statistics, and neither step between the three
@@ -157,92 +153,7 @@ def _settled(dense, strob, W: int, max_period: int) -> bool:
     return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
 
 
-def onset_speeds(model, param, start, tr, t_eval, rows, options, counts=None) -> list:
-    """|delta'| of contact ``rows`` at each contact onset of trajectory ``tr`` (from
-    ``start`` at t = 0, dense samples at ``t_eval`` = h, 2h, ..., h = T / S), NaN at the
-    other events: the state at the onset by a short integration from the dense sample
-    before it."""
-    out = []
-    h = float(t_eval[0])
-    for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
-        v = math.nan
-        if md != 0 and int(j) in rows:
-            i = int(math.floor(te / h * (1 + 1e-14))) - 1
-            ts, us = (0.0, start) if i < 0 else (t_eval[i], tr.u[i])
-            if te - ts > 1e-12 * _S_RECORD * h:
-                loc = integrate(model, param, us, ts, te, options=options)
-                if counts is not None:
-                    _count(counts, loc)
-                us = loc.u_end
-            v = abs(float(contact_kinematics(model, param, [te], us[None, :],
-                                             rows=[int(j)])[1][0, 0]))
-        out.append(v)
-    return out
-
-
-@dataclass(frozen=True, eq=False)
-class _Record:
-    """A record window: its chunks (start state, period-end states, time offset), all
-    period-end states, the end state, monitor extrema and losses, the contact events with
-    the onset speeds."""
-    chunks: list
-    states: np.ndarray
-    end: np.ndarray
-    qmin: float
-    qmax: float
-    losses: int
-    lost_events: bool
-    events: tuple
-    speeds: np.ndarray
-
-
-def _record(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
-    """The record window of R periods in chunks (module docstring): a :class:`_Record`,
-    or (status, message) where the integration failed."""
-    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
-    chunks, states, ev_t, ev_j, ev_m, speeds = [], [], [], [], [], []
-    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
-    seed = np.array(seed, dtype=float)
-    t0 = 0.0
-    while t0 < R * T * (1 - 1e-12):
-        k = min(chunk, R - int(round(t0 / T)))
-        t_eval = np.arange(1, k * _S_RECORD + 1) * (T / _S_RECORD)
-        t_eval[-1] = k * T
-        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        _count(counts, tr)
-        if not tr.ok:
-            return tr.status, tr.message
-        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
-                and (not has_monitor or (math.isfinite(tr.monitor_min)
-                                         and math.isfinite(tr.monitor_max)))):
-            return Status.NONFINITE, "non-finite state or monitor values"
-        ends = tr.u[_S_RECORD - 1::_S_RECORD]
-        chunks.append((seed.copy(), ends, t0))
-        states.append(ends)
-        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
-        losses += tr.monitor_losses
-        lost_events |= tr.events > tr.event_times.size
-        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
-        ev_t += [t0 + te for te in tr.event_times]
-        ev_j += [int(j) for j in tr.event_contacts]
-        ev_m += [int(md) for md in tr.event_modes]
-        seed = tr.u_end.copy()
-        t0 += k * T
-    return _Record(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
-                   (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
-                   np.array(speeds))
-
-
-def _extrema(model, param, rec: _Record, has_monitor) -> tuple[float, float]:
-    """(min, max) of the monitored deformation over a record: the integrator's located
-    extrema and the stroboscopic samples (the samples alone without a monitored contact)."""
-    delta = monitored_deformation(model, param, np.zeros(len(rec.states)), rec.states)
-    if not has_monitor:
-        return float(delta.min()), float(delta.max())
-    return min(rec.qmin, float(delta.min())), max(rec.qmax, float(delta.max()))
-
-
-def _metrics(model, param, u_rec, rec: _Record, groups, R, T, n) -> dict:
+def _metrics(model, param, u_rec, rec: RecordWindow, groups, R, T, n) -> dict:
     """The contact metrics of a record with their batch-means errors."""
     mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
                   model.contacts.gap_hi, model.contacts.gap_lo)
@@ -293,7 +204,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        _count(counts, tr)
+        count(counts, tr)
         used += k
         if not tr.ok or not np.all(np.isfinite(tr.u_end)):
             return fail(tr.status or Status.NONFINITE, tr.message, used)
@@ -315,7 +226,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     u_rec = seed.copy()
     groups = contact_groups(model)
     chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
-    rec = _record(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor)
+    rec = record_window(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor)
     if isinstance(rec, tuple):
         return fail(*rec, used)
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
@@ -352,7 +263,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                             periods=near, drift=states)
         counts[2] += orbit.rhs_calls
         if orbit.stable:
-            again = _record(model, param, orbit.u0, R, T, chunk, groups, options, counts,
+            again = record_window(model, param, orbit.u0, R, T, chunk, groups, options, counts,
                             has_monitor)
             if not isinstance(again, tuple):
                 n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
@@ -389,11 +300,11 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         # the record window again at rtol / 10 from the same settled state: the change of
         # each statistic is its tolerance error
         fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
-        rec2 = _record(model, param, u_rec, R, T, chunk, groups, fine, counts, has_monitor)
+        rec2 = record_window(model, param, u_rec, R, T, chunk, groups, fine, counts, has_monitor)
         tol_err = {k: math.nan for k in ("qmin", "qmax")}
         if not isinstance(rec2, tuple):
-            e1 = _extrema(model, param, rec, has_monitor)
-            e2 = _extrema(model, param, rec2, has_monitor)
+            e1 = record_extrema(model, param, rec, has_monitor)
+            e2 = record_extrema(model, param, rec2, has_monitor)
             tol_err["qmin"], tol_err["qmax"] = abs(e2[0] - e1[0]), abs(e2[1] - e1[1])
             if has_monitor:
                 m2 = _metrics(model, param, u_rec, rec2, groups, R, T, n)
@@ -403,7 +314,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         metrics["tol_err_measured"] = 1.0
     clock.lap("second_tolerance")
     delta = monitored_deformation(model, param, np.zeros(R), states)
-    qmin, qmax = _extrema(model, param, rec, has_monitor)
+    qmin, qmax = record_extrema(model, param, rec, has_monitor)
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
                        losses / R, defect, count_clusters(states, cluster_tol, split=m), 0,
                        msg, seed.copy(), steps=int(counts[0]), rejected=int(counts[1]),

@@ -1,0 +1,111 @@
+"""The record window of a sweep point (:mod:`.sweep_point`): ``R`` excitation periods in
+chunks (one integrator call each, the blocks of the Lyapunov exponent's interval), 16 dense
+samples per period, the stroboscopic states, the monitored contact's extrema and losses,
+and the contact events with the approach speed at each onset."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..integrator.contact_eval import contact_kinematics
+from ..integrator.integrate import integrate
+from ..status import Status
+from .motion import monitored_deformation
+
+__all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds", "count",
+           "S_RECORD"]
+
+#: dense samples per period in the record (the onset speeds start from them)
+S_RECORD = 16
+
+
+def count(counts, tr) -> None:
+    """Add a trajectory's steps, rejected steps, RHS calls and events to ``counts``."""
+    counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+
+
+def onset_speeds(model, param, start, tr, t_eval, rows, options, counts=None) -> list:
+    """|delta'| of contact ``rows`` at each contact onset of trajectory ``tr`` (from
+    ``start`` at t = 0, dense samples at ``t_eval`` = h, 2h, ..., h = T / S), NaN at the
+    other events: the state at the onset by a short integration from the dense sample
+    before it."""
+    out = []
+    h = float(t_eval[0])
+    for te, j, md in zip(tr.event_times, tr.event_contacts, tr.event_modes):
+        v = math.nan
+        if md != 0 and int(j) in rows:
+            i = int(math.floor(te / h * (1 + 1e-14))) - 1
+            ts, us = (0.0, start) if i < 0 else (t_eval[i], tr.u[i])
+            if te - ts > 1e-12 * S_RECORD * h:
+                loc = integrate(model, param, us, ts, te, options=options)
+                if counts is not None:
+                    count(counts, loc)
+                us = loc.u_end
+            v = abs(float(contact_kinematics(model, param, [te], us[None, :],
+                                             rows=[int(j)])[1][0, 0]))
+        out.append(v)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class RecordWindow:
+    """A record window: its chunks (start state, period-end states, time offset), all
+    period-end states, the end state, monitor extrema and losses, the contact events with
+    the onset speeds."""
+    chunks: list
+    states: np.ndarray
+    end: np.ndarray
+    qmin: float
+    qmax: float
+    losses: int
+    lost_events: bool
+    events: tuple
+    speeds: np.ndarray
+
+
+def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
+    """The record window of R periods in chunks (module docstring): a :class:`RecordWindow`,
+    or (status, message) where the integration failed."""
+    mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
+    chunks, states, ev_t, ev_j, ev_m, speeds = [], [], [], [], [], []
+    qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
+    seed = np.array(seed, dtype=float)
+    t0 = 0.0
+    while t0 < R * T * (1 - 1e-12):
+        k = min(chunk, R - int(round(t0 / T)))
+        t_eval = np.arange(1, k * S_RECORD + 1) * (T / S_RECORD)
+        t_eval[-1] = k * T
+        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        count(counts, tr)
+        if not tr.ok:
+            return tr.status, tr.message
+        if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))
+                and (not has_monitor or (math.isfinite(tr.monitor_min)
+                                         and math.isfinite(tr.monitor_max)))):
+            return Status.NONFINITE, "non-finite state or monitor values"
+        ends = tr.u[S_RECORD - 1::S_RECORD]
+        chunks.append((seed.copy(), ends, t0))
+        states.append(ends)
+        qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
+        losses += tr.monitor_losses
+        lost_events |= tr.events > tr.event_times.size
+        speeds += onset_speeds(model, param, seed, tr, t_eval, mesh_rows, options, counts)
+        ev_t += [t0 + te for te in tr.event_times]
+        ev_j += [int(j) for j in tr.event_contacts]
+        ev_m += [int(md) for md in tr.event_modes]
+        seed = tr.u_end.copy()
+        t0 += k * T
+    return RecordWindow(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
+                   (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
+                   np.array(speeds))
+
+
+def record_extrema(model, param, rec: RecordWindow, has_monitor) -> tuple[float, float]:
+    """(min, max) of the monitored deformation over a record: the integrator's located
+    extrema and the stroboscopic samples (the samples alone without a monitored contact)."""
+    delta = monitored_deformation(model, param, np.zeros(len(rec.states)), rec.states)
+    if not has_monitor:
+        return float(delta.min()), float(delta.max())
+    return min(rec.qmin, float(delta.min())), max(rec.qmax, float(delta.max()))
