@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from vibrogear.analyses.continuation import starting_orbit  # noqa: E402
-from vibrogear.analyses.study import build_study  # noqa: E402
+from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config.scene import load_scene  # noqa: E402
 from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
                                             continuation)
@@ -40,7 +40,10 @@ def run(study, scene, u0, n, guess, *, quasi_newton: bool, max_points: int,
     cfg = scene.continuation
     options = dataclasses.replace(cfg.options(), max_points=max_points)
     scale = (options.param_max - options.param_min) / float(np.linalg.norm(guess))
-    method = PseudoArclength(integration=scene.integration, tol=scene.shooting.tol,
+    # the analysis's integrator options ([continuation] rtol; scene.integration is the
+    # scene default, rtol 1e-9 with atol 1e-11: a tighter error than the analysis runs at)
+    opts = integration_options(scene, section=scene.continuation, study=study)
+    method = PseudoArclength(integration=opts, tol=scene.shooting.tol,
                              param_scale=scale, locate_tol=2e-4, quasi_newton=quasi_newton,
                              split_columns=split)
     t0 = time.perf_counter()
@@ -63,7 +66,9 @@ def main() -> dict:
     t0 = time.perf_counter()
     u0, n, guess, how = starting_orbit(study.model, cfg.rpm_max, study.start(cfg.rpm_max),
                                        transient_periods=cfg.transient_periods,
-                                       options=scene.integration, tol=scene.shooting.tol,
+                                       options=integration_options(
+                                           scene, section=cfg, study=study),
+                                       tol=scene.shooting.tol,
                                        max_iter=3 * cfg.max_corrector_iter)
     start_s = time.perf_counter() - t0
     one = run(study, scene, u0, n, guess, quasi_newton=True, max_points=N_RATIO, split=False)

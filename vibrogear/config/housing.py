@@ -142,7 +142,7 @@ class MaterialConfig:
 class HousingMeshConfig:
     size: float | None = spec(None, gt=0.0, doc="global element size, m (default 1.3 x wall)")
     bore_size: float | None = spec(None, gt=0.0, doc="element size at the bores, m (default size/2)")
-    degree: int = spec(2, ge=1, le=2, doc="Lagrange degree of the tetrahedra (2 for thin walls)")
+    degree: int = spec(2, ge=1, le=3, doc="Lagrange degree of the tetrahedra (2 for thin walls; 3: p-refinement)")
     refine: int = spec(0, ge=0, le=3, doc="uniform splits of every tet (nested meshes, h / 2^refine)")
     edge_size: float | None = spec(None, gt=0.0, doc="element size at the re-entrant junction edges "
                                    "(wall/base, wall/wall, rib and boss junctions), m (default: no grading)")

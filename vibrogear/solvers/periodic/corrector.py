@@ -33,6 +33,12 @@ QUASI_NEWTON_MOVE = 0.5
 EXACT_MOVE = 2.0
 #: ... up to this many the step grows, from the second this many on it shrinks
 QUASI_NEWTON_GROW, QUASI_NEWTON_SHRINK = 5, 12
+#: the exact Newton corrector gives up after this many successive iterates that do not
+#: shrink the residual by NEWTON_CONTRACTION each: near a regular point Newton contracts
+#: quadratically; where it does not, the flow is not smooth there (a grazing) and its
+#: iterates cycle (measured at the two-stage branch's end: periods 2-3 over all 9 iterates,
+#: 0.7 s per failed corrector); the caller halves the step
+NEWTON_CONTRACTION, NEWTON_STALLED = 0.5, 2
 
 
 class CorrectorProblem:
@@ -166,7 +172,8 @@ def _quasi_newton(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, J0:
 def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter: int,
              k_ref: int | None = None, J0: np.ndarray | None = None,
              exact_fallback: bool = True, max_move: float = np.inf,
-             z_base: np.ndarray | None = None, max_angle: float | None = None):
+             z_base: np.ndarray | None = None, max_angle: float | None = None,
+             between=None):
     """Newton on [H(z) + B lam; V^T dz = 0; t.(z - z_pred)] = 0. Returns (z, flow,
     iterations, residual) or None (why in ``prob.last_failure``: the integrator's failure,
     or GRAZING_END where an iterate's number of neutral directions differs from ``k_ref``:
@@ -183,7 +190,10 @@ def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter:
     quasi-Newton solution whose secant from ``z_base`` leaves the tangent ``t`` by more
     than max_angle / 2 is refused before its orbit with the variational equations is
     integrated (``prob.secant_rejected``): on an arc the tangent turns by twice the
-    secant's angle, so the new tangent would turn by more than max_angle."""
+    secant's angle, so the new tangent would turn by more than max_angle.  ``between``:
+    called once after the quasi-Newton stage, before the first orbit with the variational
+    equations (the continuation finishes its last point there, whose multipliers were
+    computed in a thread meanwhile); ``prob``'s record of this call survives it."""
     tol = prob.method.tol
     z = z_pred.copy()
     prob.quasi_newton_iterations = None
@@ -201,6 +211,13 @@ def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter:
         elif not exact_fallback:
             prob.last_failure = Status.NOT_CONVERGED
             return None
+    if between is not None:
+        record = (prob.quasi_newton_iterations, prob.secant_rejected, prob.last_failure,
+                  prob.last_orbit)
+        between()
+        (prob.quasi_newton_iterations, prob.secant_rejected, prob.last_failure,
+         prob.last_orbit) = record
+    res_prev, stalled = np.inf, 0
     for it in range(max_iter + 1):
         if not z[-1] * prob.scale > 0:
             return None
@@ -216,8 +233,10 @@ def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter:
             if np.linalg.norm(z - z_pred) > EXACT_MOVE * max_move:
                 return None               # crossed over to another sheet: a smaller step
             return z, f, it, res
-        if it == max_iter:
+        stalled = stalled + 1 if res > NEWTON_CONTRACTION * res_prev else 0
+        if it == max_iter or stalled == NEWTON_STALLED:
             return None
+        res_prev = res
         J = prob.jac(f)
         n1 = z.size
         A = np.vstack([J, np.concatenate([t, np.zeros(J.shape[1] - n1)])[None, :]])

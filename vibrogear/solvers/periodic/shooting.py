@@ -36,6 +36,7 @@ the continuation stops there with GRAZING_END.
 """
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass
 
@@ -80,9 +81,26 @@ class PeriodicFlow:
         computed once: an eigen-solve of the monodromy costs ~20 ms at 292 states)."""
         got = self.__dict__.get("_multipliers")
         if got is None:
-            got = floquet_multipliers(self.monodromy)
+            job = self.__dict__.pop("_prefetch", None)
+            if job is not None:
+                job[0].join()
+                got = job[1][0] if job[1] else None
+            if got is None:
+                got = floquet_multipliers(self.monodromy)
             self.__dict__["_multipliers"] = got
         return got
+
+    def prefetch_multipliers(self) -> None:
+        """Start the eigen-solve of :meth:`multipliers` in a thread (LAPACK releases the
+        GIL): the continuation runs its next quasi-Newton corrector meanwhile, whose
+        orbits keep one core busy and leave the other idle."""
+        if "_multipliers" in self.__dict__ or "_prefetch" in self.__dict__:
+            return
+        out: list = []
+        job = threading.Thread(target=lambda: out.append(floquet_multipliers(self.monodromy)),
+                               daemon=True)
+        self.__dict__["_prefetch"] = (job, out)
+        job.start()
 
 
 def newton_step(flow: PeriodicFlow, model: ReducedModel) -> np.ndarray:
@@ -190,15 +208,19 @@ class ShootingResult:
 
 def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
           options: IntegrationOptions = IntegrationOptions(),
-          shooting: ShootingOptions = ShootingOptions(tol=1e-10)) -> ShootingResult:
+          shooting: ShootingOptions = ShootingOptions(tol=1e-10),
+          split=None) -> ShootingResult:
     """Newton on u(T; u0) - u0 with backtracking, bordered by the neutral directions of
-    an orbit family (see the module docstring); bounded iterations."""
+    an orbit family (see the module docstring); bounded iterations.  ``split``: a
+    :class:`~..integrator.split_flow.ColumnSplit` of ``model`` (the monodromy on two
+    cores)."""
     wall = time.perf_counter()
     tol, max_iter = shooting.tol, shooting.max_iter
     u = np.array(u0_guess, dtype=float)
     n = u.size
     calls, flows = 0, 1
-    flow = periodic_flow(model, param, u, n_periods=n_periods, options=options)
+    flow = periodic_flow(model, param, u, n_periods=n_periods, options=options,
+                         split=split)
     calls += flow.trajectory.rhs_calls
     it = 0
     status = Status.NOT_CONVERGED
@@ -224,7 +246,8 @@ def shoot(model: ReducedModel, param: float, u0_guess, *, n_periods: int = 1,
         accepted = False
         for _ in range(8):
             trial = u + lam * du
-            f2 = periodic_flow(model, param, trial, n_periods=n_periods, options=options)
+            f2 = periodic_flow(model, param, trial, n_periods=n_periods, options=options,
+                               split=split)
             calls += f2.trajectory.rhs_calls
             flows += 1
             r2 = residual_norm(f2.G, trial) if f2.ok else np.inf
