@@ -185,7 +185,7 @@ def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
     if key is None:
         return {}
     rows = {int(groups[key][1][0])}
-    speeds = onset_speeds(r, rpm, start, tr, t_eval, rows, opts)
+    speeds = onset_speeds(tr, rows)
     mode0 = flank(contact_kinematics(r, rpm, [0.0], start[None, :])[0][:, 0],
                   r.contacts.gap_hi, r.contacts.gap_lo)
     m = metrics_with_errors(r, {key: groups[key]}, mode0,

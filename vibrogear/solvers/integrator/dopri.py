@@ -110,12 +110,13 @@ JAC_AUTO, JAC_LOOPS, JAC_BLAS = -1, 0, 1
 
 #: what the loop returns: status code, end time and state, tangent [d u / d u0 | d u / d p],
 #: dense output, counters (steps, rejected, rhs calls, events, losses of the monitored
-#: contact), event log (time, contact, new mode), monitored extrema, final modes, u' at
+#: contact), event log (time, contact, new mode; ``ev_r``: the rate of the switching
+#: function there, d delta / dt of that contact at the switch), monitored extrema, final modes, u' at
 #: the end, sum of the local error estimates, the step the controller proposes next (the
 #: last step before it was cut to end at t1: a run that continues this one starts there)
 LoopResult = namedtuple("LoopResult", [
     "status", "t", "y", "Phi", "u_eval", "counters", "ev_t", "ev_j", "ev_m", "mon_min",
-    "mon_max", "mode", "f_end", "err_sum", "h_next"])
+    "mon_max", "mode", "f_end", "err_sum", "h_next", "ev_r"])
 
 
 def loop_inputs(**kw) -> tuple:
@@ -173,6 +174,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     ev_t = np.zeros(ev_cap)
     ev_j = np.zeros(ev_cap, np.int64)
     ev_m = np.zeros(ev_cap, np.int64)
+    ev_r = np.zeros(ev_cap)
     # counters: steps, rejected, rhs calls, events, losses of the monitored contact after rec_t0
     steps = 0
     rejected = 0
@@ -275,6 +277,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
                 ev_t[nev] = t
                 ev_j[nev] = j
                 ev_m[nev] = newm
+                ev_r[nev] = rate
             nev += 1
             if j == mon and newm == 0 and t >= rec_t0:
                 losses += 1
@@ -307,4 +310,4 @@ def dopri_loop(A, y0, t_eval, fin, iin):
     # a plain tuple (LoopResult._make on the Python side): boxing a namedtuple runs Python
     # code, where a pending Ctrl-C raised inside numba's boxing crashed the process
     return (status, t, y, Phi, u_eval, counters, ev_t, ev_j, ev_m, ext[0], ext[1], mode, f_end,
-            err_sum, max(h, h_free))
+            err_sum, max(h, h_free), ev_r)

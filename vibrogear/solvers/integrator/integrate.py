@@ -55,6 +55,9 @@ class Trajectory:
     #: the step size the controller proposes after t_end: ``first_step`` of a run that
     #: continues this one
     h_next: float = float("nan")
+    #: d delta / dt of the switching contact at each logged event (event_contacts): at a
+    #: contact onset, the approach speed (the state the integrator located the switch at)
+    event_rates: np.ndarray | None = None
 
     @property
     def ok(self) -> bool:
@@ -165,5 +168,5 @@ def integrate(model: ReducedModel, param: float, u0, t0: float, t1: float, *,
         dparam=Phi[:, n].copy() if whole else None,
         tangent_columns=Phi if variational and not whole else None,
         wall_time=time.perf_counter() - wall, error_estimate=float(res.err_sum),
-        relative_error=rel, h_next=float(res.h_next),
+        relative_error=rel, h_next=float(res.h_next), event_rates=res.ev_r[:keep],
     )

@@ -21,8 +21,8 @@ periods T, so its end state is again at phase 0.
   stopped ("map", "statistics" or "budget").
 * **Record** of ``record_periods`` periods in chunks of min(:data:`~.lyapunov.CHUNK`,
   record_periods // 8) periods (at least 1; one integrator call each, the blocks of the
-  exponent's interval), 16 dense samples per period: stroboscopic samples, extrema
-  of the monitored deformation, located contact events.
+  exponent's interval): stroboscopic samples, extrema of the monitored deformation (located
+  by the integrator), located contact events.
 * **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
   is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
   (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
@@ -33,7 +33,7 @@ periods T, so its end state is again at phase 0.
   (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
-  (the state at each onset by a short integration from the dense sample before it),
+  (the switching function's rate where the integrator located the onset),
   contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
   error over blocks of the record window.
 * **Second tolerance** (``second_tolerance``): the record window again at rtol / 10 (atol /
