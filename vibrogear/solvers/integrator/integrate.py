@@ -1,6 +1,8 @@
 """Time integration of a ReducedModel: the Python face of the compiled DOPRI5 loop."""
 from __future__ import annotations
 
+import math
+
 import time
 import weakref
 from dataclasses import dataclass
@@ -58,6 +60,13 @@ class Trajectory:
     #: d delta / dt of the switching contact at each logged event (event_contacts): at a
     #: contact onset, the approach speed (the state the integrator located the switch at)
     event_rates: np.ndarray | None = None
+
+    @property
+    def next_first_step(self) -> float | None:
+        """``h_next`` as the ``first_step`` of a run that continues this one (None: the
+        default start, where the run gave no usable step)."""
+        h = self.h_next
+        return float(h) if math.isfinite(h) and h > 0 else None
 
     @property
     def ok(self) -> bool:

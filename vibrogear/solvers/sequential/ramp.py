@@ -181,7 +181,7 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
         if not tr.ok:
             run.status, run.message = tr.status, f"settling at the start speed: {tr.message}"
         run.u = tr.u_end
-        run.h = _usable_step(tr.h_next)
+        run.h = tr.next_first_step
     dphi = 2 * np.pi / chunks_per_period
     spc = samples_per_period // chunks_per_period
     dphi_s = 2 * np.pi / samples_per_period
@@ -220,7 +220,7 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
         rate = float(np.max(rates[max(i - 1, 0):i + 2]))
         run.deviation = max(run.deviation, rate * dt * dt / (8.0 if midpoint else 2.0))
         run.u = tr.u_end
-        run.h = _usable_step(tr.h_next)
+        run.h = tr.next_first_step
         t += dt
         k += 1
         if callback is not None and callback(t, p) is False:
@@ -230,11 +230,6 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
     res = _result(model, profile, rows, run, samples_per_period, chunks_per_period, midpoint,
                   time.perf_counter() - wall)
     return replace(res, inertia_torque=inertia_force is not None)
-
-
-def _usable_step(h: float) -> float | None:
-    """The proposed step as the next chunk's first trial step (None: the default start)."""
-    return float(h) if np.isfinite(h) and h > 0 else None
 
 
 def _chunk_slope(profile: SpeedProfile, slopes, t: float, dt: float) -> float:
