@@ -78,14 +78,12 @@ def state_scale(samples, m: int) -> np.ndarray:
 
 
 def tangent_chunk(model: ReducedModel, param: float, u_start, reference, direction,
-                  scale, *, options: IntegrationOptions, d0: float = D0,
-                  first_step: float | None = None):
+                  scale, *, options: IntegrationOptions, d0: float = D0):
     """One chunk of Benettin's method.
 
     ``u_start``: the reference state at the chunk's start (phase 0, an integrator end
     state); ``reference`` (K, n): the reference states at the K period ends, integrated
-    from ``u_start`` over [0, K T] by one :func:`integrate` call with ``options`` (and
-    ``first_step``: the perturbed trajectory starts with the reference's first step);
+    from ``u_start`` over [0, K T] by one :func:`integrate` call with ``options``;
     ``direction`` (n,): unit tangent in scaled units.  Returns (log growth per period
     (K,), next unit direction, rhs calls, trajectory status)."""
     reference = np.atleast_2d(np.asarray(reference, dtype=float))
@@ -94,8 +92,7 @@ def tangent_chunk(model: ReducedModel, param: float, u_start, reference, directi
     v = np.asarray(direction, dtype=float)
     u_p = np.asarray(u_start, dtype=float) + d0 * v * scale
     t_eval = np.arange(1, K + 1) * T
-    tr = integrate(model, param, u_p, 0.0, K * T, t_eval=t_eval, options=options,
-                   first_step=first_step)
+    tr = integrate(model, param, u_p, 0.0, K * T, t_eval=t_eval, options=options)
     if not tr.ok:
         return np.full(K, math.nan), v, tr.rhs_calls, tr.status
     diff = (tr.u - reference) / scale

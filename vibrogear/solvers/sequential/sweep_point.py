@@ -199,16 +199,11 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     W = settings.settle_window or max(R, SETTLE_WINDOW)
     strob, dense = [seed], []
     used, settled_by = 0, "budget"
-    # h: the step the last transient block proposed, the record's first trial step (the
-    # blocks themselves start afresh: passing it on between them moves a chaotic point's
-    # settled state, and so its record window, for 0.5 % of the transient's steps)
-    h = None
     while used < budget:
         k = min(block, budget - used)
         t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        h = tr.next_first_step
         count(counts, tr)
         used += k
         if not tr.ok or not np.all(np.isfinite(tr.u_end)):
@@ -231,8 +226,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     u_rec = seed.copy()
     groups = contact_groups(model)
     chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
-    rec = record_window(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor,
-                        first_step=h)
+    rec = record_window(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor)
     if isinstance(rec, tuple):
         return fail(*rec, used)
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
@@ -248,9 +242,9 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
                               u_rec.size, index)
         logs = []
-        for start, ends, _, h0 in chunks:
+        for start, ends, _ in chunks:
             g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
-                                            options=options, first_step=h0)
+                                            options=options)
             counts[2] += calls
             if st != Status.OK:
                 msg = f"Lyapunov exponent not determined: {st.message}"
