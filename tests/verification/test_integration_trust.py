@@ -209,3 +209,18 @@ def test_an_rtol_between_rungs_that_passes_is_kept():
     lim = loosest_rtol(st.model, 4500.0, st.start(4500.0), up_to=3.9e-4,
                        options=IntegrationOptions(rtol=1e-6, atol=1e-12))
     assert lim.rtol == 3.9e-4 and lim.failed_rtol is None
+
+
+def test_a_probe_up_to_a_looser_rtol_answers_for_a_tighter_one():
+    """within_limit probes once per (parameter, rtol); a tighter rtol than one whose probe
+    passed every rung is accurate too (the ladder stops at its first failure), so it is
+    used as asked without a second probe (the demo's run-up at 1e-4 after its sweep at
+    3.9e-4)."""
+    from vibrogear.analyses.study import within_limit
+
+    scene = load_scene(ROOT / "configs" / "gear_pair.toml")
+    st = _study("gear_pair.toml")
+    loose = within_limit(st, scene, IntegrationOptions(rtol=3.9e-4, atol=3.9e-10))
+    assert loose.rtol == 3.9e-4 and len(st.rtol_limits) == 1
+    tight = within_limit(st, scene, IntegrationOptions(rtol=1e-4, atol=1e-10))
+    assert tight.rtol == 1e-4 and len(st.rtol_limits) == 1

@@ -214,6 +214,9 @@ def within_limit(study: "Study", scene, opts: IntegrationOptions) -> Integration
 
     key = (param, opts.rtol)
     limit = study.rtol_limits.get(key)
+    if limit is None and any(k[0] == param and v.rtol is not None and v.rtol >= opts.rtol
+                             for k, v in study.rtol_limits.items()):
+        return opts     # a probe up to a looser rtol passed every rung down to this one
     if limit is None:
         limit = study.rtol_limits[key] = loosest_rtol(study.model, param, study.start(param),
                                                       up_to=opts.rtol, options=opts)
