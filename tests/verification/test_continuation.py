@@ -208,3 +208,23 @@ def test_special_points_lie_within_their_reported_bracket(model, branches, monke
         assert abs(p - ref) <= within + 1e-9
         assert within > within_exact            # one orbit: a wider bracket
     assert res.counters["flows"] < sum(b.counters["flows"] for b in branches[:1])
+
+
+def test_corrector_start_from_the_tangents_qr_is_the_inverse():
+    """tangent_and_start: the tangent of tangent() and H = inv([J; t^T]) from the same QR
+    (an identity of the factors, checked against LAPACK's inverse); bordered Jacobians
+    (more columns than the tangent has entries) fall back to H = None."""
+    from vibrogear.solvers.periodic.corrector import tangent, tangent_and_start
+
+    rng = np.random.default_rng(4)
+    for n in (3, 40, 150):
+        J = rng.standard_normal((n, n + 1))
+        prev = rng.standard_normal(n + 1)
+        t, H = tangent_and_start(J, prev)
+        np.testing.assert_allclose(t, tangent(J, prev), atol=1e-14)
+        assert t @ prev > 0
+        A = np.vstack([J, t[None, :]])
+        np.testing.assert_allclose(H, np.linalg.inv(A), rtol=1e-10, atol=1e-12)
+    J = rng.standard_normal((6, 7))                 # n = 5 states, k = 1 bordered direction
+    t, H = tangent_and_start(J, rng.standard_normal(6))
+    assert H is None and t.size == 6

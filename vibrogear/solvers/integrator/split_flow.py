@@ -47,10 +47,10 @@ def _serve(model, conn):
                 break
             if req is None:
                 break
-            param, u0, t1, options, c0, c1 = req
+            param, u0, t1, options, c0, c1, h0 = req
             try:
                 tr = integrate(model, param, u0, 0.0, t1, options=options, variational=True,
-                               columns=(c0, c1))
+                               columns=(c0, c1), first_step=h0)
                 conn.send((tr.tangent_columns, tr.steps, tr.u_end, tr.status))
             except Exception as exc:        # noqa: BLE001  the parent integrates whole
                 try:
@@ -105,25 +105,27 @@ class ColumnSplit:
             self.conn.close()
             self.proc = self.conn = None
 
-    def _whole(self, param, u0, t1, options) -> Trajectory:
-        return integrate(self.model, param, u0, 0.0, t1, options=options, variational=True)
+    def _whole(self, param, u0, t1, options, first_step=None) -> Trajectory:
+        return integrate(self.model, param, u0, 0.0, t1, options=options, variational=True,
+                         first_step=first_step)
 
-    def integrate(self, param: float, u0, t1: float, options) -> Trajectory:
+    def integrate(self, param: float, u0, t1: float, options,
+                  first_step: float | None = None) -> Trajectory:
         if self.proc is None:
-            return self._whole(param, u0, t1, options)
+            return self._whole(param, u0, t1, options, first_step)
         n = self.model.n_states
         u0 = np.ascontiguousarray(u0, dtype=float)
         try:
             if not self.proc.is_alive():
                 raise BrokenPipeError("the column worker has died")
-            self.conn.send((param, u0, t1, options, self.half, n + 1))
+            self.conn.send((param, u0, t1, options, self.half, n + 1, first_step))
         except OSError:                     # the worker is gone: the rest here, whole
             self._stop()
             self.fallbacks += 1
-            return self._whole(param, u0, t1, options)
+            return self._whole(param, u0, t1, options, first_step)
         try:
             low = integrate(self.model, param, u0, 0.0, t1, options=options,
-                            variational=True, columns=(0, self.half))
+                            variational=True, columns=(0, self.half), first_step=first_step)
         finally:
             try:
                 got = self.conn.recv()      # always: the next request must find it empty
@@ -132,12 +134,12 @@ class ColumnSplit:
                 self._stop()
         if isinstance(got, Exception):
             self.fallbacks += 1
-            return self._whole(param, u0, t1, options)
+            return self._whole(param, u0, t1, options, first_step)
         cols, steps, u_end, status = got
         if steps != low.steps or status != low.status or not np.array_equal(u_end,
                                                                             low.u_end):
             self.fallbacks += 1
-            return self._whole(param, u0, t1, options)
+            return self._whole(param, u0, t1, options, first_step)
         phi = np.concatenate([low.tangent_columns, cols], axis=1)
         return replace(low, monodromy=phi[:, :n].copy(), dparam=phi[:, n].copy(),
                        tangent_columns=None)

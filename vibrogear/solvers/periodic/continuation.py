@@ -48,7 +48,7 @@ from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProbl
 from .floquet import flip_vector, liouville_error, stability, test_functions
 from ..integrator.integrate import integrate
 from .corrector import (QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK,
-                        CorrectorProblem, correct, tangent)
+                        CorrectorProblem, correct, tangent, tangent_and_start)
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
 from .special_points import COARSE_LOCATE_ITER, grazing_note, locate, switch_counts
 from ..integrator.split_flow import ColumnSplit
@@ -179,6 +179,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
     walk = _Count(1, test_functions(f.monodromy, t, prob.neutral(f), f.multipliers()))
     k_prev = prob.neutral(f)
     J = prob.jac(f)             # the last point's bordered Jacobian: the corrector's start
+    H = tangent_and_start(J, t)[1]      # and the inverse the corrector starts from
     qn_failed = 0               # successive failed correctors
     t_prev, ds_prev = None, ds
     d_prev = _half_defect(model, z, scale, method, n_periods) if doubled else None
@@ -219,14 +220,15 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
                       J if method.quasi_newton else None,
                       exact_fallback=qn_failed > 0 or ds <= 2 * ds_min,
                       max_move=QUASI_NEWTON_MOVE * ds, z_base=z,
-                      max_angle=method.max_angle if ds > ds_min else None, between=finish)
+                      max_angle=method.max_angle if ds > ds_min else None, between=finish,
+                      H0=H)
         finish()
         qn_failed = qn_failed + 1 if got is None and not prob.secant_rejected else 0
         t_new = None
         if got is not None:
             z_new, f_new, it, res = got
             J_new = prob.jac(f_new)
-            t_new = tangent(J_new, t)
+            t_new, H_new = tangent_and_start(J_new, t)
             angle = np.arccos(np.clip(t_new @ t, -1, 1))
             if angle > method.max_angle and ds > ds_min:
                 got = None
@@ -283,7 +285,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         ds = min(ds * 1.5, ds_max) if grow else (ds * 0.7 if shrink else ds)
         ds = max(ds, ds_min)
         t_prev, ds_prev = t, ds_used
-        z, f, t, k_prev, J = z_new, f_new, t_new, k_new, J_new
+        z, f, t, k_prev, J, H = z_new, f_new, t_new, k_new, J_new, H_new
         sw_before, sw_last = sw_last, switch_counts(model, f.trajectory)
         walk.points += 1
 

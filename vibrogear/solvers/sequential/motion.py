@@ -49,7 +49,7 @@ import re
 import numpy as np
 
 from ...models.reduced import ReducedModel
-from ..integrator.contact_eval import contact_kinematics
+from ...models.contact_law import harmonic_series
 
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
            "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics",
@@ -243,9 +243,13 @@ def deformation_statistics(delta, samples_per_period: int, *, harmonics=(1, 2, 3
 
 def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.ndarray:
     """delta_mon = c_mon . x - e_mon(t) at times ``t`` for states (len(t), 2m)."""
+    states = np.atleast_2d(states)
     if model.contacts.count == 0:
-        return np.atleast_2d(states)[:, 0].copy()
-    return contact_kinematics(model, param, t, states, rows=[model.monitor])[0][0]
+        return states[:, 0].copy()
+    ct, j = model.contacts, model.monitor      # delta alone (not its rate, not mu)
+    e = harmonic_series(ct.error_cos[j], ct.error_sin[j], model.excitation_frequency(param),
+                        t)[0]
+    return states[:, :model.n_modes] @ ct.directions[j] - e
 
 
 def _scaled(samples: np.ndarray, split: int | None, ref=None) -> np.ndarray:
@@ -299,11 +303,13 @@ def count_clusters(samples, rel_tol: float = 1e-3, *, split: int | None = None) 
     if s.shape[0] == 0 or not np.all(np.isfinite(s)):
         return 0
     z = _scaled(s, split)
-    centres: list[np.ndarray] = []
+    centres = np.empty_like(z)      # greedy, in sample order; one array op per sample
+    k = 0
     for p in z:
-        if not any(float(np.max(np.abs(p - c))) <= rel_tol for c in centres):
-            centres.append(p)
-    return len(centres)
+        if k == 0 or not np.any(np.max(np.abs(centres[:k] - p), axis=1) <= rel_tol):
+            centres[k] = p
+            k += 1
+    return k
 
 
 def best_defect(samples, max_period: int) -> float:
