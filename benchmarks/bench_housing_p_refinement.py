@@ -9,21 +9,29 @@ h-sequences of ``bench_housing_convergence.py`` (``results/bench_housing_converg
 then measured against that reference: f1, f100, max over the modes (and which), and the modes the
 two-stage scene's criterion needs (up to 2 x the highest excitation frequency).
 
-Each run's DOF, wall (whole CLI process), eigen-solve time, peak memory (the sum of the resident
-set sizes of the run's process tree, sampled every 0.5 s, and the ranks' own maxrss) and
-frequencies are appended to ``benchmarks/results/bench_housing_p_refinement.json`` (rerun with the
-same levels to resume; ``--baseline`` reruns the P2 0.024 mesh in this invocation, for ratios under
-the same load).  Runs whose process tree exceeds ``--mem-limit-gb`` are killed and recorded as such.
+The reference (:func:`p3_reference`): the P2 -> P3 step on one mesh (0.8-3.1 %) dwarfs every P3
+mesh step (<= 0.4 %), most of which comes from the re-entrant junction edges, so an additive model
+f = f* + B h_bulk^qb + C h_edge^qe is fitted per mode from four P3 levels: the junction edges at
+0.024 / 0.012 / 0.006 (``edge_distance`` 0.012, bulk 0.024) and the bulk step 0.024 -> 0.020 at edge
+0.012; its uncertainty is the spread over the order ranges plus its miss of the uniform P3 0.020 run.
 
-Usage: ``python benchmarks/bench_housing_p_refinement.py [--levels 0.024:2 0.024:3 0.020:3 ...]``
-with a level ``size:degree[:bore_size[:edge_size]]`` (bore_size default size / 2, 0 or missing
-edge_size: no grading; edge_distance stays its default 2 x wall).
+Each run's DOF, wall (whole CLI process), eigen-solve time, peak memory (the ranks' summed maxrss,
+and the resident set size of the run's process tree sampled every 0.5 s) and frequencies are
+appended to ``benchmarks/results/bench_housing_p_refinement.json`` (rerun to resume: levels already
+there are skipped).  Runs whose process tree exceeds ``--mem-limit-gb`` are killed and recorded as
+failed.  ``--timing`` reruns the frontier candidates back to back (P2 0.024 first and last), for
+wall-time ratios under one load.
+
+Usage: ``python benchmarks/bench_housing_p_refinement.py [--levels 0.024:3 0.024:3:0.012:0.006:0.012 ...]``
+with a level ``size:degree[:bore_size[:edge_size[:edge_distance[:tol]]]]`` (0 or empty: the default:
+bore_size = size / 2, no grading, edge_distance 2 x wall, tol 1e-8); ``--timing``; ``--analyse-only``.
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
+import resource
 import shutil
 import signal
 import subprocess
@@ -38,7 +46,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_housing_convergence import OUT as OUT_UNIFORM, OUT_GRADED, ROOT, SCENE, VG, mpirun  # noqa: E402
 
 OUT = ROOT / "benchmarks" / "results" / "bench_housing_p_refinement.json"
-DEFAULT_LEVELS = ["0.024:2", "0.024:3", "0.024:3:0.024", "0.020:3"]
 #: the two-stage scene's highest excitation frequency at its top speed (3000 rpm: G1's second
 #: transmission-error harmonic, 2 x 40 teeth x 50 Hz; ``master_level.excitation_frequencies_hz``)
 F_EXC_HZ = 4000.0
@@ -85,6 +92,7 @@ def run_modes(size: float, degree: int, *, bore_size: float | None = None, edge_
         cmd += ["--set", a]
     row = {"size": size, "bore_size": bore_size, "degree": degree, "edge_size": edge_size,
            "n_processes": n, "overrides": args, "load_average_start": os.getloadavg()}
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd, env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, start_new_session=True)
@@ -101,7 +109,11 @@ def run_modes(size: float, degree: int, *, bore_size: float | None = None, edge_
         time.sleep(0.5)
     _, stderr = proc.communicate()
     wall = time.perf_counter() - t0
-    row.update(wall_s=wall, peak_tree_rss_mb=peak, load_average=os.getloadavg())
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    # CPU seconds of the whole process tree (mpirun and the ranks): less sensitive to other jobs
+    # on the machine than the wall
+    cpu = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    row.update(wall_s=wall, cpu_s=cpu, peak_tree_rss_mb=peak, load_average=os.getloadavg())
     try:
         if killed or proc.returncode != 0:
             row.update(failed=killed or f"rc={proc.returncode}: {stderr[-1500:]}")
@@ -116,6 +128,41 @@ def run_modes(size: float, degree: int, *, bore_size: float | None = None, edge_
         shutil.rmtree(out, ignore_errors=True)
 
 
+def run_key(r: dict) -> tuple:
+    """(size, degree, bore_size, edge_size, edge_distance, tol) of a run; None: the default."""
+    ov = dict(o.split("=", 1) for o in r.get("overrides", []))
+    dist, tol = ov.get("housing.mesh.edge_distance"), ov.get("housing.modes.tol")
+    return (round(r["size"], 9), int(r.get("degree", 2)), round(r.get("bore_size") or r["size"] / 2, 9),
+            round(r["edge_size"], 9) if r.get("edge_size") else None,
+            float(dist) if dist and r.get("edge_size") else None, float(tol) if tol else None)
+
+
+def parse_level(lv: str) -> tuple:
+    """``size:degree[:bore_size[:edge_size[:edge_distance[:tol]]]]`` (0 or empty: the default)."""
+    v = [float(x) if x else 0.0 for x in lv.split(":")] + [0.0] * 4
+    size, deg = v[0], int(v[1])
+    return (round(size, 9), deg, round(v[2] or size / 2, 9), round(v[3], 9) or None,
+            (v[4] or None) if v[3] else None, v[5] or None)
+
+
+#: the reference levels (keys as in :func:`run_key`): P3 on the bulk mesh 0.024 (bore 0.012) with
+#: the junction edges at 0.024 (uniform), 0.012, 0.006 (edge_distance 0.012), and the bulk step to
+#: 0.020 (bore 0.010) at edge size 0.012
+REF_U = (0.024, 3, 0.012, None, None, None)
+REF_E1 = (0.024, 3, 0.012, 0.012, 0.012, None)
+REF_E2 = (0.024, 3, 0.012, 0.006, 0.012, None)
+REF_B = (0.02, 3, 0.01, 0.012, 0.012, None)
+#: bulk order range (central 2) and edge order range used for the reference and its uncertainty
+BULK_ORDERS, BULK_ORDER = (1.5, 3.0), 2.0
+EDGE_ORDERS = (1.0, 2.0)
+DEFAULT_LEVELS = ["0.024:2", "0.024:3", "0.024:3:0.024", "0.020:3", "0.024:3:0.012:0.012",
+                  "0.024:3:0.012:0.012:0.012", "0.024:3:0.012:0.006:0.012", "0.020:3:0.010:0.012:0.012",
+                  "0.024:2:0.012:0:0:1e-5", "0.024:3:0.024:0:0:1e-5", "0.024:3:0.012:0:0:1e-5", "0.024:3:0.018"]
+#: the frontier candidates, rerun back to back by --timing (ratios under one load)
+TIMING_LEVELS = ["0.024:2", "0.024:3:0.024:0:0:1e-5", "0.024:3:0.018:0:0:1e-5", "0.024:3:0.012:0:0:1e-5",
+                 "0.024:3", "0.024:2"]
+
+
 def errors(F: np.ndarray, ref: np.ndarray, band: np.ndarray) -> dict:
     """Relative errors (signed: F above ref is positive) against ``ref``; ``band`` selects the
     modes the reduced model needs."""
@@ -128,126 +175,151 @@ def errors(F: np.ndarray, ref: np.ndarray, band: np.ndarray) -> dict:
             "n_band": int(band.sum())}
 
 
+def p3_reference(F: dict) -> dict:
+    """Additive error model f(h_bulk, h_edge) = f* + B h_bulk^qb + C h_edge^qe from the four P3
+    reference levels: the edge sequence (0.024, 0.012, 0.006 at bulk 0.024) gives the edge
+    remainder with its observed ratio (clipped to orders 1..2), the bulk step 0.024 -> 0.020 at edge
+    0.012 the bulk term (order 2; 1.5 and 3 for the range).  Uncertainty: the spread over the order
+    ranges plus the model's miss of the uniform P3 0.020 run (measured, not fitted)."""
+    u, e1, e2, b = (F[k] for k in (REF_U, REF_E1, REF_E2, REF_B))
+    d1, d2, db = e1 - u, e2 - e1, b - e1
+    ratio = d2 / d1
+
+    def model(r_edge, qb):
+        edge = -d2 * r_edge / (1 - r_edge)                    # remainder at edge 0.006 (> 0)
+        bulk = -db / (1 - (REF_B[0] / REF_U[0]) ** qb)         # bulk term at 0.024 (> 0)
+        return e2 - edge - bulk, edge, bulk
+    r_c = np.clip(ratio, 0.5 ** EDGE_ORDERS[1], 0.5 ** EDGE_ORDERS[0])
+    ref, edge, bulk = model(r_c, BULK_ORDER)
+    cands = [model(np.full_like(d2, 0.5 ** qe), qb)[0] for qe in EDGE_ORDERS for qb in BULK_ORDERS]
+    spread = np.maximum(ref - np.min(cands, axis=0), np.max(cands, axis=0) - ref)
+    info = {"reference_hz": ref.tolist(), "edge_ratio_per_mode": ratio.tolist(),
+            "edge_order_median": float(-np.log2(np.median(ratio))),
+            "edge_remainder_rel": (edge / ref).tolist(), "bulk_term_at_0024_rel": (bulk / ref).tolist(),
+            "order_spread_rel": (spread / ref).tolist()}
+    uni = F.get((0.02, 3, 0.01, None, None, None))
+    miss = np.zeros_like(ref)
+    if uni is not None:          # the model's prediction of the uniform 0.020 P3 run
+        qe = -np.log2(r_c)
+        pred = ref + edge * (0.020 / 0.006) ** qe + bulk * (0.020 / 0.024) ** BULK_ORDER
+        miss = np.abs(uni - pred)
+        info["uniform_0020_vs_model_rel"] = ((uni - pred) / pred).tolist()
+    unc = spread + miss
+    info.update(uncertainty_rel=(unc / ref).tolist(), uncertainty_rel_max=float(np.max(unc / ref)),
+                uncertainty_rel_median=float(np.median(unc / ref)),
+                uncertainty_max_mode=int(np.argmax(unc / ref)) + 1)
+    return info
+
+
 def analyse(rec: dict, count: int) -> None:
     runs = [r for r in rec["runs"] if not r.get("failed") and len(r.get("frequencies_hz", [])) >= count]
-    seqs = []
+    allruns = [{**r, "study": "p-refinement"} for r in runs]
     for name, path in (("uniform P2", OUT_UNIFORM), ("graded P2", OUT_GRADED)):
         if path.is_file():
             for r in json.loads(path.read_text())["runs"]:
                 if len(r["frequencies_hz"]) >= count:
-                    seqs.append({**r, "degree": 2, "study": name})
-    allruns = [{**r, "study": "p-refinement"} for r in runs] + seqs
-    F = {id(r): np.array(r["frequencies_hz"][:count]) for r in allruns}
-    # every conforming discretisation is an upper bound: the lowest frequency of each mode over all
-    # runs is the tightest upper bound of the (sharp-edged, straight-sided) continuum value
-    upper = np.min(np.array(list(F.values())), axis=0)
-    p3 = sorted((r for r in allruns if r["study"] == "p-refinement" and r["degree"] == 3 and not r.get("edge_size")
-                 and abs(r["bore_size"] - r["size"] / 2) < 1e-12), key=lambda r: -r["size"])
-    p2 = {r["size"]: r for r in allruns if r["degree"] == 2 and not r.get("edge_size")
-          and abs(r["bore_size"] - r["size"] / 2) < 1e-12}
-    ref_info: dict = {"upper_bound_hz": upper.tolist()}
-    if p3:
-        fine = p3[-1]
-        Ff = F[id(fine)]
-        ref_info["finest_p3"] = {"size": fine["size"], "n_dofs": fine["n_dofs"]}
-        # the P2 -> P3 step on each mesh, and the P3 change between meshes
-        steps = {}
-        for r in p3:
-            if r["size"] in p2:
-                d = (F[id(r)] - F[id(p2[r['size']])]) / F[id(r)]
-                steps[str(r["size"])] = {"median": float(np.median(d)), "min": float(d.min()), "max": float(d.max())}
-        ref_info["p2_to_p3_step"] = steps
-        if len(p3) >= 2:
-            c, f = p3[-2], p3[-1]
-            d = (F[id(f)] - F[id(c)]) / F[id(f)]
-            ref_info["p3_mesh_step"] = {"from": c["size"], "to": f["size"], "median": float(np.median(d)),
-                                        "min": float(d.min()), "max": float(d.max())}
-            # h-extrapolation of the two P3 meshes: order 1 (the singular-edge worst case seen in
-            # the P2 sequences) and order 2 bracket the limit below the finest P3 run
-            r_h = c["size"] / f["size"]
-            for p in (1.0, 2.0):
-                ext = F[id(f)] + (F[id(f)] - F[id(c)]) / (r_h ** p - 1.0)
-                ref_info[f"p3_richardson_order{p:g}_hz"] = ext.tolist()
-            ref = 0.5 * (np.array(ref_info["p3_richardson_order1_hz"]) + np.array(ref_info["p3_richardson_order2_hz"]))
-            unc = np.abs(np.array(ref_info["p3_richardson_order1_hz"]) - np.array(ref_info["p3_richardson_order2_hz"])) / 2
-            ref_info["reference_rule"] = ("mean of the order-1 and order-2 h-extrapolations of the two "
-                                          "finest P3 meshes; uncertainty: half their difference")
-        else:
-            ref, unc = Ff.copy(), np.abs(Ff - F[id(p2[fine['size']])]) if fine["size"] in p2 else Ff * 0
-            ref_info["reference_rule"] = "finest P3 run (upper bound); uncertainty: its P2 -> P3 step"
-        ref_info["reference_hz"] = ref.tolist()
-        ref_info["uncertainty_rel"] = (unc / ref).tolist()
-        ref_info["uncertainty_rel_max"] = float(np.max(unc / ref))
-        ref_info["uncertainty_rel_median"] = float(np.median(unc / ref))
-        # the P2 sequences' own limits for comparison
-        for name, path in (("uniform", OUT_UNIFORM), ("graded", OUT_GRADED)):
-            if path.is_file() and "convergence" in json.loads(path.read_text()):
-                R = np.array(json.loads(path.read_text())["convergence"]["reference_hz"][:count])
-                e = (R - ref) / ref
-                ref_info[f"{name}_p2_richardson_vs_reference"] = {
-                    "median": float(np.median(e)), "min": float(e.min()), "max": float(e.max())}
-        band = ref <= 2 * F_EXC_HZ
-        ref_info["band"] = {"f_exc_hz": F_EXC_HZ, "cutoff_hz": 2 * F_EXC_HZ, "n_modes": int(band.sum())}
-        rec["reference"] = ref_info
-        rec["levels"] = []
-        for r in sorted(allruns, key=lambda r: (r["study"], -r["size"], r["degree"], -(r.get("edge_size") or r["size"]))):
-            e = errors(F[id(r)], ref, band)
-            rec["levels"].append({"study": r["study"], "size": r["size"], "bore_size": r.get("bore_size"),
-                                  "degree": r["degree"], "edge_size": r.get("edge_size"), "n_dofs": r["n_dofs"],
-                                  "wall_s": r["wall_s"], "eigensolve_s": r["eigensolve_s"],
-                                  "peak_memory_mb": r["peak_memory_mb"], "peak_tree_rss_mb": r.get("peak_tree_rss_mb"),
-                                  "load_average": r["load_average"], "f1_hz": float(F[id(r)][0]),
-                                  "f_last_hz": float(F[id(r)][-1]), **e})
-            print(f"{r['study']:13s} size {r['size']:.4f} bore {r.get('bore_size') or 0:.4f} P{r['degree']} edge "
-                  f"{r.get('edge_size') or 0:.4f}: {r['n_dofs']:7d} DOF wall {r['wall_s']:6.1f} s eigen "
-                  f"{r['eigensolve_s']:6.1f} s  f1 {F[id(r)][0]:.2f}  f{count} {F[id(r)][-1]:.1f}  max "
-                  f"{100 * e['max_rel_error']:.2f} % (mode {e['max_error_mode']}), f1 {100 * e['rel_error_mode1']:+.2f} %, "
-                  f"f{count} {100 * e['rel_error_last']:+.2f} %, median {100 * e['median_rel_error']:+.2f} %")
-        print(f"reference ({ref_info['reference_rule']}): f1 {ref[0]:.2f} Hz, f{count} {ref[-1]:.1f} Hz, "
-              f"uncertainty max {100 * ref_info['uncertainty_rel_max']:.2f} %, median "
-              f"{100 * ref_info['uncertainty_rel_median']:.2f} %; upper bound f1 {upper[0]:.2f}, f{count} {upper[-1]:.1f}")
+                    allruns.append({**r, "degree": 2, "study": name,
+                                    "overrides": r.get("overrides", []) + ([f"housing.mesh.edge_distance="
+                                                                            f"{r['edge_distance']}"]
+                                                                           if r.get("edge_distance") else [])})
+    F = {run_key(r): np.array(r["frequencies_hz"][:count]) for r in runs}
+    if not all(k in F for k in (REF_U, REF_E1, REF_E2, REF_B)):
+        print("reference levels missing: run the default levels first")
+        return
+    info = p3_reference(F)
+    ref = np.array(info["reference_hz"])
+    # every conforming discretisation is an upper bound (up to the faceting of the bores)
+    upper = np.min(np.array([np.array(r["frequencies_hz"][:count]) for r in allruns]), axis=0)
+    info["upper_bound_hz"] = upper.tolist()
+    info["reference_vs_upper_bound_rel"] = {"median": float(np.median((ref - upper) / upper)),
+                                           "max": float(np.max((ref - upper) / upper))}
+    for name, path in (("uniform", OUT_UNIFORM), ("graded", OUT_GRADED)):
+        if path.is_file() and "convergence" in json.loads(path.read_text()):
+            R = np.array(json.loads(path.read_text())["convergence"]["reference_hz"][:count])
+            e = (R - ref) / ref
+            info[f"{name}_p2_richardson_vs_reference"] = {"median": float(np.median(e)), "min": float(e.min()),
+                                                         "max": float(e.max())}
+    band = ref <= 2 * F_EXC_HZ
+    info["band"] = {"f_exc_hz": F_EXC_HZ, "cutoff_hz": 2 * F_EXC_HZ, "n_modes": int(band.sum()),
+                    "note": "2 x the two-stage scene's highest excitation (8 kHz) lies above mode 100"}
+    rec["reference"] = info
+    rec["levels"] = []
+    for r in sorted(allruns, key=lambda r: (r["study"], r["degree"], -r["size"], -(r.get("edge_size") or r["size"]))):
+        Fr = np.array(r["frequencies_hz"][:count])
+        e = errors(Fr, ref, band)
+        k = run_key(r)
+        lv = {"study": r["study"], "size": k[0], "degree": k[1], "bore_size": k[2], "edge_size": k[3],
+              "edge_distance": k[4] if r["study"] == "p-refinement" else r.get("edge_distance"), "tol": k[5],
+              "n_dofs": r["n_dofs"], "wall_s": r["wall_s"], "cpu_s": r.get("cpu_s"), "eigensolve_s": r["eigensolve_s"],
+              "peak_memory_mb": r["peak_memory_mb"], "peak_tree_rss_mb": r.get("peak_tree_rss_mb"),
+              "load_average": r["load_average"], "f1_hz": float(Fr[0]), "f_last_hz": float(Fr[-1]),
+              "within_1pct_all": bool(e["max_rel_error"] <= 0.01),
+              "within_1pct_with_uncertainty": bool(np.all(np.abs(Fr - ref) + np.array(info["uncertainty_rel"]) * ref
+                                                          <= 0.01 * ref)), **e}
+        rec["levels"].append(lv)
+        print(f"{lv['study']:13s} {lv['size']:.4f}/{lv['bore_size']:.4f} P{lv['degree']} edge {lv['edge_size'] or 0:.4f}"
+              f"/{lv['edge_distance'] or 0:.3f} tol {lv['tol'] or 1e-8:g}: {lv['n_dofs']:7d} DOF wall {lv['wall_s']:6.1f} s "
+              f"eigen {lv['eigensolve_s']:6.1f} s mem {lv['peak_memory_mb'] / 1024:4.1f} GB f1 {Fr[0]:.2f} f{count} "
+              f"{Fr[-1]:.1f} | max {100 * e['max_rel_error']:.2f} % (mode {e['max_error_mode']}) f1 "
+              f"{100 * e['rel_error_mode1']:+.2f} % f{count} {100 * e['rel_error_last']:+.2f} % median "
+              f"{100 * e['median_rel_error']:+.2f} %{'  <1% incl. unc.' if lv['within_1pct_with_uncertainty'] else ''}")
+    print(f"reference: f1 {ref[0]:.2f} Hz, f{count} {ref[-1]:.1f} Hz; uncertainty median "
+          f"{100 * info['uncertainty_rel_median']:.2f} %, max {100 * info['uncertainty_rel_max']:.2f} % (mode "
+          f"{info['uncertainty_max_mode']}); edge order (median) {info['edge_order_median']:.2f}; reference vs "
+          f"lowest computed: median {100 * info['reference_vs_upper_bound_rel']['median']:+.2f} %")
+    for name in ("uniform", "graded"):
+        if f"{name}_p2_richardson_vs_reference" in info:
+            e = info[f"{name}_p2_richardson_vs_reference"]
+            print(f"{name} P2 Richardson limit vs reference: median {100 * e['median']:+.2f} %, "
+                  f"{100 * e['min']:+.2f} ... {100 * e['max']:+.2f} %")
+    for t in rec.get("timing", []):
+        base = [r for r in t["runs"] if run_key(r) == (0.024, 2, 0.012, None, None, None) and not r.get("failed")]
+        for r in t["runs"]:
+            if not r.get("failed"):
+                print(f"timing {t['started']}: {run_key(r)} wall {r['wall_s']:.1f} s eigen {r['eigensolve_s']:.1f} s"
+                      f" cpu {r.get('cpu_s', float('nan')):.1f} s load {r['load_average'][0]:.1f}"
+                      + (f" ({r['wall_s'] / np.mean([b['wall_s'] for b in base]):.2f}x P2 0.024)" if base else ""))
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--levels", nargs="+", default=DEFAULT_LEVELS,
-                    help="size:degree[:bore_size[:edge_size]]")
+                    help="size:degree[:bore_size[:edge_size[:edge_distance[:tol]]]]")
     ap.add_argument("--count", type=int, default=100)
     ap.add_argument("-n", type=int, default=2)
     ap.add_argument("--mem-limit-gb", type=float, default=12.0)
-    ap.add_argument("--set", dest="sets", action="append", default=[], help="extra --set for every run")
-    ap.add_argument("--baseline", action="store_true", help="rerun P2 0.024 first (same-load ratios)")
+    ap.add_argument("--timing", action="store_true",
+                    help="rerun the frontier candidates (TIMING_LEVELS or --levels) back to back")
     ap.add_argument("--analyse-only", action="store_true")
     a = ap.parse_args()
     rec = json.loads(OUT.read_text()) if OUT.is_file() else {"scene": "configs/housing.toml", "runs": []}
     tmp = Path(tempfile.mkdtemp(prefix="vg-pref-"))
-    levels = []
-    for lv in a.levels:
-        v = [float(x) for x in lv.split(":")]
-        levels.append((v[0], int(v[1]), v[2] if len(v) > 2 and v[2] else v[0] / 2,
-                       v[3] if len(v) > 3 and v[3] else None))
-    if a.baseline:
-        levels.insert(0, (0.024, 2, 0.012, None))
-
-    def same(r, size, deg, hb, he):
-        return (abs(r["size"] - size) < 1e-12 and r["degree"] == deg and abs(r["bore_size"] - hb) < 1e-12
-                and (r.get("edge_size") or None) == he and r.get("overrides", [])[5:] == [
-                    *([f"housing.mesh.edge_size={he}"] if he else []), *a.sets])
+    levels = [parse_level(lv) for lv in (a.levels if not a.timing or a.levels is not DEFAULT_LEVELS
+                                         else TIMING_LEVELS)]
+    timing = {"started": time.strftime("%Y-%m-%d %H:%M:%S"), "runs": []}
     try:
-        for k, (size, deg, hb, he) in enumerate(levels):
-            if a.analyse_only or (not (a.baseline and k == 0) and any(same(r, size, deg, hb, he) for r in rec["runs"])):
+        for key in ([] if a.analyse_only else levels):
+            if not a.timing and any(run_key(r) == key and not r.get("failed") for r in rec["runs"]):
                 continue
-            r = run_modes(size, deg, bore_size=hb, edge_size=he, count=a.count, n=a.n, tmp=tmp, sets=a.sets,
+            size, deg, hb, he, dist, tol = key
+            sets = ([f"housing.mesh.edge_distance={dist}"] if dist else []) + (
+                [f"housing.modes.tol={tol}"] if tol else [])
+            r = run_modes(size, deg, bore_size=hb, edge_size=he, count=a.count, n=a.n, tmp=tmp, sets=sets,
                           mem_limit_gb=a.mem_limit_gb)
             if r.get("failed"):
-                print(f"size {size} P{deg} bore {hb} edge {he}: FAILED ({r['failed'][:300]}), wall "
-                      f"{r['wall_s']:.1f} s, peak tree RSS {r['peak_tree_rss_mb']:.0f} MB", flush=True)
+                print(f"{key}: FAILED ({r['failed'][:300]}), wall {r['wall_s']:.1f} s, peak tree RSS "
+                      f"{r['peak_tree_rss_mb']:.0f} MB", flush=True)
             else:
-                print(f"size {size} P{deg} bore {hb} edge {he}: {r['n_dofs']} DOF, wall {r['wall_s']:.1f} s, eigen "
-                      f"{r['eigensolve_s']:.1f} s, peak {r['peak_memory_mb']:.0f} MB (tree {r['peak_tree_rss_mb']:.0f}), "
-                      f"f1 {r['frequencies_hz'][0]:.2f}, f{a.count} {r['frequencies_hz'][a.count - 1]:.1f}, load "
-                      f"{os.getloadavg()[0]:.1f}", flush=True)
-            rec["runs"].append(r)
+                print(f"{key}: {r['n_dofs']} DOF, wall {r['wall_s']:.1f} s, eigen {r['eigensolve_s']:.1f} s, peak "
+                      f"{r['peak_memory_mb']:.0f} MB (tree {r['peak_tree_rss_mb']:.0f}), f1 {r['frequencies_hz'][0]:.2f}, "
+                      f"f{a.count} {r['frequencies_hz'][a.count - 1]:.1f}, load {os.getloadavg()[0]:.1f}", flush=True)
+            if a.timing:
+                timing["runs"].append(r)
+                rec.setdefault("timing", [])
+                if timing not in rec["timing"]:
+                    rec["timing"].append(timing)
+            else:
+                rec["runs"].append(r)
             OUT.write_text(json.dumps(rec, indent=1))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -31,6 +31,10 @@ def test_defaults_steel_p2_fixed():
     assert h.mesh.degree == 2 and h.support == "fixed" and h.base == "plate"
     assert h.mesh_size == pytest.approx(1.3 * 0.012)
     assert h.bore_mesh_size == pytest.approx(0.5 * h.mesh_size)
+    # P3 defaults to 2 x wall (the measured frontier, docs/housing.md), bores at half that
+    p3 = _housing(mesh={"degree": 3})
+    assert p3.mesh_size == pytest.approx(2.0 * 0.012)
+    assert p3.bore_mesh_size == pytest.approx(0.012)
 
 
 @pytest.mark.parametrize("kw, field", [
@@ -59,7 +63,7 @@ _BAD = {
     "E_nonpositive": (["--set", "housing.material.E=0"], "housing.material.E", "> 0"),
     "rho_negative": (["--set", "housing.material.rho=-7850"], "housing.material.rho", "> 0"),
     "mesh_coarse": (["--set", "housing.mesh.size=0.05"], "housing.mesh.size", "across the wall"),
-    "degree": (["--set", "housing.mesh.degree=3"], "housing.mesh.degree", "<= 2"),
+    "degree": (["--set", "housing.mesh.degree=4"], "housing.mesh.degree", "<= 3"),
     "support": (["--set", "housing.support=glued"], "housing.support", "fixed"),
     "sweep_param": (["--set", "scene.analyses=['housing_sweep']", "--set", "housing_sweep.parameter='housing.foo'",
                      "--set", "housing_sweep.values=[1.0]"], "housing_sweep.parameter", "names no"),
