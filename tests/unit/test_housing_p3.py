@@ -13,13 +13,12 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
+from reference.timoshenko_beam import timoshenko_cantilever_f1
 from vibrogear.config import ConfigError
 from vibrogear.config.housing import MaterialConfig
 
@@ -29,22 +28,6 @@ L, B, H = 1.0, 0.1, 0.05
 E, NU, RHO = 210e9, 0.3, 7850.0
 
 
-def timoshenko_cantilever_f1(*, E, nu, rho, L, b, h):
-    """First bending frequency (Hz) of a clamped-free Timoshenko beam bending across h (Huang 1961)."""
-    A, I = b * h, b * h ** 3 / 12
-    G = E / (2 * (1 + nu))
-    kappa = 10 * (1 + nu) / (12 + 11 * nu)
-    r2, s2 = I / (A * L ** 2), E * I / (kappa * G * A * L ** 2)
-
-    def eq(bb):
-        root = math.sqrt((r2 - s2) ** 2 + 4 / bb ** 2)
-        al = math.sqrt(0.5 * (-(r2 + s2) + root))
-        be = math.sqrt(0.5 * ((r2 + s2) + root))
-        return (2 + (bb ** 2 * (r2 - s2) ** 2 + 2) * math.cosh(bb * al) * math.cos(bb * be)
-                - bb * (r2 + s2) / math.sqrt(1 - bb ** 2 * r2 * s2) * math.sinh(bb * al) * math.sin(bb * be))
-
-    bb = brentq(eq, 1.0, 5.0)
-    return bb * math.sqrt(E * I / (rho * A * L ** 4)) / (2 * math.pi)
 
 
 @pytest.fixture(scope="module")
