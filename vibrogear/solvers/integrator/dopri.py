@@ -110,10 +110,10 @@ JAC_AUTO, JAC_LOOPS, JAC_BLAS = -1, 0, 1
 
 #: what the loop returns: status code, end time and state, tangent [d u / d u0 | d u / d p],
 #: dense output, counters (steps, rejected, rhs calls, events, losses of the monitored
-#: contact), event log (time, contact, new mode; ``ev_r``: the rate of the switching
-#: function there, d delta / dt of that contact at the switch), monitored extrema, final modes, u' at
+#: contact), event log (time, contact, new mode), monitored extrema, final modes, u' at
 #: the end, sum of the local error estimates, the step the controller proposes next (the
-#: last step before it was cut to end at t1: a run that continues this one starts there)
+#: last step before it was cut to end at t1: a run that continues this one starts there),
+#: and the event log's rates (``ev_r``: d delta / dt of the switching contact there)
 LoopResult = namedtuple("LoopResult", [
     "status", "t", "y", "Phi", "u_eval", "counters", "ev_t", "ev_j", "ev_m", "mon_min",
     "mon_max", "mode", "f_end", "err_sum", "h_next", "ev_r"])

@@ -57,8 +57,8 @@ class CorrectorProblem:
         self.last_orbit = None          # Trajectory of the last orbit integrated
         self.rejected = {"angle": 0, "corrector": 0}    # rejected steps by reason
         # every orbit's first trial step: the step the first orbit's controller proposed
-        # at its end (one value for the whole branch, so H stays one function of z); the
-        # default start spent 6 of 50 steps of a two-stage orbit growing its step
+        # at its end (one value for the whole branch, so the residual stays one function
+        # of z); the default start spent 6 of 50 steps of a two-stage orbit growing it
         self.first_step = None
 
     def flow(self, z: np.ndarray) -> PeriodicFlow:
@@ -121,14 +121,14 @@ def tangent_and_start(J: np.ndarray, prev: np.ndarray | None):
     """(t, H): :func:`tangent` of the bordered Jacobian J, and H = inv([J; t^T]), the
     quasi-Newton corrector's start from J along t, from the same QR: with J^T = Q R,
     [J; t^T] = diag(R1^T, s) Q^T (s = +-1, t = s q_last), so its inverse is
-    [Q1 R1^-T, s q_last]: one triangular solve instead of an LU and its inverse (1.2
-    against 6.7 ms at 292 states, once a point).  H is None where J borders neutral
-    directions (t is then the truncated null vector, renormalised)."""
+    [Q1 R1^-T, s q_last]: one triangular solve instead of an LU and its inverse, once a
+    point.  H is None where J borders neutral directions (t is then the truncated null
+    vector, renormalised)."""
     if prev is None or J.shape[1] != prev.size:         # bordered: k neutral directions
         return tangent(J, prev), None
     q, r = scipy.linalg.qr(J.T, mode="full")
     t = q[:, -1].copy()
-    s = -1.0 if prev is not None and t @ prev < 0 else 1.0
+    s = -1.0 if t @ prev < 0 else 1.0
     t *= s
     n = J.shape[0]
     H = np.empty((n + 1, n + 1))
