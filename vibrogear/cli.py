@@ -91,8 +91,10 @@ def _handle_stop_signals() -> None:
         request_stop(signum)
         # worker processes (run_units) get the signal too, as a terminal's Ctrl-C reaches
         # the whole process group; the pool then ends instead of finishing its units
-        import multiprocessing
-        for child in multiprocessing.active_children():
+        # the signal can arrive while multiprocessing is being imported (its first use, in
+        # run_units): a module not yet initialised has no children to stop
+        active = getattr(sys.modules.get("multiprocessing"), "active_children", None)
+        for child in active() if active is not None else ():
             child.terminate()
         if not stop_deferred():                 # else the pool's wait loop raises it
             raise Terminated(signum)
