@@ -1,5 +1,5 @@
 """The sweep's vectorised helpers against their plain forms: the contact fractions of many
-contacts at once (unloaded rolling elements) against the one-contact computation, including
+contacts at once (meshes, unloaded rolling elements) against the one-contact computation, including
 events at the window's start and contacts without events; the greedy Poincare clusters
 against the loop over centres; the monitored deformation against the contact kinematics."""
 from __future__ import annotations
@@ -8,8 +8,16 @@ import numpy as np
 
 from pathlib import Path
 
-from vibrogear.solvers.sequential.motion import (_fraction, _fractions, _scaled, count_clusters,
+from vibrogear.solvers.sequential.motion import (_fractions, _scaled, count_clusters,
                                                  monitored_deformation)
+
+
+def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:
+    """The plain form, one contact: the window's length in contact (mode != 0) from the
+    initial mode and the contact's own switches."""
+    edges = np.concatenate([[t0], times, [t1]])
+    states = np.concatenate([[mode0], modes])
+    return float(np.sum(np.diff(edges) * (states != 0)) / (t1 - t0))
 
 
 def test_fractions_equal_the_one_contact_form():

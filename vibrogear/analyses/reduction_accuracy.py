@@ -178,7 +178,7 @@ def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
     from ..models.contact_law import flank
     from ..solvers.integrator.contact_eval import contact_kinematics
     from ..solvers.sequential.motion import contact_groups, metrics_with_errors
-    from ..solvers.sequential.sweep_point import onset_speeds
+    from ..solvers.sequential.record_window import onset_speeds
 
     groups = contact_groups(r)
     key = next((k for k, (kind, _) in groups.items() if kind == "mesh"), None)

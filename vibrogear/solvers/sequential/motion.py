@@ -103,18 +103,12 @@ def contact_groups(model: ReducedModel) -> dict:
     return out
 
 
-def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:
-    """Fraction of [t0, t1] with mode != 0, from the initial mode and the switches."""
-    edges = np.concatenate([[t0], times, [t1]])
-    states = np.concatenate([[mode0], modes])
-    return float(np.sum(np.diff(edges) * (states != 0)) / (t1 - t0))
-
-
 def _fractions(mode0, times, contacts_of, modes, t0: float, t1: float, rows) -> np.ndarray:
-    """:func:`_fraction` of each contact in ``rows`` at once (events (``times``,
-    ``contacts_of``, ``modes``) of all contacts in time order): every contact's mode
-    segments, sorted by contact then time, their lengths summed per contact (a bearing's
-    rolling elements one by one cost 7 ms a sweep point on the two-stage gearbox)."""
+    """The fraction of [t0, t1] each contact in ``rows`` spends in contact (mode != 0),
+    from the modes ``mode0`` at t0 and the events (``times``, ``contacts_of``, ``modes``)
+    of all contacts in time order: every contact's mode segments, sorted by contact then
+    time, their lengths summed per contact (contact by contact, a bearing's rolling
+    elements cost 7 ms a sweep point on the two-stage gearbox)."""
     rows = np.asarray(rows, dtype=int)
     keep = np.isin(contacts_of, rows)
     c = np.concatenate([rows, np.asarray(contacts_of)[keep]])
@@ -142,9 +136,9 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
     c2 = np.sum(model.contacts.directions ** 2, axis=1)
     per_s = 1.0 / model.time_unit_s          # approach speeds per second, not per model time
     joule = model.force_unit_n               # model energy (force x length) -> J
-    # every bearing's rolling elements in one call (the same per-element sums)
-    rows = [np.asarray(idx, dtype=int) for kind, idx in groups.values() if kind != "mesh"]
-    rows = np.concatenate(rows) if rows else np.zeros(0, int)
+    # every group's contacts in one call (each contact's own segments summed)
+    rows = [np.asarray(idx, dtype=int) for _, idx in groups.values()]
+    rows = np.unique(np.concatenate(rows)) if rows else np.zeros(0, int)
     on = dict(zip(rows.tolist(), _fractions(mode0, t, j, md, t0, t1, rows))) if rows.size \
         else {}
     for key, (kind, idx) in groups.items():
@@ -160,7 +154,7 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
             out[f"impact_velocity_rms_{key}"] = float(np.sqrt(np.mean(v ** 2))) if v.size \
                 else empty
             out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else empty
-            out[f"contact_fraction_{key}"] = _fraction(int(mode0[c]), t[mine], md[mine], t0, t1)
+            out[f"contact_fraction_{key}"] = float(on[c])
             out[f"rattle_{key}"] = float(np.sum(0.5 * speed[onset] ** 2 / c2[c]) * joule / P)
         else:
             out[f"unloaded_{key}"] = float(np.sum(1.0 - np.array([on[int(c)] for c in idx])))

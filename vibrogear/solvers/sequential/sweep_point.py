@@ -59,12 +59,12 @@ from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
-from .record_window import RecordWindow, count, onset_speeds, record_extrema, record_window
+from .record_window import RecordWindow, count, record_extrema, record_window
 from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from ..status import Status
 
-__all__ = ["PointRecord", "run_point", "failed_point", "onset_speeds", "SETTLE_TOL", "NO_CONTRACTION",
+__all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
            "SETTLE_WINDOW", "PHASES"]
 
 #: the phases of a point whose wall time :attr:`PointRecord.timings` reports
