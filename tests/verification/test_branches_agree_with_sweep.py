@@ -28,25 +28,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from branch_orbits import extrema_error, stable_orbits_through
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config.scene import load_scene
-from vibrogear.solvers.periodic.shooting import shoot
-from vibrogear.config.options import ShootingOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = str(ROOT / "configs" / "gear_pair.toml")
 SETTINGS = ["sweep.rpm_min=5850.0", "sweep.rpm_max=6450.0", "sweep.n_points=37",
             "continuation.rpm_min=5850.0", "continuation.rpm_max=6450.0",
             "continuation.from_sweep=true", "continuation.max_points=120"]
-
-
-def _bracket(br_param, param):
-    """Indices (a, b) of consecutive branch points around ``param``."""
-    for a in range(br_param.size - 1):
-        lo, hi = sorted((br_param[a], br_param[a + 1]))
-        if lo <= param <= hi:
-            yield a, a + 1
 
 
 @pytest.mark.slow
@@ -69,22 +60,9 @@ def test_stable_branches_agree_with_periodic_sweep_points(tmp_path):
     checked = 0
     for k in periodic[sw["period_n"][periodic] <= 2]:
         n, p = int(sw["period_n"][k]), float(sw["param"][k])
-        found = []
-        for b in np.unique(br["branch"][br["n_periods"] == n]):
-            sel = np.flatnonzero(br["branch"] == b)
-            for a, c in _bracket(br["param"][sel], p):
-                a, c = sel[a], sel[c]
-                if not (br["stable"][a] or br["stable"][c]):
-                    continue
-                s = (p - br["param"][a]) / (br["param"][c] - br["param"][a])
-                guess = (1 - s) * br["u0"][a] + s * br["u0"][c]
-                orb = shoot(study.model, p, guess, n_periods=n, options=opts, shooting=ShootingOptions(tol=scene.shooting.tol, max_iter=8))
-                if orb.converged and orb.stable:
-                    found.append(orb)
+        found = stable_orbits_through(study.model, br, n, p, opts, scene.shooting.tol)
         assert found, f"no stable period-{n} branch through the sweep point at {p} rpm"
-        scale = max(abs(sw["qmax"][k]), abs(sw["qmin"][k]))
-        err = min(max(abs(o.monitor_max - sw["qmax"][k]), abs(o.monitor_min - sw["qmin"][k]))
-                  for o in found) / scale
+        err = extrema_error(found, sw, k)
         assert err < 1e-3, (n, p, err)
         checked += 1
     assert checked >= 20

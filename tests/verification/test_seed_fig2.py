@@ -23,12 +23,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from branch_orbits import extrema_error, stable_orbits_through
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
-from vibrogear.config.options import ShootingOptions
 from vibrogear.config.scene import load_scene
 from vibrogear.report.fig2 import plot_fig2
-from vibrogear.solvers.periodic.shooting import shoot
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = str(ROOT / "configs" / "two_stage_seed.toml")
@@ -36,13 +35,6 @@ SETTINGS = ["sweep.rpm_min=2150.0", "sweep.rpm_max=2450.0", "sweep.n_points=13",
             "sweep.workers=1", "continuation.rpm_min=2150.0", "continuation.rpm_max=2450.0",
             "continuation.start=min", "continuation.max_points=3",
             "continuation.from_sweep=true", "continuation.from_sweep_max_points=12"]
-
-
-def _bracket(br_param, param):
-    for a in range(br_param.size - 1):
-        lo, hi = sorted((br_param[a], br_param[a + 1]))
-        if lo <= param <= hi:
-            yield a, a + 1
 
 
 @pytest.mark.slow
@@ -65,23 +57,9 @@ def test_seed_sweep_periodic_points_lie_on_stable_branches(tmp_path):
     assert periodic.size >= 8            # the window is period-1 (measured: 13 of 13 points)
     for k in periodic:
         n, p = int(sw["period_n"][k]), float(sw["param"][k])
-        found = []
-        for b in np.unique(br["branch"][br["n_periods"] == n]):
-            sel = np.flatnonzero(br["branch"] == b)
-            for a, c in _bracket(br["param"][sel], p):
-                a, c = sel[a], sel[c]
-                if not (br["stable"][a] or br["stable"][c]):
-                    continue
-                s = (p - br["param"][a]) / (br["param"][c] - br["param"][a])
-                guess = (1 - s) * br["u0"][a] + s * br["u0"][c]
-                orb = shoot(study.model, p, guess, n_periods=n, options=opts,
-                            shooting=ShootingOptions(tol=scene.shooting.tol, max_iter=8))
-                if orb.converged and orb.stable:
-                    found.append(orb)
+        found = stable_orbits_through(study.model, br, n, p, opts, scene.shooting.tol)
         assert found, f"no stable period-{n} branch through the sweep point at {p} rpm"
-        scale = max(abs(sw["qmax"][k]), abs(sw["qmin"][k]))
-        err = min(max(abs(o.monitor_max - sw["qmax"][k]), abs(o.monitor_min - sw["qmin"][k]))
-                  for o in found) / scale
+        err = extrema_error(found, sw, k)
         assert err < 1e-3, (n, p, err)
 
 
