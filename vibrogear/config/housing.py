@@ -200,7 +200,7 @@ class HousingConfig:
     def mesh_size(self) -> float:
         if self.mesh.size is not None:
             return self.mesh.size
-        per_wall = DEFAULT_SIZE_PER_WALL[min(self.mesh.degree, 3)]
+        per_wall = DEFAULT_SIZE_PER_WALL[self.mesh.degree]
         return per_wall * self.wall_thickness if self.wall_thickness is not None else math.nan
 
     @property

@@ -15,10 +15,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from .fe_eigen import _PREFIX
+
 __all__ = ["amg_ksp", "rigid_body_modes"]
 
-_PREFIX = "vghousing_st_"
-
+_ST = f"{_PREFIX}st_"      # the spectral transform's KSP (options -vghousing_st_...)
 
 def rigid_body_modes(coords: np.ndarray, comm) -> np.ndarray:
     """(3 n, 6) M-independent, Euclidean-orthonormal rigid-body modes on the owned nodes ``coords``
@@ -62,11 +63,11 @@ def amg_ksp(K, coords: np.ndarray, comm, *, inner: str = "preonly", rtol: float 
                 "pc_hypre_boomeramg_vec_interp_variant": 3, "pc_hypre_boomeramg_coarsen_type": "HMIS",
                 "pc_hypre_boomeramg_interp_type": "ext+i", "pc_hypre_boomeramg_P_max": 4,
                 "pc_hypre_boomeramg_agg_nl": 1}
-    added = [k for k in defaults if f"{_PREFIX}{k}" not in opts]
+    added = [k for k in defaults if f"{_ST}{k}" not in opts]
     for k in added:
-        opts[f"{_PREFIX}{k}"] = defaults[k]
+        opts[f"{_ST}{k}"] = defaults[k]
     ksp = PETSc.KSP().create(comm)
-    ksp.setOptionsPrefix(_PREFIX)
+    ksp.setOptionsPrefix(_ST)
     ksp.setOperators(K)
     if inner == "cg":
         ksp.setType(PETSc.KSP.Type.CG)
@@ -80,7 +81,7 @@ def amg_ksp(K, coords: np.ndarray, comm, *, inner: str = "preonly", rtol: float 
         ksp.setUp()
     finally:
         for k in added:
-            opts.delValue(f"{_PREFIX}{k}")
+            opts.delValue(f"{_ST}{k}")
     for v in vecs:
         v.destroy()
     return ksp, ns

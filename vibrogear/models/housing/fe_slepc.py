@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SLEPC_SOLVERS", "slepc_eigensolve"]
+from .fe_eigen import _PREFIX, HousingSolveError
 
-_PREFIX = "vghousing_"
+__all__ = ["SLEPC_SOLVERS", "slepc_eigensolve"]
 
 #: solver name -> (SLEPc EPS type, spectral transform, linear solver: "direct" factor or "amg").
 #: The LOBPCG entries are for the benchmarks only (not in ``HOUSING_SOLVERS``): with K^-1 as
@@ -79,12 +79,24 @@ def slepc_eigensolve(K, M, ksp, *, method: str, count: int, cutoff_hz: float | N
 
     With ``cutoff_hz`` the number of requested pairs doubles (from 20) until one lies above the
     cut-off or ``max_count`` is reached (status ``truncated``).  Returns (lam ascending, local rows
-    of X (n_own x m), converged reason, n converged, status, message, statistics)."""
+    of X (n_own x m), converged reason, n converged, status, message, statistics); raises
+    HousingSolveError where fewer than ``count`` pairs converged."""
+    Mp = _definite_mass(K, M) if SLEPC_SOLVERS[method][0] == "lobpcg" else M
+    eps = _eps(K, Mp, ksp, method, tol, comm, max_it)
+    try:
+        return _solve(eps, K, method, count, cutoff_hz, max_count)
+    finally:
+        eps.destroy()
+        if Mp is not M:
+            Mp.destroy()
+
+
+def _solve(eps, K, method, count, cutoff_hz, max_count):
+    """The pairs of :func:`slepc_eigensolve` from its set-up ``eps``; raises
+    HousingSolveError where fewer than ``count`` converged (without a cut-off)."""
     from petsc4py import PETSc
     from slepc4py import SLEPc
 
-    Mp = _definite_mass(K, M) if SLEPC_SOLVERS[method][0] == "lobpcg" else M
-    eps = _eps(K, Mp, ksp, method, tol, comm, max_it)
     eps.setFromOptions()
     nev = count if cutoff_hz is None else min(20, max_count)
     lam_cut = None if cutoff_hz is None else (2 * np.pi * cutoff_hz) ** 2
@@ -105,22 +117,16 @@ def slepc_eigensolve(K, M, ksp, *, method: str, count: int, cutoff_hz: float | N
     reason = SLEPc.EPS.ConvergedReason
     rname = {getattr(reason, k): k for k in dir(reason) if not k.startswith("_")}.get(
         eps.getConvergedReason(), str(eps.getConvergedReason()))
+    if lam_cut is None and nconv < count:
+        raise HousingSolveError(f"SLEPc {method} converged {nconv} of {count} modes ({rname})")
     order = np.argsort(lam)
     want = list(order[:nev]) if lam_cut is None else [i for i in order if lam[i] < lam_cut][:max_count]
     stats = {"eps_iterations": int(its), "ncv": int(eps.getDimensions()[1]), "method": method,
              "linear_iterations": int(eps.getST().getKSP().getIterationNumber())}
-    if lam_cut is None and nconv < count:
-        eps.destroy()
-        if Mp is not M:
-            Mp.destroy()
-        return None, None, rname, nconv, "failed", f"SLEPc {method} converged {nconv} of {count} modes ({rname})", stats
     X = np.empty((K.getLocalSize()[0], len(want)), order="F")
     x = K.createVecRight()
     for j, i in enumerate(want):
         eps.getEigenpair(int(i), x)
         X[:, j] = x.array
     x.destroy()
-    eps.destroy()
-    if Mp is not M:
-        Mp.destroy()
     return lam[want], X, rname, nconv, status, message, stats
