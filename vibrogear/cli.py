@@ -88,7 +88,6 @@ def _handle_stop_signals() -> None:
         return
 
     def stop(signum, _frame):
-        request_stop(signum)
         # worker processes (run_units) get the signal too, as a terminal's Ctrl-C reaches
         # the whole process group; the pool then ends instead of finishing its units
         # the signal can arrive while multiprocessing is being imported (its first use, in
@@ -96,7 +95,9 @@ def _handle_stop_signals() -> None:
         active = getattr(sys.modules.get("multiprocessing"), "active_children", None)
         for child in active() if active is not None else ():
             child.terminate()
-        if not stop_deferred():                 # else the pool's wait loop raises it
+        if stop_deferred():                     # the pool's wait loop raises it
+            request_stop(signum)
+        else:
             raise Terminated(signum)
     for sig in (signal.SIGTERM, signal.SIGHUP):
         signal.signal(sig, stop)

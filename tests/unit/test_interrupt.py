@@ -49,3 +49,17 @@ def test_ctrl_c_stops_cleanly_and_a_changed_model_does_not_resume(tmp_path):
     stale = list(out.glob("sweep.partial.jsonl.stale-*"))
     assert len(stale) == 1 and stale[0].read_text().count("\n") == kept
     assert not partial.exists()
+
+
+def test_a_recorded_stop_is_raised_once():
+    """A signal recorded while workers were forked is raised by the next wait loop, and only
+    once: a later run in the same process (a second main()) does not inherit it."""
+    import signal
+
+    from vibrogear.pipeline.units_base import Terminated, raise_if_stopped, request_stop
+
+    request_stop(signal.SIGTERM)
+    with pytest.raises(Terminated) as e:
+        raise_if_stopped()
+    assert e.value.signum == signal.SIGTERM
+    raise_if_stopped()                      # cleared: nothing raised

@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .units_base import Terminated, clear_stop, is_root, raise_if_stopped, request_stop  # noqa: F401
+from .units_base import Terminated, is_root
 from .progress import Progress
 
 __all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "LostUnits", "Terminated",
            "WriteFailure",
-           "is_root_process", "request_stop", "raise_if_stopped", "clear_stop"]
+           "is_root_process"]
 
 
 

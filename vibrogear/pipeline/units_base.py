@@ -10,7 +10,7 @@ from contextlib import contextmanager
 
 __all__ = ["UnitError", "in_unit", "inside_unit", "Terminated", "request_stop", "raise_if_stopped",
            "under_mpi", "is_root",
-           "clear_stop", "deferred_stop", "stop_deferred"]
+           "deferred_stop", "stop_deferred"]
 
 #: units of a parallel run_units (a worker process or an MPI rank) running in this process
 _DEPTH = [0]
@@ -96,10 +96,10 @@ _PENDING: list[int] = []
 
 
 def request_stop(signum: int) -> None:
-    """Record a stop signal.  The handler also raises :class:`Terminated` at once, except
-    inside :func:`deferred_stop` (worker processes being forked: a raise there lands in an
-    at-fork hook, where Python prints it and drops it); the loops that wait on workers call
-    :func:`raise_if_stopped`, so the signal is never lost."""
+    """Record a stop signal that arrived inside :func:`deferred_stop` (worker processes
+    being forked: a raise there lands in an at-fork hook, where Python prints it and drops
+    it; elsewhere the handler raises :class:`Terminated` at once); the loops that wait on
+    workers call :func:`raise_if_stopped`, so the signal is never lost."""
     _PENDING.append(int(signum))
 
 
@@ -122,12 +122,11 @@ def stop_deferred() -> bool:
 
 
 def raise_if_stopped() -> None:
+    """Raise :class:`Terminated` for a recorded stop signal (once: the record is cleared)."""
     if _PENDING:
-        raise Terminated(_PENDING[0])
-
-
-def clear_stop() -> None:
-    _PENDING.clear()
+        signum = _PENDING[0]
+        _PENDING.clear()
+        raise Terminated(signum)
 
 
 def under_mpi() -> bool:
