@@ -15,7 +15,7 @@ from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
 from .status import Outcome, Status
 
-__all__ = ["StaticResult", "static_equilibrium"]
+__all__ = ["StaticResult", "static_equilibrium", "static_forces"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -46,7 +46,10 @@ class StaticResult:
                        self.error_estimate)
 
 
-def _forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):
+def static_forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):
+    """(r, J) at rest at the positions x: the residual r = F0 - (restoring forces + mu x)
+    and its negative Jacobian J = d(restoring forces)/dx + mu I (contacts through the one
+    contact law, at zero velocity)."""
     ct, cp = model.contacts, model.coupling
     spin = model.spin_per_param * param
     Kc = cp.Kc0 + spin * cp.Kc1
@@ -63,7 +66,7 @@ def _forces(model: ReducedModel, x: np.ndarray, param: float, mu: float = 0.0):
 
 
 def _newton(model, x, param, mu, tol, max_iter, scale):
-    r, J = _forces(model, x, param, mu)
+    r, J = static_forces(model, x, param, mu)
     res = np.linalg.norm(r) / scale
     it = 0
     while res > tol and it < max_iter:
@@ -74,7 +77,7 @@ def _newton(model, x, param, mu, tol, max_iter, scale):
             dx = np.linalg.lstsq(J, r, rcond=None)[0]
         lam = 1.0
         for _ in range(30):
-            r2, J2 = _forces(model, x + lam * dx, param, mu)
+            r2, J2 = static_forces(model, x + lam * dx, param, mu)
             res2 = np.linalg.norm(r2) / scale
             if res2 < res or res2 <= tol:
                 break

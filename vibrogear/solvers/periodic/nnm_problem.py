@@ -44,6 +44,9 @@ import dataclasses
 import numpy as np
 
 from ...models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
+from ..integrator.trust import mechanical_energy
+from ..linear import tangent_matrices
+from ..static import static_forces
 from .corrector import CorrectorProblem
 from .floquet import NEUTRAL_RTOL
 
@@ -74,62 +77,23 @@ def conservative_model(model: ReducedModel) -> tuple[ReducedModel, float]:
     return out, skew
 
 
-def _contact_terms(model: ReducedModel, x: np.ndarray):
-    """(potential, force) of every contact at the positions x (mean stiffness, e = 0)."""
-    ct = model.contacts
-    d = ct.directions @ x
-    over = np.maximum(d - ct.gap_hi, 0.0)
-    under = np.maximum(ct.gap_lo - d, 0.0)          # 0 where gap_lo = -inf
-    p = ct.exponent
-    pot = (ct.k_hi * over ** (p + 1) + ct.k_lo * under ** (p + 1)) / (p + 1)
-    force = ct.k_hi * over ** p - ct.k_lo * under ** p
-    return pot, force
-
-
 def energy(model: ReducedModel, u) -> float:
-    """The conserved energy of the conservative model at the state u (module docstring)."""
-    u = np.asarray(u, dtype=float)
-    m = model.n_modes
-    x, v = u[:m], u[m:]
-    cp = model.coupling
-    e = 0.5 * float(v @ v) + 0.5 * float(x @ (model.omega2 * x)) - float(model.forcing.F0 @ x)
-    if cp.P.shape[0]:
-        y = cp.P @ x
-        e += 0.5 * float(y @ (cp.Kc0 @ y))
-    if model.contacts.count:
-        e += float(np.sum(_contact_terms(model, x)[0]))
-    return e
+    """The conserved energy of the conservative model at the state u (module docstring):
+    :func:`~..integrator.trust.mechanical_energy`."""
+    return mechanical_energy(model, np.asarray(u, dtype=float))
 
 
 def energy_gradient(model: ReducedModel, u) -> np.ndarray:
-    """grad E = [restoring force - F0, velocity]."""
+    """grad E = [restoring force - F0, velocity] (:func:`~..static.static_forces`)."""
     u = np.asarray(u, dtype=float)
     m = model.n_modes
-    x = u[:m]
-    cp = model.coupling
-    g = model.omega2 * x - model.forcing.F0
-    if cp.P.shape[0]:
-        g = g + cp.P.T @ (cp.Kc0 @ (cp.P @ x))
-    if model.contacts.count:
-        g = g + model.contacts.directions.T @ _contact_terms(model, x)[1]
-    return np.concatenate([g, u[m:]])
+    return np.concatenate([-static_forces(model, u[:m], 0.0)[0], u[m:]])
 
 
 def tangent_stiffness(model: ReducedModel, x: np.ndarray) -> np.ndarray:
-    """d(restoring force)/dx of the conservative model at the positions x (symmetric)."""
-    cp, ct = model.coupling, model.contacts
-    K = np.diag(model.omega2).astype(float)
-    if cp.P.shape[0]:
-        K += cp.P.T @ cp.Kc0 @ cp.P
-    if ct.count:
-        d = ct.directions @ x
-        p = ct.exponent
-        over = np.maximum(d - ct.gap_hi, 0.0)
-        under = np.maximum(ct.gap_lo - d, 0.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            k = np.where(d > ct.gap_hi, p * ct.k_hi * over ** (p - 1), 0.0)
-            k = k + np.where(d < ct.gap_lo, p * ct.k_lo * under ** (p - 1), 0.0)
-        K += ct.directions.T @ (k[:, None] * ct.directions)
+    """d(restoring force)/dx of the conservative model at the positions x (symmetric:
+    :func:`~..linear.tangent_matrices`)."""
+    K = tangent_matrices(model, x, 0.0)[0]
     return 0.5 * (K + K.T)
 
 
