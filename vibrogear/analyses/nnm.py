@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..solvers.linear import contact_slopes
 from ..config.base import ConfigError
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrator.integrate import integrate
@@ -49,16 +50,10 @@ class NnmStudyResult:
 
 
 def _mesh_shares(model, x_s, omega, phi, contact: int) -> np.ndarray:
-    """Strain-energy share k' (c . phi)^2 / omega^2 of contact ``contact`` per mode."""
-    ct = model.contacts
-    d = float(ct.directions[contact] @ x_s)
-    p = ct.exponent[contact]
-    k = 0.0
-    if d > ct.gap_hi[contact]:
-        k = p * ct.k_hi[contact] * (d - ct.gap_hi[contact]) ** (p - 1)
-    elif d < ct.gap_lo[contact]:
-        k = p * ct.k_lo[contact] * (ct.gap_lo[contact] - d) ** (p - 1)
-    return k * (ct.directions[contact] @ phi) ** 2 / omega ** 2
+    """Strain-energy share k' (c . phi)^2 / omega^2 of contact ``contact`` per mode (k' the
+    contact law's slope at the static state, :func:`~..solvers.linear.contact_slopes`)."""
+    k = float(contact_slopes(model, x_s)[0][contact])
+    return k * (model.contacts.directions[contact] @ phi) ** 2 / omega ** 2
 
 
 def start_mode(cfg, study, model, x_s, omega, phi, freq_scale) -> int:
