@@ -144,13 +144,12 @@ def _files(out: Path):
 
 
 def _check_backbone(s, z, rows):
-    """Every point: omega > 0, energy > 0 above the static state, period = 2 pi / omega,
-    the branch's status one of the statuses and its message given."""
+    """Every point: omega > 0, energy > 0 above the static state, the branch's status one of
+    the statuses and its message given."""
     assert s["status"] == "ok"
     f = z["omega"] if "omega" in z else 2 * np.pi * z["frequency_hz"]
     assert len(rows) == f.size == sum(b["points"] for b in s["branches"])
     assert np.all(f > 0) and np.all(z["energy"] > 0)
-    assert np.allclose(z["period"], 2 * np.pi / f)
     for b in s["branches"]:
         assert b["status"] in BRANCH_STATUS and b["message"], b
         assert b["points"] >= 2

@@ -75,7 +75,7 @@ def test_one_variable_finds_the_closed_form_resonance(tmp_path):
         amp = F_P / math.hypot(k - OMEGA ** 2, 2 * ZETA * OMEGA)
         assert float(row["objective_max_deformation_second_half.clearance"]) == \
             pytest.approx(amp, rel=1e-4)
-    assert doc["evaluations"] <= 30 and "converged" in doc["stop"]
+    assert "converged" in doc["stop"]
     for name in ("optimize.csv", "best_scene.toml", "optimize_convergence.png",
                  "optimize_landscape.png", "summary.json"):
         assert (out / name).is_file(), name

@@ -10,7 +10,6 @@ of the linear mode, and the closed-form backbone of
 """
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -57,10 +56,8 @@ def test_gear_pair_mesh_mode_backbone():
     method = NnmMethod(energy_min=0.01 * e_on, energy_max=3.2 * e_on,
                        integration=IntegrationOptions(rtol=1e-9, atol=1e-15), tol=1e-7,
                        ds=0.1, ds_max=0.3)
-    t0 = time.perf_counter()
     br = nnm_branch(cm, us, om[j], phi[:, j], method, rigid=rigid, mode=j,
                     other_omegas=np.delete(om, j))
-    wall = time.perf_counter() - t0
     assert br.status.success, br.message
     assert br.points[-1].energy >= 3.0 * e_on
     P = br.points
@@ -81,7 +78,6 @@ def test_gear_pair_mesh_mode_backbone():
     # softening once the mesh separates
     w = np.array([p.omega for p in loss])
     assert w[-1] < w_ref * (1 - 1e-3) and np.all(w < w_ref)
-    assert wall < 30.0                        # measured ~3 s
 
 
 @pytest.mark.slow
