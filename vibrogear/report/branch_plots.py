@@ -11,7 +11,7 @@ import numpy as np
 
 from .figure import new_figure, save_figure
 
-__all__ = ["plot_branches", "draw_branches", "branch_legend"]
+__all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments"]
 
 _MARK = {"LP": ("^", "black"), "PD": ("s", "tab:purple"), "NS": ("D", "tab:orange"),
          "BP": ("o", "tab:brown")}
@@ -19,12 +19,12 @@ _COLOR = {1: "tab:blue", 2: "tab:green", 3: "tab:olive", 4: "tab:pink", 5: "tab:
           6: "tab:brown", 8: "tab:gray"}
 
 
-def _segments(x, y, stable):
+def stability_segments(x, y, stable):
     """Split a polyline where stability changes, sharing the boundary point."""
     start = 0
     for k in range(1, len(x) + 1):
         if k == len(x) or stable[k] != stable[start]:
-            lo = max(start - 1, 0) if start > 0 else 0
+            lo = max(start - 1, 0)
             yield x[lo:k], y[lo:k], bool(stable[start])
             start = k
 
@@ -75,7 +75,7 @@ def _draw(ax, arrays, quantity, lw_scale=1.0):
         x = np.asarray(arrays["param"])[sel]
         y = np.asarray(arrays[quantity])[sel]
         st = np.asarray(arrays["stable"])[sel]
-        for xs, ys, s in _segments(x, y, st):
+        for xs, ys, s in stability_segments(x, y, st):
             ax.plot(xs, ys, "-" if s else "--", color=_COLOR.get(nper, "tab:gray"),
                     lw=(1.6 if s else 1.1) * lw_scale)
     for lab, (mk, col) in _MARK.items():

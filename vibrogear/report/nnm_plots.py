@@ -5,6 +5,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from .branch_plots import stability_segments
 from .figure import new_figure, save_figure
 
 __all__ = ["plot_fep", "plot_backbone"]
@@ -12,19 +13,9 @@ __all__ = ["plot_fep", "plot_backbone"]
 _COLORS = ("tab:red", "tab:blue", "tab:green", "tab:purple")
 
 
-def _segments(x, y, stable):
-    """Polyline pieces of constant stability, sharing their boundary points."""
-    start = 0
-    for k in range(1, len(x) + 1):
-        if k == len(x) or stable[k] != stable[start]:
-            lo = max(start - 1, 0)
-            yield x[lo:k], y[lo:k], bool(stable[start])
-            start = k
-
-
 def _draw(ax, x, y, stable, color, name):
     first = True
-    for xs, ys, st in _segments(x, y, stable):
+    for xs, ys, st in stability_segments(x, y, stable):
         ax.plot(xs, ys, "-" if st else "--", color=color, lw=1.6,
                 label=name if first else None)
         first = False
