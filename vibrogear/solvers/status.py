@@ -3,8 +3,9 @@
 Every solver result (integration, shooting, static equilibrium, sweep, continuation)
 carries a :class:`Status` and a message that starts from :data:`MESSAGES`, and shows the
 same face, :class:`Outcome`, through its ``outcome`` property: status, message, counters,
-wall time and error estimate, of one shape everywhere (what post-processing and the run
-summary read; the result's own fields keep their detail).  The compiled
+wall time and error estimate, of one shape everywhere, for scripts and post-processing
+that take any result (the run summary still spells out each analysis's own fields; no
+analysis reads ``outcome`` yet).  The compiled
 integrator loop returns plain negative integers (numba has no enums); they are the values
 of the integrator members below and become a :class:`Status` in one place,
 :func:`from_code`.  The integers are also what ``sweep.npz`` stores per point, so the files
