@@ -83,19 +83,19 @@ def housing_cache_key(cfg: HousingConfig, stage: str) -> str:
     the geometry and the resolved mesh sizes only; ``"modes"`` and ``"matrices"`` on the whole
     housing config (``modes.solver`` and ``tol`` included) plus the resolved mesh sizes (and
     share its hash)."""
+    # the resolved mesh sizes: a changed default rule (mesh.size / bore_size left out) must
+    # give a new key, not the entry solved on the old default mesh
+    resolved = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size}
     if stage == "mesh":
         geo = cfg.key_data()
         for k in ("material", "modes", "support", "foundation_stiffness"):
             geo.pop(k)
-        geo["mesh"] = {"size": cfg.mesh_size, "bore_size": cfg.bore_mesh_size, "refine": cfg.mesh.refine}
+        geo["mesh"] = {**resolved, "refine": cfg.mesh.refine}
         return cache_key("housing-mesh", geo)
     if stage not in ("modes", "matrices"):
         raise ValueError(f"unknown housing cache stage {stage!r}")
-    # the resolved mesh sizes too: a changed default rule (mesh.size / bore_size left out) must
-    # give a new key, not the entry solved on the old default mesh
     return cache_key(f"housing-{stage}", {**cfg.key_data(), "entry_format": CACHE_FORMAT,
-                                          "resolved_mesh": {"size": cfg.mesh_size,
-                                                            "bore_size": cfg.bore_mesh_size}})
+                                          "resolved_mesh": resolved})
 
 
 def housing_cache_keys(cfg: HousingConfig) -> tuple[str, str]:
