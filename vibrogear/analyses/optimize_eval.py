@@ -19,7 +19,6 @@ a metric that is missing or has no values) returns its reason; it never stops th
 """
 from __future__ import annotations
 
-import copy
 import importlib
 import inspect
 import shutil
@@ -31,7 +30,8 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..config.base import ConfigError, parse_override, set_path
+from ..config.base import ConfigError
+from ..config.optimize_section import data_with
 from ..config.verbs import VERBS
 from ..pipeline.outcome import AnalysisOutcome, RunContext
 
@@ -54,11 +54,7 @@ def scene_with(base: dict, config, values: dict):
     """The scene built from ``base`` with each variable key set to ``values[key]``."""
     from ..config.scene import scene_from_dict
 
-    data = copy.deepcopy(base)
-    for v in config.variables:
-        keys, _ = parse_override(f"{v.key}=0")
-        set_path(data, keys, values[v.key])
-    return scene_from_dict(data)
+    return scene_from_dict(data_with(base, {v.key: values[v.key] for v in config.variables}))
 
 
 def _load(target: str):

@@ -21,7 +21,18 @@ from dataclasses import dataclass
 from .base import ConfigError, as_data, parse_override, set_path, spec
 
 __all__ = ["OptimizeConfig", "OptimizeVariable", "OptimizeObjective", "OptimizeConstraint",
-           "METHODS", "REDUCTIONS", "evaluation_data"]
+           "METHODS", "REDUCTIONS", "evaluation_data", "data_with"]
+
+
+def data_with(base: dict, values: dict) -> dict:
+    """A deep copy of the scene data ``base`` with each dotted key of ``values`` (a variable's
+    ``key``, e.g. ``gearbox.meshes[1].backlash``) set to its value."""
+    data = copy.deepcopy(base)
+    for key, value in values.items():
+        keys, _ = parse_override(f"{key}=0")
+        set_path(data, keys, value)
+    return data
+
 
 #: optimisation methods ("auto": "bounded" for one variable, else the measured choice)
 METHODS = ("auto", "bounded", "nelder-mead", "differential-evolution", "tpe")
@@ -171,11 +182,8 @@ class OptimizeConfig:
         for i, v in enumerate(self.variables):
             errors = {}
             for end in ("min", "max"):
-                data = copy.deepcopy(base)
                 try:
-                    keys, _ = parse_override(f"{v.key}=0")
-                    set_path(data, keys, v.value(getattr(v, end)))
-                    scene_from_dict(data)
+                    scene_from_dict(data_with(base, {v.key: v.value(getattr(v, end))}))
                 except ConfigError as exc:
                     errors[end] = exc
             if len(errors) == 2:

@@ -12,13 +12,12 @@
 """
 from __future__ import annotations
 
-import copy
 import json
 import math
 import re
 from pathlib import Path
 
-from ..config.base import parse_override, set_path
+from ..config.optimize_section import data_with
 from ..pipeline.files import atomic_write_csv, atomic_write_text, finite_json
 from .optimize_plots import plot_convergence, plot_landscape
 
@@ -98,10 +97,7 @@ def toml_text(data: dict, prefix: str = "") -> str:
 
 
 def _best_scene(result) -> str:
-    data = copy.deepcopy(result.base)
-    for k, v in result.best["values"].items():
-        keys, _ = parse_override(f"{k}=0")
-        set_path(data, keys, v)
+    data = data_with(result.base, result.best["values"])
     values = ", ".join(f"{k} = {v!r}" for k, v in result.best["values"].items())
     head = (f"# best evaluation ({result.best['evaluation']}) of vibrogear optimize, method "
             f"{result.method}: {values}\n# objective {result.objective.reduce} "
