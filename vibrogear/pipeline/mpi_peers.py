@@ -157,19 +157,20 @@ def _test_hook(rank: int) -> None:
         os.kill(os.getpid(), signal.SIGKILL)
 
 
-def bcast(value):
+def bcast(value, tag: int = _BCAST):
     """``value`` from rank 0 on every live rank, point to point (a dead rank is skipped
-    instead of blocking everyone, as a collective ``bcast`` would)."""
+    instead of blocking everyone, as a collective ``bcast`` would); ``tag``: the message
+    tag (the executor's final outcome has its own)."""
     comm = _comm()
     if comm.size < 2:
         return value
     _peers(comm)
     if comm.rank == 0:
         for r in range(1, comm.size):
-            if r not in _LOST and not _send(comm, value, r, _BCAST):
+            if r not in _LOST and not _send(comm, value, r, tag):
                 _mark_lost(r)
         return value
     try:
-        return _recv_root(comm, _BCAST)
+        return _recv_root(comm, tag)
     except _RootLost:
         raise _root_lost() from None

@@ -54,17 +54,14 @@ def run_mpi(fn, units, on_result, order, describe=None) -> list:
             return _run_serial(fn, units, on_result)
         _peers(comm)
         if comm.rank == 0:
-            root = _MpiRoot(comm, fn, units, on_result, order, describe)
-            outcome = root.run()
-            for r in root.workers:
-                if r not in _LOST and not _send(comm, outcome, r, _RESULT):
-                    _mark_lost(r)
+            outcome = bcast(_MpiRoot(comm, fn, units, on_result, order, describe).run(),
+                            tag=_RESULT)
         else:
             try:
                 _mpi_worker(comm, fn)
-                outcome = _recv_root(comm, _RESULT)
             except _RootLost:
                 raise _root_lost() from None
+            outcome = bcast(None, tag=_RESULT)
             for r in outcome["lost_ranks"]:
                 _mark_lost(r)
     except LostUnits:
