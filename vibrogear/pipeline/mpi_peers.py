@@ -94,12 +94,13 @@ def alive(rank: int) -> bool:
         return True
 
 
-def _wait(req, peer) -> tuple[bool, object]:
-    """Complete ``req`` (a send to or a receive from ``peer``): (True, value), or
-    (False, None) once ``peer`` is gone (the request is then abandoned)."""
+def _poll(test, peer) -> tuple[bool, object]:
+    """Call ``test()`` -> (done, value) with a growing pause (0.2 -> 20 ms) until it is done:
+    (True, value), or (False, None) once ``peer`` is gone (its pid checked every
+    :data:`_CHECK_S`)."""
     delay, check = 0.0002, time.monotonic() + _CHECK_S
     while True:
-        done, value = req.test()
+        done, value = test()
         if done:
             return True, value
         now = time.monotonic()
@@ -111,6 +112,12 @@ def _wait(req, peer) -> tuple[bool, object]:
         delay = min(2 * delay, 0.02)
 
 
+def _wait(req, peer) -> tuple[bool, object]:
+    """Complete ``req`` (a send to or a receive from ``peer``): (True, value), or
+    (False, None) once ``peer`` is gone (the request is then abandoned)."""
+    return _poll(req.test, peer)
+
+
 def _send(comm, obj, dest: int, tag: int) -> bool:
     """Send ``obj``; False if ``dest`` is gone (then nothing more is sent to it)."""
     return alive(dest) and _wait(comm.isend(obj, dest=dest, tag=tag), dest)[0]
@@ -118,21 +125,16 @@ def _send(comm, obj, dest: int, tag: int) -> bool:
 
 def _recv_root(comm, tag: int):
     """The next message from rank 0 with ``tag``; :class:`_RootLost` if rank 0 is gone."""
-    delay, check = 0.0002, time.monotonic() + _CHECK_S
-    while True:
+    def probe():
         m = comm.improbe(source=0, tag=tag)
-        if m is not None:
-            ok, obj = _wait(m.irecv(), 0)
-            if ok:
-                return obj
-            raise _RootLost
-        now = time.monotonic()
-        if now >= check:
-            if not alive(0):
-                raise _RootLost
-            check = now + _CHECK_S
-        time.sleep(delay)
-        delay = min(2 * delay, 0.02)
+        return m is not None, m
+
+    ok, m = _poll(probe, 0)
+    if ok:
+        ok, obj = _wait(m.irecv(), 0)
+        if ok:
+            return obj
+    raise _RootLost
 
 
 def _root_lost() -> LostUnits:
