@@ -7,7 +7,6 @@ Never a NaN written as a number beside status 0 (map.npz stores missing values a
 gear_pair, two speeds x one load, one direction, 20 transient periods: ~0.5 s a map."""
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -15,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cli_cases import cases, cli_args
+from cli_cases import cases, cli_args, read_outputs
 
 from vibrogear.analyses import operating_map
 from vibrogear.analyses.study import build_study
@@ -79,18 +78,6 @@ def test_degenerate_input_exits_2_naming_the_field(tmp_path, capsys, overrides, 
 
 
 # ------------------------------------------------------------------ extreme but valid input
-
-def _read(out: Path):
-    text = (out / "summary.json").read_text()
-    assert "NaN" not in text and "Infinity" not in text
-    doc = json.loads(text)
-    s = dict(doc["results"]["map"], notes=doc.get("notes", []))
-    with np.load(out / "map.npz") as z:
-        arrays = {k: z[k] for k in z.files}
-    with open(out / "map.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    return s, arrays, rows
-
 
 def _check_files(s, z, rows):
     """Statuses agree between summary, npz and csv; an ok row has every value finite, a
@@ -189,7 +176,7 @@ def test_extreme_input_gives_a_status_per_point(tmp_path, overrides, check):
         args = _args("map", out, [o for o in SMALL + overrides if "torque" not in o])
         args[1] = _twist_scene(tmp_path)
     assert main(args) == 0
-    s, z, rows = _read(out)
+    s, z, rows = read_outputs(out, "map")
     _check_files(s, z, rows)
     if check is not None:
         check(s, z, rows)
@@ -211,7 +198,7 @@ def test_partial_map_failed_point_carries_status_and_message(tmp_path):
     out = tmp_path / "out"
     assert main(_args("map", out, SMALL + ["map.rpm_min=100",
                                            "integration.max_steps=3000"])) == 0
-    s, z, rows = _read(out)
+    s, z, rows = read_outputs(out, "map")
     assert s["status"] == "partial" and s["failed_points"] == 1
     assert s["message"] == "1 of 2 points failed"
     _check_files(s, z, rows)

@@ -8,7 +8,6 @@ gear pair (configs/gear_pair_nnm.toml) the gearbox-only ones (mesh names, an unl
 absolute energies in J) with short branches."""
 from __future__ import annotations
 
-import csv
 import json
 import math
 from pathlib import Path
@@ -16,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cli_cases import cli_args
+from cli_cases import cli_args, read_outputs
 
 from vibrogear.cli import main
 
@@ -124,25 +123,6 @@ def test_check_refuses_the_onset_unit_of_an_unloaded_gearbox(tmp_path, capsys, m
 
 # ------------------------------------------------------------------ extreme but valid input
 
-def _files(out: Path):
-    """summary, nnm.npz arrays, nnm.csv rows; no NaN/inf anywhere."""
-    text = (out / "summary.json").read_text()
-    assert "NaN" not in text and "Infinity" not in text
-    s = json.loads(text)["results"]["nnm"]
-    with np.load(out / "nnm.npz") as z:
-        arrays = {k: z[k] for k in z.files}
-    for k, v in arrays.items():
-        if v.dtype.kind in "fc":
-            assert np.all(np.isfinite(v)), k
-    with open(out / "nnm.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    for r in rows:
-        for k, v in r.items():
-            if k not in ("label", "stable"):
-                assert math.isfinite(float(v)), (k, r)
-    return s, arrays, rows
-
-
 def _check_backbone(s, z, rows):
     """Every point: omega > 0, energy > 0 above the static state, the branch's status one of
     the statuses and its message given."""
@@ -236,7 +216,7 @@ def test_extreme_input_gives_a_finite_backbone(tmp_path, scene, overrides, check
     out = tmp_path / "out"
     overrides = ['scene.analyses=["nnm"]', *overrides]
     assert main(_args("nnm", scene, out, overrides)) == 0
-    s, z, rows = _files(out)
+    s, z, rows = read_outputs(out, "nnm", text_columns=("label", "stable"))
     _check_backbone(s, z, rows)
     if check is not None:
         check(s, z, rows)

@@ -7,15 +7,13 @@ gear_pair, 5000 -> 5002 rpm at 100 rpm/s (0.02 s, 66 mesh periods), one directio
 settling periods: ~0.5 s a run."""
 from __future__ import annotations
 
-import csv
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from cli_cases import cases, cli_args
+from cli_cases import cases, cli_args, read_outputs
 
 from vibrogear.cli import main
 from vibrogear.config.scene import read_toml
@@ -160,24 +158,6 @@ def test_mesh_periods_from_the_config_match_the_model():
 
 # ------------------------------------------------------------------ extreme but valid input
 
-def _read(out: Path):
-    text = (out / "summary.json").read_text()
-    assert "NaN" not in text and "Infinity" not in text
-    s = json.loads(text)["results"]["runup"]
-    with np.load(out / "runup.npz") as z:
-        arrays = {k: z[k] for k in z.files}
-    for k, v in arrays.items():
-        if v.dtype.kind == "f":
-            assert np.all(np.isfinite(v)), k
-    with open(out / "runup.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    for r in rows:
-        for k in r:
-            if k not in ("direction", "inertia_torque"):
-                assert math.isfinite(float(r[k])), (k, r)
-    return s, arrays, rows
-
-
 def _check_runs(s, z, rows, lo=5000.0, hi=5002.0):
     """Per run: the mesh periods of the profile, speeds inside it, envelope min <= max."""
     assert s["status"] == "ok"
@@ -269,7 +249,7 @@ def test_extreme_input_gives_finite_runs(tmp_path, table_scene, overrides, check
         args = _args("runup", GEAR_PAIR, out, SHORT + overrides)
         lo = 5000.0
     assert main(args) == 0
-    s, z, rows = _read(out)
+    s, z, rows = read_outputs(out, "runup", text_columns=("direction", "inertia_torque"))
     _check_runs(s, z, rows, lo=lo, hi=hi or 5002.0)
     if check is not None:
         check(s, z, rows)
