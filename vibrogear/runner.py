@@ -8,8 +8,6 @@ without FE parts never imports dolfinx or gmsh.  The contract between them is in
 """
 from __future__ import annotations
 
-import importlib
-import inspect
 import json
 import platform
 import sys
@@ -17,10 +15,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Callable
+from typing import Any
 
 from . import __version__
 from .config import Scene
+from .analyses.invoke import invoke, load
 from .config.verbs import VERBS
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
@@ -45,11 +44,6 @@ class Entry:
 ANALYSIS_TABLE: dict[tuple[str, str], Entry] = {
     (kind, name): Entry(f"vibrogear.analyses.{run.analysis}", f"vibrogear.report.{run.report}", run.study)
     for name, verb in VERBS.items() for kind, run in verb.runs.items()}
-
-
-def _load(target: str) -> Callable:
-    module, func = target.split(":")
-    return getattr(importlib.import_module(module), func)
 
 
 def resolve(scene: Scene) -> list[tuple[str, Entry]]:
@@ -85,11 +79,6 @@ def write_summary(out: Path, summary: dict) -> None:
     if not is_root_process():
         return  # under mpirun only rank 0 writes files
     atomic_write_text(out / "summary.json", json.dumps(finite_json(summary), indent=2))
-
-
-def _as_outcome(value) -> AnalysisOutcome:
-    """Analyses return an AnalysisOutcome; a plain dict is a summary without a result."""
-    return value if isinstance(value, AnalysisOutcome) else AnalysisOutcome(summary=dict(value))
 
 
 def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
@@ -130,19 +119,16 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
                 study = build_study(scene)
                 summary["wall_time_s"]["model"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
-            fn = _load(entry.analysis)
-            args = (study, scene, ctx) if entry.study else (scene, ctx)
             # analyses that read earlier outcomes take them as ``previous`` (read-only), with
             # the saved results of verbs that did not run here
             seen = {**_load_saved(name, scene.model_kind, ctx.out, previous), **previous}
-            kw = {"previous": MappingProxyType(seen)} \
-                if "previous" in inspect.signature(fn).parameters else {}
-            outcome = _as_outcome(fn(*args, **kw))
+            outcome = invoke(load(entry.analysis), study if entry.study else None, scene, ctx,
+                             seen)
             record = dict(outcome.summary)
             if outcome.warnings:
                 record["warnings"] = list(outcome.warnings)
             if entry.report is not None and ctx.root:
-                files = _load(entry.report)(scene, outcome, ctx.out, MappingProxyType(previous))
+                files = load(entry.report)(scene, outcome, ctx.out, MappingProxyType(previous))
                 if files:
                     record["files"] = files
             for path in outcome.partial_files:      # the final files exist now

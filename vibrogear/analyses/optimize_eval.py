@@ -19,14 +19,11 @@ a metric that is missing or has no values) returns its reason; it never stops th
 """
 from __future__ import annotations
 
-import importlib
-import inspect
 import shutil
 import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from types import MappingProxyType
 
 import numpy as np
 
@@ -34,6 +31,7 @@ from ..config.base import ConfigError
 from ..config.optimize_section import data_with
 from ..config.verbs import VERBS
 from ..pipeline.outcome import AnalysisOutcome, RunContext
+from .invoke import invoke, load
 
 __all__ = ["Evaluation", "MetricError", "metric_values", "reduce_values", "scene_with", "evaluate"]
 
@@ -57,11 +55,6 @@ def scene_with(base: dict, config, values: dict):
     return scene_from_dict(data_with(base, {v.key: values[v.key] for v in config.variables}))
 
 
-def _load(target: str):
-    module, func = target.split(":")
-    return getattr(importlib.import_module(f"vibrogear.analyses.{module}"), func)
-
-
 def _run_analyses(scene, ctx: RunContext) -> dict[str, AnalysisOutcome]:
     kind = scene.model_kind
     outcomes: dict[str, AnalysisOutcome] = {}
@@ -71,12 +64,8 @@ def _run_analyses(scene, ctx: RunContext) -> dict[str, AnalysisOutcome]:
         if run.study and study is None:
             from .study import build_study
             study = build_study(scene)
-        fn = _load(run.analysis)
-        args = (study, scene, ctx) if run.study else (scene, ctx)
-        kw = {"previous": MappingProxyType(dict(outcomes))} \
-            if "previous" in inspect.signature(fn).parameters else {}
-        out = fn(*args, **kw)
-        outcomes[name] = out if isinstance(out, AnalysisOutcome) else AnalysisOutcome(dict(out))
+        outcomes[name] = invoke(load(f"vibrogear.analyses.{run.analysis}"),
+                                study if run.study else None, scene, ctx, outcomes)
     return outcomes
 
 
