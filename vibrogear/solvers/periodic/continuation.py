@@ -47,8 +47,8 @@ from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProbl
                      PseudoArclength, SpecialPoint, stability_notes)
 from .floquet import flip_vector, liouville_error, stability, test_functions
 from ..integrator.integrate import integrate
-from .corrector import (QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK,
-                        CorrectorProblem, correct, tangent, tangent_and_start)
+from .corrector import (QUASI_NEWTON_MOVE, CorrectorProblem, adapted_step, correct,
+                        predictor, tangent, tangent_and_start, tangent_turned)
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
 from .special_points import COARSE_LOCATE_ITER, grazing_note, locate, switch_counts
 from ..integrator.split_flow import ColumnSplit
@@ -207,12 +207,7 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
         if p < options.param_min - slack or p > options.param_max + slack:
             finish()
             return Status.LEFT_RANGE, Status.LEFT_RANGE.message
-        pred = z + ds * t
-        if t_prev is not None:
-            # second-order predictor: the tangent's change estimates the curvature
-            bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
-            if np.linalg.norm(bend) < 0.25 * ds:
-                pred = pred + bend
+        pred = predictor(z, t, ds, t_prev, ds_prev)
         prob.last_failure = None
         # a failed quasi-Newton corrector first halves the step; the exact Newton corrector
         # (an orbit with the variational equations per iterate) only after a second failure
@@ -229,10 +224,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             z_new, f_new, it, res = got
             J_new = prob.jac(f_new)
             t_new, H_new = tangent_and_start(J_new, t)
-            angle = np.arccos(np.clip(t_new @ t, -1, 1))
-            if angle > method.max_angle and ds > ds_min:
+            if ds > ds_min and tangent_turned(prob, t_new, t, method.max_angle):
                 got = None
-                prob.rejected["angle"] += 1
         else:
             prob.rejected["angle" if prob.secant_rejected else "corrector"] += 1
         if got is None:
@@ -276,15 +269,8 @@ def _walk(prob, z, f, t, method, options, n_periods, emit, doubled) -> tuple[Sta
             d_prev = d_new
         f_new.prefetch_multipliers()
         pending.append(((z, f, t, J, k_prev), ds, (z_new, f_new, t_new, k_new, it, res)))
-        ds_used = ds
-        qn = prob.quasi_newton_iterations
-        if qn is not None and it == 0:
-            grow, shrink = qn <= QUASI_NEWTON_GROW, qn >= QUASI_NEWTON_SHRINK
-        else:
-            grow, shrink = it <= 2, it >= 5
-        ds = min(ds * 1.5, ds_max) if grow else (ds * 0.7 if shrink else ds)
-        ds = max(ds, ds_min)
-        t_prev, ds_prev = t, ds_used
+        t_prev, ds_prev = t, ds
+        ds = adapted_step(ds, prob, it, ds_min, ds_max)
         z, f, t, k_prev, J, H = z_new, f_new, t_new, k_new, J_new, H_new
         sw_before, sw_last = sw_last, switch_counts(model, f.trajectory)
         walk.points += 1

@@ -20,7 +20,8 @@ from .branch import PseudoArclength
 from .shooting import PeriodicFlow, periodic_flow, periodic_residual, residual_norm
 from ..status import Status
 
-__all__ = ["CorrectorProblem", "tangent", "tangent_and_start", "correct", "QUASI_NEWTON_ITER",
+__all__ = ["CorrectorProblem", "tangent", "tangent_and_start", "correct", "predictor",
+           "adapted_step", "tangent_turned", "QUASI_NEWTON_ITER",
            "QUASI_NEWTON_GROW", "QUASI_NEWTON_SHRINK", "QUASI_NEWTON_MOVE"]
 
 #: quasi-Newton iterations of a corrector before the exact Newton iteration takes over
@@ -283,3 +284,38 @@ def correct(prob: CorrectorProblem, z_pred: np.ndarray, t: np.ndarray, max_iter:
         if not np.all(np.isfinite(z)):
             return None
     return None
+
+
+def predictor(z: np.ndarray, t: np.ndarray, ds: float, t_prev=None, ds_prev=None) -> np.ndarray:
+    """z + ds t, plus the second-order term where the last step's tangent change gives one
+    (the tangent's change estimates the curvature; left out where it exceeds ds / 4)."""
+    pred = z + ds * t
+    if t_prev is not None:
+        bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
+        if np.linalg.norm(bend) < 0.25 * ds:
+            pred = pred + bend
+    return pred
+
+
+def tangent_turned(prob: CorrectorProblem, t_new: np.ndarray, t: np.ndarray,
+                   max_angle: float) -> bool:
+    """The new tangent turned by more than ``max_angle`` from ``t`` (counted as a rejected
+    step: the step is too long for the branch's curvature)."""
+    if np.arccos(np.clip(t_new @ t, -1, 1)) > max_angle:
+        prob.rejected["angle"] += 1
+        return True
+    return False
+
+
+def adapted_step(ds: float, prob: CorrectorProblem, it: int, ds_min: float,
+                 ds_max: float) -> float:
+    """The next step after an accepted one: x1.5 (up to ``ds_max``) where the corrector
+    needed few iterations (quasi-Newton: <= QUASI_NEWTON_GROW; exact Newton: <= 2), x0.7
+    where it needed many (>= QUASI_NEWTON_SHRINK; >= 5), at least ``ds_min``."""
+    qn = prob.quasi_newton_iterations
+    if qn is not None and it == 0:
+        grow, shrink = qn <= QUASI_NEWTON_GROW, qn >= QUASI_NEWTON_SHRINK
+    else:
+        grow, shrink = it <= 2, it >= 5
+    ds = min(ds * 1.5, ds_max) if grow else (ds * 0.7 if shrink else ds)
+    return max(ds, ds_min)

@@ -36,7 +36,8 @@ from ...config.options import IntegrationOptions
 from ...pipeline.executors import blas_threads
 from ..status import Outcome, Status
 from .branch import PseudoArclength
-from .corrector import QUASI_NEWTON_GROW, QUASI_NEWTON_MOVE, QUASI_NEWTON_SHRINK, correct, tangent
+from .corrector import (QUASI_NEWTON_MOVE, adapted_step, correct, predictor, tangent,
+                        tangent_turned)
 from .floquet import liouville_error, split_trivial
 from .nnm_problem import NnmCorrectorProblem, energy, energy_gradient, phase_vector
 from .shooting import residual_norm
@@ -266,11 +267,7 @@ def _walk(prob, got, t_hint, us, e_s, method, others, emit, pts):
             return Status.MAX_POINTS, ""
         size = max(float(np.linalg.norm(z[:-1] - us)), 1e-300)
         ds = h * size
-        pred = z + ds * t
-        if t_prev is not None:
-            bend = 0.5 * ds * ds * (t - t_prev) / ds_prev
-            if np.linalg.norm(bend) < 0.25 * ds:
-                pred = pred + bend
+        pred = predictor(z, t, ds, t_prev, ds_prev)
         prob.last_failure = None
         _set_tol(prob, z, us, method)
         got = correct(prob, pred, t, method.max_corrector_iter, k,
@@ -283,9 +280,8 @@ def _walk(prob, got, t_hint, us, e_s, method, others, emit, pts):
             z_new, f_new, it, res = got
             J_new = prob.jac(f_new)
             t_new = tangent(J_new, t)
-            if np.arccos(np.clip(t_new @ t, -1, 1)) > method.max_angle and h > method.ds_min:
+            if h > method.ds_min and tangent_turned(prob, t_new, t, method.max_angle):
                 got = None
-                prob.rejected["angle"] += 1
         else:
             prob.rejected["angle" if prob.secant_rejected else "corrector"] += 1
         jumped = False
@@ -314,15 +310,8 @@ def _walk(prob, got, t_hint, us, e_s, method, others, emit, pts):
             label = "GR" if np.any(switch_counts(model, f_new.trajectory) != switch_counts(
                 model, f.trajectory)) else "J"
         emit(_with(point, energy=e_new, label=label))
-        qn = prob.quasi_newton_iterations
-        if qn is not None and it == 0:
-            grow, shrink = qn <= QUASI_NEWTON_GROW, qn >= QUASI_NEWTON_SHRINK
-        else:
-            grow, shrink = it <= 2, it >= 5
-        h_used = h
-        h = min(h * 1.5, method.ds_max) if grow else (h * 0.7 if shrink else h)
-        h = max(h, method.ds_min)
-        t_prev, ds_prev = t, h_used * size
+        t_prev, ds_prev = t, h * size
+        h = adapted_step(h, prob, it, method.ds_min, method.ds_max)
         z, f, t, J, k, de_prev = z_new, f_new, t_new, J_new, k_new, de_new
         if e_new > method.energy_max:
             return Status.LEFT_RANGE, f"energy {e_new:.6g} above energy_max"
