@@ -211,3 +211,20 @@ def test_nnm_through_the_cli(tmp_path):
         assert z["shape_x"].shape[0] == 1
     s = json.loads((out / "summary.json").read_text())["results"]["nnm"]
     assert s["branches"][0]["onset_energy_model_units"] == pytest.approx(0.05 ** 2 / 2)
+
+
+def test_amplitude_range_ends_at_its_excursion(tmp_path):
+    """An amplitude range: the branch leaves its range at the first point whose excursion of
+    the monitored deformation from the static state exceeds amplitude_max, and no earlier."""
+    text = (ROOT / "configs" / "impact_pair_nnm.toml").read_text()
+    text = "\n".join(line for line in text.splitlines()
+                     if not line.startswith(("energy_min", "energy_max")))
+    scene = tmp_path / "amp.toml"
+    scene.write_text(text.replace("[nnm]", "[nnm]\namplitude_min = 0.01\namplitude_max = 0.2", 1))
+    out = tmp_path / "out"
+    assert main(["nnm", str(scene), "--out", str(out), "--quiet"]) == 0
+    (b,) = json.loads((out / "summary.json").read_text())["results"]["nnm"]["branches"]
+    assert b["status"] == "left_range" and "amplitude_max" in b["message"]
+    with np.load(out / "nnm.npz") as z:
+        exc = z["excursion"]
+    assert exc[-1] > 0.2 and np.all(exc[:-1] <= 0.2)

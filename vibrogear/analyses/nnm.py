@@ -14,6 +14,7 @@ contact's extrema in display units, stability and labels, and the orbits at
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -27,7 +28,6 @@ from ..solvers.periodic.nnm import NnmMethod, nnm_branch
 from ..solvers.periodic.nnm_problem import (conservative_model, linear_modes_at,
                                             onset_amplitude)
 from ..solvers.static import static_equilibrium
-from ..solvers.status import Status
 
 __all__ = ["NnmStudyResult", "run", "start_mode"]
 
@@ -109,6 +109,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
                        and cfg.second_mode != first else [])
     branches, onsets, notes, shapes = [], [], [], []
     mon = study.monitor
+    d_s = float(cm.contacts.directions[cm.monitor] @ us[:m]) if cm.contacts.count else 0.0
     for b, j in enumerate(modes):
         if j >= omega.size:                 # needs the model: its elastic-mode count
             raise ConfigError("nnm.second_mode", f"expected an elastic-mode index 0 .. "
@@ -116,23 +117,20 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
         a_on = onset_amplitude(cm, us[:m], phi[:, j])
         e_on = 0.5 * omega[j] ** 2 * a_on ** 2
         onsets.append(e_on * es)
-        lo, hi, stop = _energy_range(cfg, cm, phi[:, j], omega[j], e_on, es, mon.scale, us)
+        lo, hi, excursion_max = _energy_range(cfg, cm, phi[:, j], omega[j], e_on, es,
+                                              mon.scale, us)
         _check_energy_floor(cfg, cm, us, lo, hi, es, eunit)
         method = NnmMethod(energy_min=lo, energy_max=hi, integration=opts, tol=cfg.tol,
                            ds=cfg.ds, ds_min=cfg.ds_min, ds_max=cfg.ds_max,
                            max_points=cfg.max_points, phase=cfg.phase,
                            stability_tol=cfg.stability_tol, rational_max=cfg.rational_max,
-                           rational_tol=cfg.rational_tol)
+                           rational_tol=cfg.rational_tol, excursion_max=excursion_max,
+                           delta_static=d_s)
         with ctx.progress(cfg.max_points, f"nnm mode {j}") as bar:
-            def cb(p, bar=bar):
-                bar.update(1, f"{p.omega * fs:.5g} {fkey}")
-                return stop is None or stop(p)
             br = nnm_branch(cm, us, omega[j], phi[:, j], method, rigid=rigid, mode=j,
-                            other_omegas=np.delete(omega, j), callback=cb)
-        if br.status == Status.STOPPED_BY_CALLBACK and stop is not None:
-            br = dataclasses.replace(br, status=Status.LEFT_RANGE,
-                                     message=f"{Status.LEFT_RANGE.message}: excursion above "
-                                     "amplitude_max")
+                            other_omegas=np.delete(omega, j),
+                            callback=lambda p, bar=bar: bar.update(1, f"{p.omega * fs:.5g} "
+                                                                      f"{fkey}"))
         if not br.points:
             raise NumericalFailure(f"nnm: mode {j}: {br.message}")
         branches.append(br)
@@ -141,7 +139,6 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     if skew > 1e-12:
         notes.append(f"non-symmetric linear coupling stiffness (|skew| / |K| = {skew:.3g}) "
                      "symmetrised: the circulatory part is not conservative")
-    d_s = float(cm.contacts.directions[cm.monitor] @ us[:m]) if cm.contacts.count else 0.0
     result = NnmStudyResult(study=study, branches=tuple(branches), freq_scale=fs,
                             freq_key=fkey, freq_label=flabel, energy_scale=es,
                             energy_unit=eunit, onset_energy=tuple(onsets),
@@ -152,8 +149,8 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
 
 
 def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):
-    """(energy_min, energy_max, stop) in model units; ``stop(point)`` False past
-    amplitude_max (amplitude ranges), else None."""
+    """(energy_min, energy_max, excursion_max) in model units: an amplitude range ends at
+    its excursion (energy_max unbounded), an energy range has no excursion bound (None)."""
     if cfg.amplitude_min is not None:
         if not cm.contacts.count:
             raise ConfigError("nnm.amplitude_min", "an amplitude range needs a monitored "
@@ -164,12 +161,7 @@ def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):
             raise ConfigError("nnm.amplitude_min", "the start mode does not move the "
                               "monitored contact; give an energy range")
         a = cfg.amplitude_min / mon_scale / cphi
-        d_s = float(c @ us[:cm.n_modes])
-        amax = cfg.amplitude_max / mon_scale
-
-        def stop(p):
-            return max(abs(p.qmax - d_s), abs(p.qmin - d_s)) <= amax
-        return 0.5 * om ** 2 * a ** 2, 1e30, stop
+        return 0.5 * om ** 2 * a ** 2, math.inf, cfg.amplitude_max / mon_scale
     if cfg.energy_unit == "onset":
         # needs the model: the config refuses the unloaded gearbox (every contact on its
         # switch, NnmConfig.check_model); a loaded model can still give 0 (a contact exactly

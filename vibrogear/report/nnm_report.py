@@ -55,8 +55,7 @@ def nnm_arrays(r) -> dict:
         "amplitude": np.array([p.amplitude * scale for _, _, p in pts]),
         "qmin": np.array([p.qmin * scale for _, _, p in pts]),
         "qmax": np.array([p.qmax * scale for _, _, p in pts]),
-        "excursion": np.array([max(abs(p.qmax - d_s), abs(p.qmin - d_s)) * scale
-                               for _, _, p in pts]),
+        "excursion": np.array([p.excursion(d_s) * scale for _, _, p in pts]),
         "energy": np.array([p.energy * r.energy_scale for _, _, p in pts]),
         "period": np.array([p.period * period_scale for _, _, p in pts]),
         "stable": np.array([p.stable for _, _, p in pts], dtype=bool),

@@ -64,6 +64,10 @@ class NnmMethod:
     stability_tol: float = 1e-6
     rational_max: int = 5
     rational_tol: float = 0.01
+    #: the branch also ends (LEFT_RANGE) once the monitored deformation's largest excursion
+    #: from its static value ``delta_static`` exceeds this (an amplitude range; None: no)
+    excursion_max: float | None = None
+    delta_static: float = 0.0
 
     def __post_init__(self):
         if not (0 < self.energy_min < self.energy_max and 0 < self.ds_min <= self.ds
@@ -93,6 +97,10 @@ class NnmPoint:
     @property
     def period(self) -> float:
         return 2 * np.pi / self.omega
+
+    def excursion(self, delta_static: float) -> float:
+        """The monitored deformation's largest excursion from ``delta_static``."""
+        return max(abs(self.qmax - delta_static), abs(self.qmin - delta_static))
 
     @property
     def amplitude(self) -> float:
@@ -315,6 +323,9 @@ def _walk(prob, got, t_hint, us, e_s, method, others, emit, pts):
         z, f, t, J, k, de_prev = z_new, f_new, t_new, J_new, k_new, de_new
         if e_new > method.energy_max:
             return Status.LEFT_RANGE, f"energy {e_new:.6g} above energy_max"
+        if (method.excursion_max is not None
+                and point.excursion(method.delta_static) > method.excursion_max):
+            return Status.LEFT_RANGE, "excursion above amplitude_max"
         if e_new < method.energy_min * (1 - 1e-9):
             return Status.LEFT_RANGE, f"energy {e_new:.6g} below energy_min (the branch turned)"
 
