@@ -8,6 +8,7 @@ imported inside functions (see :mod:`.fe`).
 from __future__ import annotations
 
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -36,11 +37,7 @@ def _factor(K, comm):
     from petsc4py import PETSc
 
     K.setOption(PETSc.Mat.Option.SPD, True)
-    opts = PETSc.Options()
     package = "cholmod" if comm.size == 1 and PETSc.Sys.hasExternalPackage("suitesparse") else "mumps"
-    set_icntl = f"{_PREFIX}st_mat_mumps_icntl_14" not in opts
-    if set_icntl:
-        opts[f"{_PREFIX}st_mat_mumps_icntl_14"] = 50
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(f"{_PREFIX}st_")
     ksp.setOperators(K)
@@ -48,13 +45,27 @@ def _factor(K, comm):
     pc = ksp.getPC()
     pc.setType(PETSc.PC.Type.CHOLESKY)
     pc.setFactorSolverType(package)
-    ksp.setFromOptions()
-    try:
+    with option_defaults(f"{_PREFIX}st_", {"mat_mumps_icntl_14": 50}):
+        ksp.setFromOptions()
         ksp.setUp()
-    finally:
-        if set_icntl:
-            opts.delValue(f"{_PREFIX}st_mat_mumps_icntl_14")
     return ksp
+
+
+@contextmanager
+def option_defaults(prefix: str, defaults: dict):
+    """PETSc options ``prefix + key`` set to ``defaults`` where the user set none, for the
+    ``setFromOptions``/``setUp`` inside the block; removed after it (a user's stay)."""
+    from petsc4py import PETSc
+
+    opts = PETSc.Options()
+    added = [k for k in defaults if f"{prefix}{k}" not in opts]
+    for k in added:
+        opts[f"{prefix}{k}"] = defaults[k]
+    try:
+        yield
+    finally:
+        for k in added:
+            opts.delValue(f"{prefix}{k}")
 
 
 def _dense(arr, comm):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fe_eigen import _PREFIX
+from .fe_eigen import _PREFIX, option_defaults
 
 __all__ = ["amg_ksp", "rigid_body_modes"]
 
@@ -55,7 +55,6 @@ def amg_ksp(K, coords: np.ndarray, comm, *, inner: str = "preonly", rtol: float 
         vecs.append(v)
     ns = PETSc.NullSpace().create(vectors=vecs, comm=comm)
     K.setNearNullSpace(ns)
-    opts = PETSc.Options()
     defaults = {"pc_gamg_type": "agg", "pc_gamg_agg_nsmooths": 1, "pc_gamg_threshold": 0.02,
                 "pc_gamg_square_graph": 1, "mg_levels_ksp_type": "chebyshev",
                 "mg_levels_pc_type": "jacobi", "mg_levels_ksp_max_it": 2,
@@ -63,9 +62,6 @@ def amg_ksp(K, coords: np.ndarray, comm, *, inner: str = "preonly", rtol: float 
                 "pc_hypre_boomeramg_vec_interp_variant": 3, "pc_hypre_boomeramg_coarsen_type": "HMIS",
                 "pc_hypre_boomeramg_interp_type": "ext+i", "pc_hypre_boomeramg_P_max": 4,
                 "pc_hypre_boomeramg_agg_nl": 1}
-    added = [k for k in defaults if f"{_ST}{k}" not in opts]
-    for k in added:
-        opts[f"{_ST}{k}"] = defaults[k]
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(_ST)
     ksp.setOperators(K)
@@ -76,12 +72,9 @@ def amg_ksp(K, coords: np.ndarray, comm, *, inner: str = "preonly", rtol: float 
     else:
         ksp.setType(PETSc.KSP.Type.PREONLY)
     ksp.getPC().setType(PETSc.PC.Type.GAMG)
-    try:
+    with option_defaults(_ST, defaults):
         ksp.setFromOptions()
         ksp.setUp()
-    finally:
-        for k in added:
-            opts.delValue(f"{_ST}{k}")
     for v in vecs:
         v.destroy()
     return ksp, ns
