@@ -8,18 +8,13 @@ imported inside functions (see :mod:`.fe`).
 from __future__ import annotations
 
 import time
-from contextlib import contextmanager
 
 import numpy as np
 
 from .block_lanczos import Breakdown, block_lanczos
+from .fe_common import PREFIX as _PREFIX, HousingSolveError, option_defaults
 
 
-class HousingSolveError(RuntimeError):
-    """The eigen-solve failed or converged too few modes."""
-
-
-_PREFIX = "vghousing_"
 #: columns per block of the block Lanczos solver: MUMPS / CHOLMOD forward-backward sweeps with 16
 #: right-hand sides cost ~ 1/5 of 16 single sweeps (the factor is read once per sweep), while the
 #: Krylov space needed for 100 modes grows only ~ 1.7x against single-vector Krylov-Schur
@@ -49,23 +44,6 @@ def _factor(K, comm):
         ksp.setFromOptions()
         ksp.setUp()
     return ksp
-
-
-@contextmanager
-def option_defaults(prefix: str, defaults: dict):
-    """PETSc options ``prefix + key`` set to ``defaults`` where the user set none, for the
-    ``setFromOptions``/``setUp`` inside the block; removed after it (a user's stay)."""
-    from petsc4py import PETSc
-
-    opts = PETSc.Options()
-    added = [k for k in defaults if f"{prefix}{k}" not in opts]
-    for k in added:
-        opts[f"{prefix}{k}"] = defaults[k]
-    try:
-        yield
-    finally:
-        for k in added:
-            opts.delValue(f"{prefix}{k}")
 
 
 def _dense(arr, comm):

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fe_eigen import _PREFIX, option_defaults
+from .fe_common import PREFIX as _PREFIX, option_defaults
 
 __all__ = ["amg_ksp", "rigid_body_modes"]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .fe_eigen import _PREFIX, HousingSolveError
+from .fe_common import PREFIX as _PREFIX, HousingSolveError
 
 __all__ = ["SLEPC_SOLVERS", "slepc_eigensolve"]
 
