@@ -12,7 +12,8 @@ from typing import Any
 
 from ..config.base import ConfigError
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "finite_json",
+__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "atomic_write_npz",
+           "finite_json",
            "check_output_dir"]
 
 
@@ -43,6 +44,17 @@ def atomic_write_bytes(path, data: bytes) -> Path:
 
 def atomic_write_text(path, text: str) -> Path:
     return atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def atomic_write_npz(path, arrays: dict, *, compressed: bool = True) -> Path:
+    """``arrays`` as one ``.npz`` (compressed unless told otherwise), written atomically."""
+    import io
+
+    import numpy as np
+
+    buf = io.BytesIO()
+    (np.savez_compressed if compressed else np.savez)(buf, **arrays)
+    return atomic_write_bytes(path, buf.getvalue())
 
 
 def atomic_write_csv(path, header, rows) -> Path:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 
@@ -55,10 +55,8 @@ def write_branches(branches, omega_per_param: float, out_dir) -> dict:
     for key, a in arrays.items():
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
             raise ValueError(f"branch array {key!r} holds non-finite values")
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
     out_dir = Path(out_dir)
-    npz = atomic_write_bytes(out_dir / "branch.npz", buf.getvalue())
+    npz = atomic_write_npz(out_dir / "branch.npz", arrays)
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
     w.writerow(CSV_COLUMNS)

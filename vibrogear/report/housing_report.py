@@ -12,7 +12,6 @@
 """
 from __future__ import annotations
 
-import io
 import os
 import shutil
 import tempfile
@@ -20,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes, atomic_write_csv
+from ..pipeline.files import atomic_write_csv, atomic_write_npz
 
 __all__ = ["write_modes", "write_sweep", "write_convergence", "write_modes_outputs"]
 
@@ -59,12 +58,12 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
                      [[i + 1, f"{f:.8g}", f"{res.damping_ratios[i]:.6g}",
                        f"{res.residuals[i]:.3e}", dom[i]] for i, f in enumerate(res.freqs_hz)])
     files["modes"] = "modes.csv"
-    buf = io.BytesIO()
-    np.savez(buf, freqs_hz=res.freqs_hz, bore_values=res.bore_values,
-             bore_points=res.bore_points, bore_centers=res.bore_centers, bore_axes=res.bore_axes,
-             bore_center_values=res.bore_center_values, bore_n_points=np.array(res.bore_n_points),
-             bore_names=np.array(res.bore_names), beta=res.beta, n_dofs=res.n_dofs)
-    atomic_write_bytes(out / "housing_modes.npz", buf.getvalue())
+    atomic_write_npz(out / "housing_modes.npz", dict(
+        freqs_hz=res.freqs_hz, bore_values=res.bore_values, bore_points=res.bore_points,
+        bore_centers=res.bore_centers, bore_axes=res.bore_axes,
+        bore_center_values=res.bore_center_values, bore_n_points=np.array(res.bore_n_points),
+        bore_names=np.array(res.bore_names), beta=res.beta, n_dofs=res.n_dofs),
+        compressed=False)
     files["coupling"] = "housing_modes.npz"
     if res.shapes_path is not None and Path(res.shapes_path).is_file():
         src = Path(res.shapes_path)

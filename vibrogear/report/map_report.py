@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .map_plots import plot_map_figures
 
 __all__ = ["write", "map_arrays", "METRICS_PER_MESH"]
@@ -107,9 +107,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     res = outcome.result
     out = Path(out)
     arrays = map_arrays(res)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    files = {"npz": str(atomic_write_bytes(out / "map.npz", buf.getvalue())),
+    files = {"npz": str(atomic_write_npz(out / "map.npz", arrays)),
              "csv": str(atomic_write_bytes(out / "map.csv", _csv(res, arrays)))}
     if res.curves is not None:
         files["curves_csv"] = str(atomic_write_bytes(out / "map_curves.csv",

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .nnm_plots import plot_backbone, plot_fep
 
 __all__ = ["write", "nnm_arrays", "CSV_COLUMNS"]
@@ -111,9 +111,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
     out = Path(out)
     arrays = nnm_arrays(r)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    npz = atomic_write_bytes(out / "nnm.npz", buf.getvalue())
+    npz = atomic_write_npz(out / "nnm.npz", arrays)
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
     w.writerow((r.freq_key,) + CSV_COLUMNS)

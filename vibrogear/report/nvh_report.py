@@ -37,13 +37,12 @@ stable and unstable alike).
 """
 from __future__ import annotations
 
-import io
 import os
 from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .nvh_plots import plot_erp, plot_waterfall
 
 __all__ = ["write", "write_branch", "write_surface_velocity", "line_arrays"]
@@ -175,9 +174,7 @@ def _write_spectra(path: Path, arrays: dict, res, channels: dict) -> str:
         arrays[f"parseval_{q}"] = np.float64(res.parseval[q])
     if res.erp_per_bin is not None:
         arrays["erp_w_per_bin"], arrays["erp_w"] = res.erp_per_bin, res.erp_w
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    return str(atomic_write_bytes(path, buf.getvalue()))
+    return str(atomic_write_npz(path, arrays))
 
 
 def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:

@@ -11,12 +11,11 @@ Each returns the names of the files it wrote, as listed in ``summary.json``.
 """
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes, atomic_write_csv
+from ..pipeline.files import atomic_write_csv, atomic_write_npz
 
 __all__ = ["write_modes", "write_campbell"]
 
@@ -37,11 +36,9 @@ def write_modes(scene, outcome, out, previous=None) -> list[str]:
     atomic_write_csv(out / "master_modes.csv", ["index", "frequency_hz", "mode_type", "rigid_body"],
                      [[i + 1, f"{f:.8g}", r.master_types[i],
                        int(i < master.n_rigid)] for i, f in enumerate(master.frequencies_hz)])
-    buf = io.BytesIO()
-    np.savez_compressed(buf, frequencies_hz=master.frequencies_hz, vectors=master.vectors,
-                        node_z=model.node_z, free_gear_dofs=np.array(model.free_gear_dofs, int),
-                        n_rigid=master.n_rigid)
-    atomic_write_bytes(out / "master_modes.npz", buf.getvalue())
+    atomic_write_npz(out / "master_modes.npz", dict(
+        frequencies_hz=master.frequencies_hz, vectors=master.vectors, node_z=model.node_z,
+        free_gear_dofs=np.array(model.free_gear_dofs, int), n_rigid=master.n_rigid))
     plots = []
     if res.frequencies_hz.size:
         from .rotor_plots import plot_mode_shapes

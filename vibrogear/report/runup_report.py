@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .branch_io import branch_arrays
 from .runup_plots import plot_envelopes, plot_orders, plot_waterfall
 from .sweep_io import read_sweep_npz, sweep_arrays
@@ -99,9 +99,7 @@ def steady_state(previous, out, study) -> tuple[dict | None, dict | None]:
 def write(scene, outcome, out, previous=None) -> dict:
     result = outcome.result
     out = Path(out)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **runup_arrays(result))
-    files = {"npz": str(atomic_write_bytes(out / "runup.npz", buf.getvalue())),
+    files = {"npz": str(atomic_write_npz(out / "runup.npz", runup_arrays(result))),
              "csv": str(atomic_write_bytes(out / "runup.csv", _csv(result)))}
     sweep, branch = steady_state(previous, out, result.study)
     files["envelope_png"] = str(plot_envelopes(result, out / "runup_envelope", sweep=sweep,

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
 
@@ -102,9 +102,7 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
     """Write ``stem.npz`` and ``stem.csv`` into ``out_dir``; returns {kind: path}."""
     out_dir = Path(out_dir)
     arrays = sweep_arrays(result)
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    npz = atomic_write_bytes(out_dir / f"{stem}.npz", buf.getvalue())
+    npz = atomic_write_npz(out_dir / f"{stem}.npz", arrays)
     text = io.StringIO()
     w = csv.writer(text, lineterminator="\n")
     metrics = sorted(result.metrics)

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_bytes
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .gearbox_plots import plot_gearbox_time_response
 from .time_plots import plot_time_response
 
@@ -45,9 +45,7 @@ def write(scene, outcome, out, previous=None) -> dict:
                   names=np.array(names, dtype=str))
     if model.n_states <= _STATES_NPZ:
         arrays.update(u=r.u, state_names=np.array(model.state_names, dtype=str))
-    buf = io.BytesIO()
-    np.savez_compressed(buf, **arrays)
-    files = {"npz": str(atomic_write_bytes(out / "time_response.npz", buf.getvalue()))}
+    files = {"npz": str(atomic_write_npz(out / "time_response.npz", arrays))}
 
     lu = f"_{study.length_unit}" if study.length_unit else ""
     fu = "_N" if study.length_unit else ""
