@@ -88,7 +88,7 @@ def size_field(gmsh, h: float, hb: float, bore_surfs: list[int], *, dist_min: fl
         fields.append(_threshold(field, fd, hb, h, dist_min, dist_max))
     if edges is not None and edges[0]:
         curves, he, de = edges
-        longest = max(_curve_length(gmsh, c) for c in curves)
+        longest = max(gmsh.model.occ.getMass(1, c) for c in curves)    # curve lengths
         fd = field.add("Distance")
         field.setNumbers(fd, "CurvesList", sorted(curves))
         # samples <= he / 2 apart on the longest curve: the distance is exact to he / 4 there
@@ -111,10 +111,3 @@ def _threshold(field, fd: int, size_min: float, size_max: float, dist_min: float
     field.setNumber(ft, "DistMin", dist_min)
     field.setNumber(ft, "DistMax", dist_max)
     return ft
-
-
-def _curve_length(gmsh, c: int) -> float:
-    lo, hi = gmsh.model.getParametrizationBounds(1, c)
-    u = np.linspace(lo[0], hi[0], 33)
-    x = np.array(gmsh.model.getValue(1, c, list(u))).reshape(-1, 3)
-    return float(np.linalg.norm(np.diff(x, axis=0), axis=1).sum())
