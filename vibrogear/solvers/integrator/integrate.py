@@ -62,6 +62,12 @@ class Trajectory:
     event_rates: np.ndarray | None = None
 
     @property
+    def counts(self) -> np.ndarray:
+        """(steps, rejected, rhs calls, events): what a caller that integrates in pieces
+        adds up (``counters += tr.counts``)."""
+        return np.array([self.steps, self.rejected, self.rhs_calls, self.events], np.int64)
+
+    @property
     def next_first_step(self) -> float | None:
         """``h_next`` as the ``first_step`` of a run that continues this one (None: the
         default start, where the run gave no usable step)."""

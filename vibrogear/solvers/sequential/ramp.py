@@ -272,7 +272,7 @@ class _Run:
 
     def add(self, tr) -> None:
         """Count an integration: steps, rejected, rhs calls, events; its error estimate."""
-        self.counters += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+        self.counters += tr.counts
         self.err += tr.error_estimate
 
 

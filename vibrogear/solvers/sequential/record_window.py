@@ -13,12 +13,7 @@ from ..integrator.integrate import integrate
 from ..status import Status
 from .motion import monitored_deformation
 
-__all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds", "count"]
-
-
-def count(counts, tr) -> None:
-    """Add a trajectory's steps, rejected steps, RHS calls and events to ``counts``."""
-    counts += (tr.steps, tr.rejected, tr.rhs_calls, tr.events)
+__all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds"]
 
 
 def onset_speeds(tr, rows) -> list:
@@ -62,7 +57,7 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
         t_eval = np.arange(1, k + 1) * T
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        count(counts, tr)
+        counts += tr.counts
         if not tr.ok:
             return tr.status, tr.message
         if not (np.all(np.isfinite(tr.u)) and np.all(np.isfinite(tr.u_end))

@@ -59,7 +59,7 @@ from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
-from .record_window import RecordWindow, count, record_extrema, record_window
+from .record_window import RecordWindow, record_extrema, record_window
 from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
 from ..status import Status
@@ -204,7 +204,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
-        count(counts, tr)
+        counts += tr.counts
         used += k
         if not tr.ok or not np.all(np.isfinite(tr.u_end)):
             return fail(tr.status or Status.NONFINITE, tr.message, used)
