@@ -99,30 +99,30 @@ class _Evaluator:
         self.cfg, self.space, self.task, self.store, self.bar = cfg, space, task, store, bar
         self.cache = {_key(r["values"]): r for r in resumed}
         self.history: list[dict] = []
-        self.seen: set = set()
+        self.f_of: dict = {}            # key of each point evaluated -> its penalised value
         self.next_index = 1 + max((int(r["index"]) for r in resumed), default=0)
         self.worst = 0.0
 
     def _record(self, r: dict) -> float:
-        if _key(r["values"]) not in self.seen:
-            self.seen.add(_key(r["values"]))
+        if _key(r["values"]) not in self.f_of:
             r = dict(r, f=penalised(self.cfg, r, self.worst),
                      feasible=r["status"] == "ok" and violation(self.cfg, r["constraints"]) == 0,
                      evaluation=len(self.history) + 1)
             if np.isfinite(r["f"]):
                 self.worst = max(self.worst, r["f"]) if self.history else r["f"]
             self.history.append(r)
+            self.f_of[_key(r["values"])] = r["f"]
             return r["f"]
-        return next(h["f"] for h in self.history if _key(h["values"]) == _key(r["values"]))
+        return self.f_of[_key(r["values"])]
 
     def __call__(self, us: list) -> list[float]:
         values = [self.space.values(u) for u in us]
         keys = [_key(v) for v in values]
         # distinct points new to this run, in order; evaluations read back from the partial
         # file count against the budget as they are asked for again
-        new = list(dict.fromkeys(k for k in keys if k not in self.seen))
+        new = list(dict.fromkeys(k for k in keys if k not in self.f_of))
         room = self.cfg.budget - len(self.history)
-        allowed = set(new[:max(room, 0)]) | self.seen
+        allowed = set(new[:max(room, 0)]) | self.f_of.keys()
         fresh: dict = {}
         for k, v in zip(keys, values):
             if k in allowed and k not in self.cache and k not in fresh:
@@ -183,7 +183,7 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
             shutil.rmtree(task.scratch, ignore_errors=True)     # the evaluations' scratch
     # evaluations in the file that this run's method did not ask for again: kept
     for r in resumed:
-        if _key(r["values"]) not in ev.seen:
+        if _key(r["values"]) not in ev.f_of:
             ev._record(r)
     wall = time.perf_counter() - t0
     history = ev.history
@@ -195,8 +195,8 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
     summary = {
         "status": "ok" if best["feasible"] else "no feasible evaluation",
         "method": method, "stop": stop, "evaluations": len(history),
-        "resumed_evaluations": sum(1 for h in history if _key(h["values"]) in
-                                   {_key(r["values"]) for r in resumed}),
+        "resumed_evaluations": len({_key(r["values"]) for r in resumed}
+                                   & {_key(h["values"]) for h in history}),
         "failed_evaluations": len(failed),
         "feasible_evaluations": sum(1 for h in history if h["feasible"]),
         "best": {
