@@ -163,10 +163,24 @@ def _main(argv: list[str] | None) -> int:
     except (NotImplementedError, ConfigError) as exc:   # ConfigError: found building the model
         _error("invalid input", exc)
         return EXIT_INPUT
-    if not args.quiet:
-        print(f"wrote {out}/ ({', '.join(summary['analyses'])}; "
-              f"{summary['wall_time_s']['total']:.2f} s)")
+    _print_end(summary, out, args.quiet)
     return EXIT_FAILED if summary.get("status") == "failed" else EXIT_OK
+
+
+def _print_end(summary: dict, out: Path, quiet: bool) -> None:
+    """The run's last lines: what was written, then the findings (at most ~10 lines) and
+    where the report is; ``--quiet``: the verdict alone."""
+    from .pipeline.outcome import is_root_process
+    findings = summary.get("findings")
+    if not quiet:
+        print(f"wrote {out}/ ({', '.join(summary['analyses'])}; computation "
+              f"{summary.get('status', 'ok')}; {summary['wall_time_s']['total']:.3g} s)")
+    if findings is not None and is_root_process():
+        from .report.findings_report import console_lines
+        for line in console_lines(findings, f"{out}/report.html", quiet=quiet):
+            print(line)
+    elif not quiet:
+        print(f"open {out}/report.html")
 
 
 if __name__ == "__main__":

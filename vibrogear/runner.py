@@ -176,6 +176,14 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
         failure = _write_run_files(ctx.out, summary, failure, html=False)
         if failure is not None:
             break
+    if ctx.root:
+        # what the finished results say about the speeds (also after a failure: finished
+        # points are never lost)
+        from .analyses.findings import run_findings
+        findings = run_findings(scene, summary["results"])
+        if findings is not None:
+            summary["findings"] = findings
+        failure = _write_overview(scene, ctx.out, findings, failure)
     summary["wall_time_s"]["total"] = time.perf_counter() - t_all
     failure = _write_run_files(ctx.out, summary, failure, html=True)
     if failure is not None:
@@ -190,6 +198,19 @@ def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
         write_summary(out, summary)
         if html:
             write_html_report(out, summary)
+    except OSError as exc:
+        if failure is None:
+            failure = WriteFailure(_file_error(exc))
+    return failure
+
+
+def _write_overview(scene: Scene, out: Path, findings, failure):
+    """The figures the report opens on: the speed-band chart of the findings."""
+    from .report.findings_report import BAND_CHART, plot_band_chart
+    try:
+        chart = Path(out) / BAND_CHART
+        if findings is None or plot_band_chart(findings, chart) is None:
+            chart.unlink(missing_ok=True)        # never an old run's chart
     except OSError as exc:
         if failure is None:
             failure = WriteFailure(_file_error(exc))

@@ -37,6 +37,7 @@ class Monitor:
     scale: float = 1.0
     lines: tuple[float, ...] = ()
     zero_line: bool = False
+    name: str = ""              # the contact's name (a gearbox mesh: "G1")
 
     def axis_label(self, prefix: str = "") -> str:
         text = f"{prefix} {self.label}".strip()
@@ -267,7 +268,7 @@ def _gearbox_study(scene) -> Study:
     return Study(model=r, title=f"{scene.scene.name}: m = {r.n_modes} ({parts})",
                  parameter=scene.parameter,
                  monitor=Monitor(contact=r.monitor, label=f"{name} mesh deformation", unit="um",
-                                 scale=1e6, lines=(-back * 1e6,), zero_line=True),
+                                 scale=1e6, lines=(-back * 1e6,), zero_line=True, name=name),
                  length_unit=r.length_unit, time_unit_s=r.time_unit_s,
                  force_unit_n=r.force_unit_n,
                  rate_unit=gm.omega_ref, contact_groups=groups, balance_arclength=True,

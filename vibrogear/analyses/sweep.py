@@ -114,6 +114,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "message": res.status_message, "points": int(res.param.size),
         "resumed_points": resumed, "failed_points": failed, "period_classes": classes,
         "points_with_contact_loss": int(np.sum(res.impacts > 0)),
+        "monitored": study.monitor.name or study.monitor.label,
         "steps": res.steps, "rhs_calls": res.rhs_calls, "events": res.events,
         "solver_wall_s": res.wall_time,
         "point_wall_split_s": {k: round(v, 3) for k, v in res.timings.items()},

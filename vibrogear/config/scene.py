@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
+from .findings_section import FindingsConfig
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
@@ -58,6 +59,7 @@ class Scene:
     runup: RunupConfig | None = spec(None)
     nnm: NnmConfig | None = spec(None)
     optimize: OptimizeConfig | None = spec(None)
+    findings: FindingsConfig = spec(FindingsConfig())
 
     @property
     def parameter(self) -> Parameter | None:

@@ -3,9 +3,11 @@
 
 The page needs no server, no script and nothing from the network: the style sheet is inline,
 figures are ``<img>`` links to the PNGs beside it and every other file in the folder is a
-relative link.  It shows the run's status, versions and wall times, and per analysis its
-status and message, warnings, error estimates, the scalar entries of its summary (and its
-lists of records) as tables, its figures and its files.
+relative link.  It opens on the findings (:mod:`.findings_report`) and a drawing of the
+gearbox, then gives per analysis its key figure with a caption that says what to look at,
+its numerical status, warnings and, folded, its error estimates, values, other figures and
+files; a glossary, the run's details and the folder's files close it.  Nothing is wider than
+the page: wide tables scroll inside their own box.
 """
 from __future__ import annotations
 
@@ -16,35 +18,56 @@ from pathlib import Path
 from typing import Any, Iterable
 from urllib.parse import quote
 
+from ..config.verbs import VERBS
 from ..pipeline.files import atomic_write_text
 from ..pipeline.outcome import is_root_process
+from .captions import caption_for
+from .glossary import GLOSSARY, PAPER, SECTION_TITLES
 
 __all__ = ["REPORT_NAME", "write_html_report", "render_html_report"]
 
 REPORT_NAME = "report.html"
 FIGURE_SUFFIX = ".png"
+#: the drawing of the gearbox and the speed-band chart (written by the runner)
+OVERVIEW_FIGURES = ("findings.png", "gearbox.png")
 #: summary entries shown in their own places, not in an analysis's table of values
 _OWN_PLACE = ("status", "message", "warnings", "files", "error_estimate")
 _MAX_LIST = 12          # lists of numbers up to this length are shown whole
 _MAX_ROWS = 60          # rows of a table of records
 _MAX_DEPTH = 4          # nested dicts are flattened to this depth
 _MAX_FILES = 5000       # files listed from the folder
+_DIGITS = 4             # significant digits of the numbers in tables
 
 _STYLE = """
-body { font-family: sans-serif; margin: 1.5em auto; max-width: 1100px; color: #222; }
+body { font-family: sans-serif; margin: 1.5em auto; max-width: 1100px; padding: 0 1em;
+       color: #222; line-height: 1.4; }
 h1 { font-size: 1.5em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #ccc; }
 h3 { font-size: 1.05em; margin-bottom: .3em; }
-table { border-collapse: collapse; margin: .4em 0 1em; font-size: .9em; }
-th, td { border: 1px solid #ccc; padding: .2em .6em; text-align: left; vertical-align: top; }
+nav { font-size: .9em; } nav a { margin-right: .8em; }
+.scroll { max-width: 100%; overflow-x: auto; }
+table { border-collapse: collapse; margin: .4em 0 1em; font-size: .88em; }
+th, td { border: 1px solid #ccc; padding: .2em .6em; text-align: left; vertical-align: top;
+         overflow-wrap: anywhere; }
 th { background: #f3f3f3; } td.num { text-align: right; font-family: monospace; }
 .status { font-weight: bold; padding: .1em .5em; border-radius: .3em; }
 .status-ok { background: #d8f0d8; } .status-partial { background: #fff1c2; }
 .status-failed, .status-interrupted { background: #f6d0d0; }
 .status-not-run { background: #e6e6e6; }
-figure { display: inline-block; margin: .5em; max-width: 100%; }
-figure img { max-width: 100%; border: 1px solid #ddd; }
-figcaption { font-size: .85em; text-align: center; }
+.verdict { font-size: 1.15em; padding: .6em .8em; border-left: .4em solid; }
+.verdict-avoid { border-color: #c0392b; background: #fbeaea; }
+.verdict-caution { border-color: #e6a817; background: #fdf5e0; }
+.verdict-fine { border-color: #5b8c5b; background: #edf5ed; }
+.sev { font-weight: bold; padding: 0 .4em; border-radius: .3em; color: #fff; }
+.sev-avoid { background: #c0392b; } .sev-caution { background: #b7830d; }
+.sev-fine { background: #5b8c5b; }
+figure { display: inline-block; margin: .5em; max-width: 100%; vertical-align: top; }
+figure.key, figure.wide { display: block; margin: .5em 0; }
+figure img { max-width: 100%; height: auto; border: 1px solid #ddd; }
+figcaption { font-size: .88em; max-width: 60em; }
+details { margin: .4em 0; } summary { cursor: pointer; color: #1f4e79; }
 ul.warnings li { color: #8a5a00; }
+dl.glossary dt { font-weight: bold; } dl.glossary dd { margin: 0 0 .5em 1.5em; }
+code { overflow-wrap: anywhere; }
 """
 
 
@@ -59,6 +82,7 @@ def write_html_report(out, summary: dict) -> Path | None:
 
 def render_html_report(out, summary: dict) -> str:
     """The page for the run folder ``out`` whose summary is ``summary``, as a string."""
+    from .findings_report import findings_html
     out = Path(out)
     folder = _folder_files(out)
     results = summary.get("results") or {}
@@ -71,54 +95,83 @@ def render_html_report(out, summary: dict) -> str:
     names += [n for n in results if n not in names]
 
     status = str(summary.get("status", "unknown"))
-    title = f"vibrogear run: {summary.get('scene', '')}"
+    title = f"{summary.get('scene', '')}: vibration report"
+    findings = summary.get("findings")
     parts = [
         "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
         f"<title>{_esc(title)}</title>", f"<style>{_STYLE}</style>", "</head>", "<body>",
         f"<h1>{_esc(title)}</h1>",
-        f'<p>Status: {_status_badge(status)}</p>',
+        f"<p>Computation: {_status_badge(status)} &middot; scene "
+        f"<code>{_esc(summary.get('source', ''))}</code> &middot; "
+        f"{_esc(_fmt(((summary.get('wall_time_s') or {}).get('total')), 3))} s</p>",
+        _nav(names, findings is not None, "gearbox.png" in folder),
     ]
     parts += _failure_notes(results)
+    if findings is not None:
+        parts += findings_html(findings, "findings.png" if "findings.png" in folder else None)
     notes = summary.get("notes") or []
     if notes:
-        parts.append("<h3>Notes</h3><ul>")
+        parts.append("<h3>Notes on the model</h3><ul>")
         parts += [f"<li>{_esc(n)}</li>" for n in notes]
         parts.append("</ul>")
-    parts.append("<h2>Run</h2>")
-    parts.append(_table(["entry", "value"], [
-        ("scene", summary.get("scene")), ("source", summary.get("source")),
-        ("model", summary.get("model")), ("analyses", ", ".join(map(str, names))),
-        ("status", status)]))
-    parts.append("<h3>Versions</h3>")
-    parts.append(_table(["package", "version"], list((summary.get("versions") or {}).items())))
-    parts.append("<h3>Wall times [s]</h3>")
-    parts.append(_table(["stage", "wall time [s]"],
-                        list((summary.get("wall_time_s") or {}).items())))
-    if names:
-        parts.append("<h3>Contents</h3><ul>")
-        parts += [f'<li><a href="#{_anchor(n)}">{_esc(n)}</a></li>' for n in names]
-        parts.append('<li><a href="#files">files in this folder</a></li></ul>')
+    if "gearbox.png" in folder:
+        parts.append('<h2 id="gearbox">The gearbox</h2>')
+        parts.append(_figure("gearbox.png", key=True))
 
     for name in names:
         record = results.get(name)
         wall = (summary.get("wall_time_s") or {}).get(name)
         parts += _analysis_section(out, name, record, wall, folder)
 
-    unclaimed_figures = [rel for rel in folder
-                         if rel.lower().endswith(FIGURE_SUFFIX) and rel not in claimed]
+    unclaimed_figures = [rel for rel in folder if rel.lower().endswith(FIGURE_SUFFIX)
+                         and rel not in claimed and rel not in OVERVIEW_FIGURES]
     if unclaimed_figures:
         parts.append("<h2>Other figures</h2>")
         parts += [_figure(rel) for rel in unclaimed_figures]
-
+    parts += _glossary()
+    parts += _run_details(summary, names, status)
     parts.append('<h2 id="files">Files in this folder</h2>')
     if folder:
         rows = [(_link(rel), _size(folder[rel]), _esc(claimed.get(rel, "")))
                 for rel in folder]
-        parts.append(_table(["file", "size", "analysis"], rows, raw=True))
+        parts.append(f"<details><summary>{len(folder)} files</summary>"
+                     + _table(["file", "size", "analysis"], rows, raw=True) + "</details>")
     else:
         parts.append("<p>No files.</p>")
     parts += ["</body>", "</html>", ""]
     return "\n".join(parts)
+
+
+def _nav(names, findings: bool, drawing: bool) -> str:
+    links = (['<a href="#findings">Findings</a>'] if findings else []) + \
+        (['<a href="#gearbox">Gearbox</a>'] if drawing else []) + \
+        [f'<a href="#{_anchor(n)}">{_esc(SECTION_TITLES.get(n, n))}</a>' for n in names] + \
+        ['<a href="#glossary">Glossary</a>', '<a href="#run">Run details</a>',
+         '<a href="#files">Files</a>']
+    return "<nav>" + " ".join(links) + "</nav>"
+
+
+def _glossary() -> list[str]:
+    parts = ['<h2 id="glossary">Glossary</h2>', '<dl class="glossary">']
+    parts += [f"<dt>{_esc(term)}</dt><dd>{_esc(text)}</dd>" for term, text in GLOSSARY]
+    parts.append("</dl>")
+    parts.append(f"<p>Method: {_esc(PAPER)}</p>")
+    return parts
+
+
+def _run_details(summary: dict, names, status: str) -> list[str]:
+    walls = [(k, _fmt(v, 3)) for k, v in (summary.get("wall_time_s") or {}).items()]
+    return ['<h2 id="run">Run details</h2>', "<details><summary>scene, versions, wall "
+            "times</summary>",
+            _table(["entry", "value"], [
+                ("scene", summary.get("scene")), ("source", summary.get("source")),
+                ("model", summary.get("model")), ("analyses", ", ".join(map(str, names))),
+                ("computation status", status)]),
+            "<h3>Versions</h3>",
+            _table(["package", "version"], list((summary.get("versions") or {}).items())),
+            "<h3>Wall times [s]</h3>", _table(["stage", "wall time [s]"], walls),
+            "</details>"]
 
 
 # ------------------------------------------------------------------ sections
@@ -132,47 +185,66 @@ def _failure_notes(results: dict) -> list[str]:
     return notes
 
 
+def _key_figure(name: str, figures: list[str]) -> str | None:
+    """The analysis's key figure: the first PNG its verb lists among its outputs."""
+    verb = VERBS.get(name)
+    wanted = [f for run in (verb.runs.values() if verb else ()) for f in run.outputs
+              if f.endswith(FIGURE_SUFFIX)]
+    for f in wanted:
+        for rel in figures:
+            if rel.rsplit("/", 1)[-1] == f:
+                return rel
+    return figures[0] if figures else None
+
+
 def _analysis_section(out: Path, name: str, record, wall, folder: dict[str, int]) -> list[str]:
-    parts = [f'<h2 id="{_anchor(name)}">{_esc(name)}</h2>']
+    parts = [f'<h2 id="{_anchor(name)}">{_esc(SECTION_TITLES.get(name, name))}</h2>']
     if not isinstance(record, dict):
-        parts.append(f"<p>Status: {_status_badge('not run')}</p>")
+        parts.append(f"<p>Computation: {_status_badge('not run')}</p>")
         return parts
     status = str(record.get("status", "ok"))
-    line = f"Status: {_status_badge(status)}"
+    line = f"Computation: {_status_badge(status)}"
     if record.get("message") and record.get("message") != status:
         line += f" &mdash; {_esc(record['message'])}"
     if wall is not None:
-        line += f" &middot; wall time {_esc(_fmt(wall))} s"
+        line += f" &middot; {_esc(_fmt(wall, 3))} s"
     parts.append(f"<p>{line}</p>")
     warnings = record.get("warnings") or []
     if warnings:
         parts.append("<h3>Warnings</h3><ul class=\"warnings\">")
         parts += [f"<li>{_esc(w)}</li>" for w in warnings]
         parts.append("</ul>")
+    files = [rel for rel in _record_files(out, record.get("files")) if rel in folder]
+    figures = [rel for rel in files if rel.lower().endswith(FIGURE_SUFFIX)]
+    key = _key_figure(name, figures)
+    if key is not None:
+        parts.append(_figure(key, key=True))
+    others = [rel for rel in figures if rel != key]
+    if others:
+        parts.append(f"<details><summary>{len(others)} more figures</summary>")
+        parts += [_figure(rel) for rel in others]
+        parts.append("</details>")
     if "error_estimate" in record:
-        parts.append("<h3>Error estimates</h3>")
         estimate = record["error_estimate"]
         if isinstance(estimate, dict) and estimate:
             rows = [row for k, v in estimate.items() for row in _flatten(v, str(k))]
         else:
             rows = _flatten(estimate, "error_estimate")
-        parts.append(_table(["estimate", "value"], rows))
+        parts.append("<details><summary>Error estimates</summary>"
+                     + _table(["estimate", "value"], rows) + "</details>")
     values, record_lists = _key_values(record)
-    if values:
-        parts.append("<h3>Results</h3>")
-        parts.append(_table(["entry", "value"], values))
-    for key, items in record_lists:
-        parts.append(f"<h3>{_esc(key)}</h3>")
-        parts.append(_records_table(items))
-    files = [rel for rel in _record_files(out, record.get("files")) if rel in folder]
-    figures = [rel for rel in files if rel.lower().endswith(FIGURE_SUFFIX)]
-    if figures:
-        parts.append("<h3>Figures</h3>")
-        parts += [_figure(rel) for rel in figures]
-    if files:
-        parts.append("<h3>Files</h3><ul>")
-        parts += [f"<li>{_link(rel)} ({_size(folder[rel])})</li>" for rel in files]
-        parts.append("</ul>")
+    if values or record_lists:
+        parts.append("<details><summary>All values of this analysis</summary>")
+        if values:
+            parts.append(_table(["entry", "value"], values))
+        for key_name, items in record_lists:
+            parts.append(f"<h3>{_esc(key_name)}</h3>")
+            parts.append(_records_table(items))
+        parts.append("</details>")
+    data = [rel for rel in files if rel not in figures]
+    if data:
+        parts.append("<p>Data: " + ", ".join(f"{_link(rel)} ({_size(folder[rel])})"
+                                             for rel in data) + "</p>")
     return parts
 
 
@@ -212,7 +284,12 @@ def _list_text(values) -> str:
     if all(_is_scalar(v) for v in values):
         first, second, last = (_fmt(values[i]) for i in (0, 1, -1))
         return f"{len(values)} values: {first}, {second}, ..., {last}"
-    return f"{len(values)} entries"
+    if all(isinstance(v, dict) for v in values):
+        shown = "; ".join(", ".join(f"{k} = {_fmt(x)}" for k, x in v.items()
+                                    if _is_scalar(x)) for v in values[:6])
+        return shown + (f"; ... ({len(values)} in all, see summary.json)"
+                        if len(values) > 6 else "")
+    return f"{len(values)} entries (see summary.json)"
 
 
 def _records_table(items: list[dict]) -> str:
@@ -232,10 +309,13 @@ def _fmt_cell(value):
     return _list_text(value) if isinstance(value, (list, tuple)) else value
 
 
-def _figure(rel: str) -> str:
+def _figure(rel: str, key: bool = False) -> str:
     url = _url(rel)
-    return (f'<figure><a href="{url}"><img src="{url}" alt="{_esc(rel)}"></a>'
-            f"<figcaption>{_esc(rel)}</figcaption></figure>")
+    caption = caption_for(rel)
+    text = f"{_esc(caption)} <small>({_esc(rel)})</small>" if caption else _esc(rel)
+    css = ' class="key"' if key else ""
+    return (f'<figure{css}><a href="{url}"><img src="{url}" alt="{_esc(rel)}"></a>'
+            f"<figcaption>{text}</figcaption></figure>")
 
 
 # ------------------------------------------------------------------ files
@@ -301,7 +381,7 @@ def _table(header: list[str], rows, raw: bool = False) -> str:
     """An HTML table; cells are formatted and escaped unless ``raw`` (already HTML)."""
     if not rows:
         return "<p>None.</p>"
-    out = ["<table>", "<tr>" + "".join(f"<th>{_esc(h)}</th>" for h in header) + "</tr>"]
+    out = ['<div class="scroll"><table>', "<tr>" + "".join(f"<th>{_esc(h)}</th>" for h in header) + "</tr>"]
     for row in rows:
         cells = []
         for cell in row:
@@ -312,7 +392,7 @@ def _table(header: list[str], rows, raw: bool = False) -> str:
             else:
                 cells.append(f"<td>{_esc(_fmt(cell))}</td>")
         out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</table>")
+    out.append("</table></div>")
     return "\n".join(out)
 
 
@@ -350,7 +430,7 @@ def _is_scalar(value) -> bool:
     return value is None or isinstance(value, (str, bool, int, float)) or _is_number(value)
 
 
-def _fmt(value) -> str:
+def _fmt(value, digits: int = _DIGITS) -> str:
     if hasattr(value, "dtype") and hasattr(value, "item"):
         try:
             value = value.item()
@@ -361,7 +441,7 @@ def _fmt(value) -> str:
     if isinstance(value, bool):
         return "yes" if value else "no"
     if isinstance(value, float):
-        return f"{value:.6g}" if math.isfinite(value) else str(value)
+        return f"{value:.{digits}g}" if math.isfinite(value) else str(value)
     if isinstance(value, (list, tuple)):
         return _list_text(value)
     return str(value)

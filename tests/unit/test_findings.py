@@ -1,0 +1,190 @@
+"""Findings: bands derived from per-point arrays, checked against hand-made arrays whose
+bands are known, and recomputable from the file with the band's own metric, op, threshold
+(``recompute_band`` below is written from the documented definition, not from the code)."""
+from __future__ import annotations
+
+import operator
+
+import numpy as np
+import pytest
+
+from vibrogear.analyses.findings import derive_findings
+from vibrogear.config import ConfigError
+from vibrogear.config.base import build
+from vibrogear.config.findings_section import FindingsConfig
+from vibrogear.report.findings_report import console_lines, plot_band_chart
+
+OPS = {">": operator.gt, ">=": operator.ge, "<": operator.lt, "<=": operator.le,
+       "==": operator.eq}
+
+
+def recompute_band(arrays: dict, band: dict) -> set[float]:
+    """The grid speeds at which ``band``'s test holds in its direction(s), from the file:
+    'up'/'down': in that direction and not the other; 'both': in both (docs/findings.md)."""
+    param = np.asarray(arrays["param"], float)
+    direction = np.asarray(arrays["direction"], str)
+    ok = np.asarray(arrays["ok"], bool)
+    op = OPS[band["op"]]
+    compare = band.get("compare", "")
+    if compare.startswith("min("):
+        a, b = compare[4:-1].split(", ")
+        values = np.minimum(arrays[a], arrays[b])
+    else:
+        values = np.asarray(arrays[band["metric"]], float)
+    if compare == "abs(up - down)":
+        held = set()
+        for p in np.unique(param):
+            u = values[(param == p) & (direction == "up") & ok]
+            d = values[(param == p) & (direction == "down") & ok]
+            if u.size and d.size and op(abs(u[0] - d[0]), band["threshold"]):
+                held.add(float(p))
+        return held
+    holds = {d: {float(p) for p in param[(direction == d) & ok & op(values, band["threshold"])]}
+             for d in ("up", "down")}
+    if band["direction"] == "both":
+        return holds["up"] & holds["down"]
+    other = "down" if band["direction"] == "up" else "up"
+    return holds[band["direction"]] - holds[other]
+
+
+def check_bands_recompute(arrays: dict, findings: dict) -> int:
+    """Every sweep band's [from, to] is a maximal run of grid points where its test holds."""
+    grid = np.unique(np.asarray(arrays["param"], float))
+    checked = 0
+    for band in findings["bands"]:
+        if band["source"] != "sweep.npz":
+            continue
+        held = recompute_band(arrays, band)
+        inside = {float(p) for p in grid if band["from"] <= p <= band["to"]}
+        assert inside <= held, (band, sorted(inside - held))
+        i0 = int(np.searchsorted(grid, band["from"]))
+        i1 = int(np.searchsorted(grid, band["to"]))
+        assert i0 == 0 or float(grid[i0 - 1]) not in held, band       # maximal run
+        assert i1 == grid.size - 1 or float(grid[i1 + 1]) not in held, band
+        assert band["edge_err"] == pytest.approx(float(np.min(np.diff(grid))))
+        checked += 1
+    return checked
+
+
+def _sweep(cf_up, cf_down, back_up=None, back_down=None, cls=None) -> dict:
+    """A two-direction sweep on the grid 100, 200, ..., 1000 rpm with one mesh 'G1'."""
+    grid = np.arange(1, 11) * 100.0
+    n = grid.size
+    zeros = np.zeros(n)
+    back_up = zeros if back_up is None else np.asarray(back_up, float)
+    back_down = zeros if back_down is None else np.asarray(back_down, float)
+    cls = np.ones(2 * n, int) if cls is None else np.asarray(cls)
+    return {
+        "param": np.concatenate([grid, grid[::-1]]),
+        "direction": np.array(["up"] * n + ["down"] * n),
+        "ok": np.ones(2 * n, bool),
+        "qmin": np.zeros(2 * n), "qmax": np.ones(2 * n) * 1e-5,
+        "period_n": np.where(cls == 1, 1, 0),
+        "motion_class": cls, "motion_class_legend": np.array(["failed", "periodic",
+                                                             "quasi-periodic", "chaotic",
+                                                             "not settled", "aperiodic"]),
+        "contact_fraction_G1": np.concatenate([cf_up, np.asarray(cf_down)[::-1]]),
+        "impacts_drive_G1": np.concatenate([zeros, zeros]),
+        "impacts_back_G1": np.concatenate([back_up, back_down[::-1]]),
+    }
+
+
+def test_contact_loss_bands_per_direction():
+    """Contact lost at 300-500 rpm in both directions and at 600-700 rpm going down only:
+    one 'both' band 300-500 and one 'down' band 600-700, each avoid."""
+    cf = np.ones(10)
+    up = cf.copy()
+    up[2:5] = 0.9
+    down = up.copy()
+    down[5:7] = 0.95
+    arrays = _sweep(up, down)
+    f = derive_findings({"sweep.npz": arrays}, {}, FindingsConfig())
+    loss = [b for b in f["bands"] if b["quantity"] == "contact loss"]
+    assert [(b["direction"], b["from"], b["to"], b["severity"]) for b in loss] == \
+        [("both", 300.0, 500.0, "avoid"), ("down", 600.0, 700.0, "avoid")]
+    assert all(b["metric"] == "contact_fraction_G1" and b["op"] == "<" and b["threshold"] == 1.0
+               for b in loss)
+    assert check_bands_recompute(arrays, f) >= 2
+    assert f["verdict"].startswith("Avoid 300–700 rpm: G1 loses contact")
+
+
+def test_rattle_and_rules_from_the_section():
+    """Back-flank impacts of 0.02 and 0.3 per period: with back_impacts_above = 0.05 only
+    the 0.3 points rattle; a rule set to 'fine' removes them from the verdict."""
+    back = np.zeros(10)
+    back[3] = 0.02
+    back[6:9] = 0.3
+    arrays = _sweep(np.ones(10), np.ones(10), back, back)
+    rules = build(FindingsConfig, {"back_impacts_above": 0.05})
+    f = derive_findings({"sweep.npz": arrays}, {}, rules)
+    rattle = [b for b in f["bands"] if b["quantity"] == "rattle"]
+    assert [(b["from"], b["to"], b["direction"]) for b in rattle] == [(700.0, 900.0, "both")]
+    assert "0.30 back-flank impacts" in rattle[0]["evidence"]
+    assert check_bands_recompute(arrays, f) >= 1
+    quiet = derive_findings({"sweep.npz": arrays}, {},
+                            build(FindingsConfig, {"back_impacts_above": 0.05,
+                                                   "rattle": "fine"}))
+    assert quiet["verdict"].startswith("No speed to avoid or watch in 100–1000 rpm")
+
+
+def test_motion_classes_and_failed_points():
+    """Chaos at 400-500 rpm up only; a failed point never belongs to a band."""
+    cls = np.ones(20, int)
+    cls[3:5] = 3                         # up: 400, 500 rpm
+    arrays = _sweep(np.ones(10), np.ones(10), cls=cls)
+    arrays["ok"][4] = False              # 500 rpm up failed
+    arrays["motion_class"][4] = 0
+    f = derive_findings({"sweep.npz": arrays}, {}, FindingsConfig())
+    chaos = [b for b in f["bands"] if b["quantity"] == "chaotic motion"]
+    assert [(b["from"], b["to"], b["direction"], b["severity"]) for b in chaos] == \
+        [(400.0, 400.0, "up", "caution")]
+    assert check_bands_recompute(arrays, f) >= 1
+
+
+def test_hysteresis_band_and_jump_events():
+    """qmax 10 um going up and 30 um going down at 500-600 rpm: a hysteresis band there
+    and a jump event in each direction."""
+    arrays = _sweep(np.ones(10), np.ones(10))
+    arrays["qmax"] = np.full(20, 10e-6)
+    arrays["qmax"][10 + 4:10 + 6] = 30e-6     # down run: 600, 500 rpm
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"monitored": "G1"}},
+                        FindingsConfig())
+    hyst = [b for b in f["bands"] if b["quantity"].startswith("hysteresis")]
+    assert [(b["from"], b["to"], b["where"]) for b in hyst] == [(500.0, 600.0, "G1")]
+    assert check_bands_recompute(arrays, f) >= 1
+    jumps = [e for e in f["events"] if e["kind"] == "jump"]
+    assert sorted(e["direction"] for e in jumps) == ["down", "down"]    # onto and off the
+    assert sorted(e["at"] for e in jumps) == [450.0, 650.0]              # upper state
+
+
+def test_no_response_over_speed_gives_no_verdict(tmp_path):
+    f = derive_findings({}, {"modes": {"status": "ok"}}, FindingsConfig())
+    assert f["verdict"].startswith("No speed verdict") and not f["bands"]
+    assert plot_band_chart(f, tmp_path / "f.png") is None
+    assert console_lines(f, quiet=True) == [f["verdict"]]
+
+
+def test_partial_run_says_partial():
+    arrays = _sweep(np.ones(10), np.ones(10))
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"status": "partial",
+                                                          "message": "3 points failed"}},
+                        FindingsConfig())
+    assert "Partial results: sweep: partial (3 points failed)" in f["verdict"]
+
+
+def test_console_is_short_and_chart_draws(tmp_path):
+    cf = np.where(np.arange(10) % 2 == 0, 0.9, 1.0)
+    cls = np.tile([1, 2, 3, 4], 5)
+    arrays = _sweep(cf, cf, cf < 1, cf < 1, cls=cls)
+    f = derive_findings({"sweep.npz": arrays}, {}, FindingsConfig())
+    lines = console_lines(f, "out/x/report.html")
+    assert len(lines) <= 10 and lines[-1] == "open out/x/report.html"
+    assert lines[0].startswith("findings: Avoid")
+    assert plot_band_chart(f, tmp_path / "f.png").stat().st_size > 1000
+
+
+def test_findings_section_errors_name_the_field():
+    with pytest.raises(ConfigError, match="rattle"):
+        build(FindingsConfig, {"rattle": "never"})
+    with pytest.raises(ConfigError, match="contact_fraction_below"):
+        build(FindingsConfig, {"contact_fraction_below": 1.5})

@@ -1,0 +1,334 @@
+"""Speed bands of a sweep: contact loss, rattle, double-sided impacts, bearing unloading,
+motion classes, hysteresis (:mod:`vibrogear.analyses.findings` explains the band).
+
+The test of a band is evaluated per grid point and per direction on the arrays of
+``sweep.npz`` exactly as the band states it (:func:`test_mask`); failed points
+(``ok = False``) never belong to a band.
+"""
+from __future__ import annotations
+
+import operator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..solvers.sequential.motion import CHAOTIC, NOT_SETTLED, APERIODIC, QUASI_PERIODIC
+
+__all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands",
+           "mesh_and_bearing_names", "PARAM_UNITS", "fmt", "fmt_param", "range_text"]
+
+#: the comparison operators a band may state
+OPS = {">": operator.gt, ">=": operator.ge, "<": operator.lt, "<=": operator.le,
+       "==": operator.eq}
+#: parameter -> unit text
+PARAM_UNITS = {"rpm": "rpm", "Omega": ""}
+
+
+@dataclass(frozen=True)
+class Band:
+    quantity: str
+    where: str
+    direction: str
+    start: float
+    stop: float
+    severity: str
+    metric: str
+    op: str
+    threshold: float
+    evidence: str
+    source: str = "sweep.npz"
+    edge_err: float = 0.0
+    points: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {"quantity": self.quantity, "where": self.where, "direction": self.direction,
+                "from": self.start, "to": self.stop, "severity": self.severity,
+                "metric": self.metric, "op": self.op, "threshold": self.threshold,
+                "evidence": self.evidence, "source": self.source, "edge_err": self.edge_err,
+                "points": self.points, **self.extra}
+
+
+def fmt(x: float, digits: int = 2) -> str:
+    """``x`` to ``digits`` significant digits, plainly (no exponent for ordinary sizes)."""
+    x = float(x)
+    if not np.isfinite(x):
+        return str(x)
+    if x == 0:
+        return "0"
+    mag = int(np.floor(np.log10(abs(x))))
+    if -3 <= mag < 6:
+        decimals = max(digits - 1 - mag, 0)
+        return f"{x:.{decimals}f}"
+    return f"{x:.{digits - 1}e}"
+
+
+def fmt_param(x: float) -> str:
+    """A speed (or Omega) as a reader writes it: 4 significant digits, whole numbers from
+    1000 up (4883 rpm, 0.872)."""
+    x = float(x)
+    return f"{x:.0f}" if abs(x) >= 1000 else f"{x:.4g}"
+
+
+def range_text(lo: float, hi: float, unit: str) -> str:
+    u = f" {unit}" if unit else ""
+    if fmt_param(lo) == fmt_param(hi):
+        return f"{fmt_param(lo)}{u}"
+    return f"{fmt_param(lo)}–{fmt_param(hi)}{u}"
+
+
+def test_mask(values, op: str, threshold: float) -> np.ndarray:
+    return OPS[op](np.asarray(values, float), float(threshold))
+
+
+def grid_masks(arrays: dict, metric: str, op: str, threshold: float):
+    """(grid, {direction: mask on the grid}) of ``metric op threshold`` per direction."""
+    param = np.asarray(arrays["param"], float)
+    direction = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
+    ok = np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
+    grid = np.unique(param)
+    passed = test_mask(arrays[metric], op, threshold) & ok
+    masks = {}
+    for d in ("up", "down"):
+        sel = direction == d
+        if not np.any(sel):
+            continue
+        m = np.zeros(grid.size, bool)
+        m[np.searchsorted(grid, param[sel])] = passed[sel]
+        masks[d] = m
+    return grid, masks
+
+
+def segments(mask) -> list[tuple[int, int]]:
+    """(first, last) index of each run of True in ``mask``."""
+    m = np.concatenate(([False], np.asarray(mask, bool), [False])).astype(np.int8)
+    d = np.diff(m)
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1))
+
+
+def _split_directions(masks: dict) -> dict[str, np.ndarray]:
+    if len(masks) == 1:
+        return dict(masks)
+    up, down = masks["up"], masks["down"]
+    return {"both": up & down, "up": up & ~down, "down": down & ~up}
+
+
+def mesh_and_bearing_names(arrays: dict) -> tuple[list[str], list[str]]:
+    meshes = sorted(k[len("contact_fraction_"):] for k in arrays
+                    if k.startswith("contact_fraction_") and not k.endswith("err"))
+    bearings = sorted(k[len("unloaded_"):] for k in arrays
+                      if k.startswith("unloaded_") and not k.endswith("err"))
+    return meshes, bearings
+
+
+def _select(arrays, grid, direction: str, i0: int, i1: int) -> np.ndarray:
+    """Indices into the file's points of the band [grid[i0], grid[i1]] in ``direction``."""
+    param = np.asarray(arrays["param"], float)
+    d = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
+    sel = (param >= grid[i0]) & (param <= grid[i1]) & \
+        np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
+    if direction in ("up", "down"):
+        sel &= d == direction
+    return np.flatnonzero(sel)
+
+
+def _stat(arrays, key, idx, digits=2, scale=1.0, unit="") -> str:
+    """'lo–hi unit (± err)' of ``key`` over ``idx`` with its batch-means error."""
+    v = np.asarray(arrays[key], float)[idx] * scale
+    err = arrays.get(f"{key}_err")
+    e = f" (± {fmt(float(np.max(np.asarray(err, float)[idx])) * scale, 1)})" \
+        if err is not None and np.any(np.asarray(err, float)[idx] > 0) else ""
+    u = f" {unit}" if unit else ""
+    lo, hi = float(v.min()), float(v.max())
+    txt = fmt(lo, digits) if np.isclose(lo, hi) else f"{fmt(lo, digits)}–{fmt(hi, digits)}"
+    return f"{txt}{u}{e}"
+
+
+def _bands(arrays, rule: dict, evidence, *, param_unit: str) -> list[Band]:
+    """The bands of one rule: ``rule`` has quantity, where, metric, op, threshold,
+    severity; ``evidence(idx) -> str`` describes the file's points ``idx`` of a band."""
+    if rule["metric"] not in arrays:
+        return []
+    grid, masks = grid_masks(arrays, rule["metric"], rule["op"], rule["threshold"])
+    step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
+    out = []
+    for direction, mask in _split_directions(masks).items():
+        for i0, i1 in segments(mask):
+            idx = _select(arrays, grid, direction, i0, i1)
+            out.append(Band(rule["quantity"], rule["where"], direction, float(grid[i0]),
+                            float(grid[i1]), rule["severity"], rule["metric"], rule["op"],
+                            float(rule["threshold"]), evidence(idx), edge_err=step,
+                            points=int(i1 - i0 + 1)))
+    return out
+
+
+def sweep_bands(arrays: dict, rules, *, param_unit: str, length_scale: float,
+                length_unit: str, monitored: str = "monitored contact"
+                ) -> tuple[list[Band], list[dict], list[str]]:
+    """Bands and jump events of a ``sweep.npz`` and what was checked; ``monitored``: the
+    contact whose deformation ``qmin``/``qmax`` are (a gearbox: the first mesh)."""
+    meshes, bearings = mesh_and_bearing_names(arrays)
+    bands: list[Band] = []
+    per = "per mesh period" if param_unit == "rpm" else "per excitation period"
+    kw = dict(param_unit=param_unit)
+    for m in meshes:
+        cf, back, drive = f"contact_fraction_{m}", f"impacts_back_{m}", f"impacts_drive_{m}"
+
+        def loss(idx, m=m, cf=cf, drive=drive):
+            return (f"{m} in contact {_stat(arrays, cf, idx, 2, 100, '%')} of the time, "
+                    f"{_stat(arrays, drive, idx)} drive-flank re-impacts {per}")
+
+        def rattle(idx, m=m, back=back):
+            text = f"{m}: {_stat(arrays, back, idx)} back-flank impacts {per}"
+            if f"rattle_{m}" in arrays:
+                text += f", impact energy {_stat(arrays, f'rattle_{m}', idx, 2, 1e3, 'mJ')} " \
+                        f"{per}"
+            return text
+
+        bands += _bands(arrays, dict(quantity="contact loss", where=m, metric=cf, op="<",
+                                     threshold=rules.contact_fraction_below,
+                                     severity=rules.contact_loss), loss, **kw)
+        bands += _bands(arrays, dict(quantity="rattle", where=m, metric=back, op=">",
+                                     threshold=rules.back_impacts_above,
+                                     severity=rules.rattle), rattle, **kw)
+        if back in arrays and drive in arrays:
+            both = dict(arrays)
+            both[f"double_sided_{m}"] = np.minimum(np.asarray(arrays[back], float),
+                                                   np.asarray(arrays[drive], float))
+            bands += [_with(b, compare=f"min({back}, {drive})")
+                      for b in _bands(both, dict(quantity="double-sided impacts", where=m,
+                                                 metric=f"double_sided_{m}", op=">",
+                                                 threshold=0.0,
+                                                 severity=rules.double_sided),
+                                      lambda idx, m=m, back=back, drive=drive:
+                                      f"{m} hits both flanks: {_stat(arrays, drive, idx)} "
+                                      f"drive and {_stat(arrays, back, idx)} back impacts "
+                                      f"{per}", **kw)]
+    for b in bearings:
+        key = f"unloaded_{b}"
+        bands += _bands(arrays, dict(quantity="bearing unloading", where=b, metric=key,
+                                     op=">", threshold=rules.unloaded_above,
+                                     severity=rules.bearing_unloading),
+                        lambda idx, b=b, key=key: f"{b}: {_stat(arrays, key, idx)} rolling "
+                        "elements out of contact on average", **kw)
+    bands += _motion_bands(arrays, rules, kw)
+    hyst, events = _hysteresis(arrays, rules, param_unit, length_scale, length_unit,
+                               monitored)
+    bands += hyst
+    checked = [f"sweep ({', '.join(sorted(set(np.asarray(arrays.get('direction', ['up']), str).tolist())))}"
+               f", {np.unique(np.asarray(arrays['param'])).size} speeds): contact loss and rattle "
+               f"of {', '.join(meshes) or 'the contacts'}"
+               + (f", unloading of {', '.join(bearings)}" if bearings else "")
+               + ", motion class, jumps and hysteresis"]
+    return bands, events, checked
+
+
+def _span_text(v) -> str:
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}–{fmt(hi)}"
+
+
+def _points(n: int) -> str:
+    """'1 point' / 'n points' (of the file: both directions counted)."""
+    return f"{n} point" + ("" if n == 1 else "s")
+
+
+def _with(band: Band, **extra) -> Band:
+    return Band(**{**band.__dict__, "extra": {**band.extra, **extra}})
+
+
+def _motion_bands(arrays, rules, kw) -> list[Band]:
+    if "motion_class" not in arrays:
+        return []
+    out = []
+    lyap = "lyapunov_ci" in arrays
+
+    def chaos(idx):
+        text = f"chaotic at {_points(idx.size)}"
+        if lyap:
+            lo = np.asarray(arrays["lyapunov_ci"], float)[idx, 0]
+            text += "; largest Lyapunov exponent > 0 with 95 % confidence (lower bound " \
+                    f"{_span_text(lo)} per time unit)"
+        return text
+
+    def torus(idx):
+        text = f"quasi-periodic at {_points(idx.size)} (Lyapunov interval contains 0)"
+        if "base_f2_order" in arrays:
+            nu = np.asarray(arrays["base_f2_order"], float)[idx]
+            nu = nu[nu > 0]
+            if nu.size:
+                text += f"; second frequency f2 = {_span_text(nu)} x the excitation " \
+                        "frequency (folded)"
+        return text
+
+    for quantity, code, severity, ev in (("chaotic motion", CHAOTIC, rules.chaotic, chaos),
+                                         ("quasi-periodic motion", QUASI_PERIODIC,
+                                          rules.quasi_periodic, torus),
+                                         ("motion not settled", NOT_SETTLED, rules.not_settled,
+                                          lambda idx: f"not settled within the transient "
+                                          f"budget at {_points(idx.size)}"),
+                                         ("aperiodic motion", APERIODIC, rules.not_settled,
+                                          lambda idx: f"no period found at {_points(idx.size)} "
+                                          "(no Lyapunov exponent computed)")):
+        out += _bands(arrays, dict(quantity=quantity, where="gearbox" if kw["param_unit"]
+                                   == "rpm" else "system", metric="motion_class", op="==",
+                                   threshold=code, severity=severity), ev, **kw)
+    if "period_n" in arrays:
+        pn = np.asarray(arrays["period_n"])
+        out += _bands(arrays, dict(quantity="subharmonic motion", where="gearbox" if
+                                   kw["param_unit"] == "rpm" else "system", metric="period_n",
+                                   op=">=", threshold=2, severity=rules.subharmonic),
+                      lambda idx: f"period {', '.join(str(int(n)) for n in np.unique(pn[idx]))}"
+                      " x the excitation period", **kw)
+        out += _bands(arrays, dict(quantity="periodic motion", where="gearbox" if
+                                   kw["param_unit"] == "rpm" else "system", metric="period_n",
+                                   op="==", threshold=1, severity="fine"),
+                      lambda idx: f"period 1 at {_points(idx.size)}", **kw)
+    return out
+
+
+def _hysteresis(arrays, rules, param_unit, scale, unit,
+                monitored) -> tuple[list[Band], list[dict]]:
+    """Jumps per direction (events) and the band where up and down differ."""
+    param = np.asarray(arrays["param"], float)
+    d = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
+    ok = np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
+    qmax = np.asarray(arrays["qmax"], float)
+    span = float(np.ptp(qmax[ok])) if np.any(ok) else 0.0
+    events = []
+    for direction in ("up", "down"):
+        sel = np.flatnonzero((d == direction) & ok)
+        sel = sel[np.argsort(param[sel])]
+        if direction == "down":
+            sel = sel[::-1]
+        for a, b in zip(sel[:-1], sel[1:]):
+            if span > 0 and abs(qmax[b] - qmax[a]) > rules.jump_rel * span:
+                events.append({"kind": "jump", "at": float(0.5 * (param[a] + param[b])),
+                               "where": monitored, "direction": direction,
+                               "evidence": f"going {direction}, qmax changes from "
+                               f"{fmt(qmax[a] * scale, 3)} to {fmt(qmax[b] * scale, 3)} {unit} "
+                               f"between {fmt_param(param[a])} and {fmt_param(param[b])} "
+                               f"{param_unit}".replace("  ", " ")})
+    if not (np.any(d == "up") and np.any(d == "down")) or span == 0:
+        return [], events
+    grid = np.unique(param)
+    diff = np.zeros(grid.size)
+    both_ok = np.zeros(grid.size, bool)
+    for i, p in enumerate(grid):
+        u = np.flatnonzero((param == p) & (d == "up") & ok)
+        w = np.flatnonzero((param == p) & (d == "down") & ok)
+        if u.size and w.size:
+            diff[i] = abs(qmax[u[0]] - qmax[w[0]])
+            both_ok[i] = True
+    thr = rules.hysteresis_rel * span
+    mask = (diff > thr) & both_ok
+    step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
+    bands = []
+    for i0, i1 in segments(mask):
+        bands.append(Band("hysteresis (up and down differ)", monitored, "both", float(grid[i0]),
+                          float(grid[i1]), rules.hysteresis, "qmax", ">", thr,
+                          f"up and down end in different states: qmax differs by up to "
+                          f"{fmt(diff[i0:i1 + 1].max() * scale, 2)} {unit}".rstrip(),
+                          edge_err=step, points=int(i1 - i0 + 1),
+                          extra={"compare": "abs(up - down)"}))
+    return bands, events

@@ -1,0 +1,115 @@
+"""Findings from the continuation (special points), the modes (resonance speeds), the ERP
+(peak and the bands above a level) and the census of coexisting states."""
+from __future__ import annotations
+
+import numpy as np
+
+from .findings_bands import Band, fmt, segments
+
+__all__ = ["branch_events", "resonance_events", "erp_findings", "states_findings"]
+
+#: what a special point of a branch means, in plain words
+LABELS = {"LP": "fold (LP): the branch turns back; a jump between coexisting responses",
+          "PD": "period doubling (PD): a period-2 response branches off",
+          "NS": "Neimark-Sacker (NS): a torus (quasi-periodic motion) branches off",
+          "BP": "branch point (BP)", "GR": "grazing: a contact just touches"}
+
+
+def _stability(stable, i: int, branch) -> str:
+    same = np.flatnonzero(branch == branch[i])
+    before = [j for j in same if j < i]
+    after = [j for j in same if j > i]
+    a = "stable" if before and stable[before[-1]] else "unstable" if before else "?"
+    b = "stable" if after and stable[after[0]] else "unstable" if after else "?"
+    return f"{a} → {b}"
+
+
+def branch_events(arrays: dict, *, param_unit: str, length_scale: float,
+                  length_unit: str) -> list[dict]:
+    """One event per labelled point of ``branch.npz``, with the stability on each side."""
+    label = np.asarray(arrays.get("label", []), str)
+    param = np.asarray(arrays["param"], float)
+    stable = np.asarray(arrays.get("stable", np.zeros(param.size, bool)), bool)
+    branch = np.asarray(arrays.get("branch", np.zeros(param.size, int)))
+    nper = np.asarray(arrays.get("n_periods", np.ones(param.size, int)))
+    qmax = np.asarray(arrays.get("qmax", np.zeros(param.size)), float)
+    out = []
+    for i in np.flatnonzero(label != ""):
+        kind = str(label[i])
+        out.append({"kind": kind, "at": float(param[i]),
+                    "where": f"branch {int(branch[i])} (period-{int(nper[i])})",
+                    "stability": _stability(stable, i, branch),
+                    "evidence": f"{LABELS.get(kind, kind)}; stability "
+                    f"{_stability(stable, i, branch)}; qmax {fmt(qmax[i] * length_scale, 3)} "
+                    f"{length_unit}".rstrip()})
+    return out
+
+
+def resonance_events(resonances: list[dict], rules) -> list[dict]:
+    """The modes' resonance speeds (mesh order x mode frequency) whose mesh strain-energy
+    share is above ``rules.resonance_share_above``."""
+    out = []
+    for r in resonances:
+        share = float(r.get("mesh_energy_share", 0.0))
+        if share <= rules.resonance_share_above:
+            continue
+        out.append({"kind": "resonance", "at": float(r["rpm"]),
+                    "where": f"mode {int(r['mode']) + 1} ({fmt(r['frequency_hz'], 4)} Hz)",
+                    "mesh_order": int(r.get("mesh_order", 1)),
+                    "evidence": f"mesh order {int(r.get('mesh_order', 1))} meets mode "
+                    f"{int(r['mode']) + 1} at {fmt(r['frequency_hz'], 4)} Hz; "
+                    f"{fmt(100 * share, 2)} % of its strain energy is in the meshes"})
+    return out
+
+
+def erp_findings(arrays: dict, rules, *, direction: str) -> tuple[list[Band], list[dict]]:
+    """The ERP peak (event) and the bands where ``erp_db`` is above the level."""
+    rpm = np.asarray(arrays["rpm"], float)
+    db = np.asarray(arrays["erp_db"], float)
+    order = np.argsort(rpm)
+    rpm, db = rpm[order], db[order]
+    k = int(np.nanargmax(db))
+    events = [{"kind": "erp_peak", "at": float(rpm[k]), "where": "housing",
+               "evidence": f"radiated power (ERP) peaks at {fmt(db[k], 4)} dB re 1 pW"}]
+    level = float(db[k] - 6.0) if rules.erp_above_db is None else float(rules.erp_above_db)
+    step = float(np.min(np.diff(rpm))) if rpm.size > 1 else 0.0
+    bands = []
+    for i0, i1 in segments(db > level):
+        bands.append(Band("radiated power", "housing", direction, float(rpm[i0]),
+                          float(rpm[i1]), rules.erp, "erp_db", ">", level,
+                          f"ERP {fmt(db[i0:i1 + 1].min(), 4)}–{fmt(db[i0:i1 + 1].max(), 4)} dB "
+                          f"re 1 pW, above {fmt(level, 4)} dB", source="erp.csv",
+                          edge_err=step, points=int(i1 - i0 + 1)))
+    return bands, events
+
+
+def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float,
+                    length_unit: str) -> tuple[list[Band], list[dict]]:
+    """Speeds where more than one attractor was found (band on ``n_attractors`` of
+    ``states.npz``, per speed) and one event per attractor that coexists with another."""
+    ap = np.asarray(arrays["attractor_param"], float)
+    grid = np.unique(ap)
+    count = np.array([np.sum(ap == p) for p in grid])
+    basin = np.asarray(arrays.get("basin_fraction", np.ones(ap.size)), float)
+    lo = np.asarray(arrays.get("basin_ci_lo", basin), float)
+    hi = np.asarray(arrays.get("basin_ci_hi", basin), float)
+    legend = [str(s) for s in np.asarray(arrays.get("attractor_class_legend", []))]
+    cls = np.asarray(arrays.get("attractor_class", np.zeros(ap.size, int)))
+    step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
+    bands, events = [], []
+    for i0, i1 in segments(count > 1):
+        bands.append(Band("coexisting states", "gearbox" if param_unit == "rpm" else "system",
+                          "both", float(grid[i0]), float(grid[i1]), rules.coexisting,
+                          "n_attractors", ">", 1.0,
+                          f"up to {int(count[i0:i1 + 1].max())} distinct states from random "
+                          "starts", source="states.npz", edge_err=step,
+                          points=int(i1 - i0 + 1),
+                          extra={"compare": "count of attractor_param equal to the speed"}))
+    for j in np.flatnonzero(np.isin(ap, grid[count > 1])):
+        name = legend[int(cls[j])] if legend and 0 <= int(cls[j]) < len(legend) else str(cls[j])
+        events.append({"kind": "coexisting", "at": float(ap[j]), "where": name,
+                       "basin_fraction": float(basin[j]),
+                       "evidence": f"a {name} state; {fmt(100 * basin[j], 2)} % of the "
+                       f"disturbances end there (95 %: {fmt(100 * lo[j], 2)}–"
+                       f"{fmt(100 * hi[j], 2)} %)"})
+    return bands, events

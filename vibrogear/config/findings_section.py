@@ -1,0 +1,67 @@
+"""[findings]: the rules that turn a run's results into speed bands with a severity.
+
+Every gearbox run ends with findings (``summary.json`` ``findings``, the console's last lines,
+the top of ``report.html``).  A band is a run of neighbouring grid speeds at which one test
+``metric op threshold`` holds on a per-point array of a written file (``sweep.npz``,
+``map.npz``, ``erp.csv``); its severity is the rule's.  The defaults are written out in
+``docs/findings.md``; change them here, for example ``quasi_periodic = "fine"`` where a
+torus of small amplitude is acceptable, or ``back_impacts_above = 0.05`` to ignore rare
+rattle impacts.
+
+Severities: ``avoid`` (do not operate there), ``caution`` (acceptable only with a reason:
+look at the evidence) and ``fine`` (reported, not flagged).
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from .base import spec
+
+__all__ = ["FindingsConfig", "SEVERITIES"]
+
+#: from least to most severe
+SEVERITIES = ("fine", "caution", "avoid")
+
+
+def _severity(default: str, what: str):
+    return spec(default, choices=SEVERITIES, doc=f"severity of a band where {what}")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FindingsConfig:
+    """[findings]: thresholds and the severity of each kind of band."""
+    contact_fraction_below: float = spec(1.0, gt=0.0, le=1.0, doc="a mesh loses contact "
+                                         "where contact_fraction_<mesh> (time in contact) is "
+                                         "below this")
+    contact_loss: str = _severity("avoid", "a mesh loses contact")
+    back_impacts_above: float = spec(0.0, ge=0.0, le=1e6, doc="a mesh rattles where "
+                                     "impacts_back_<mesh> (back-flank impacts per mesh "
+                                     "period) is above this")
+    rattle: str = _severity("avoid", "a mesh rattles (back-flank impacts)")
+    double_sided: str = _severity("avoid", "a mesh hits both flanks")
+    unloaded_above: float = spec(0.5, ge=0.0, le=1e4, doc="a bearing unloads where "
+                                 "unloaded_<bearing> (mean rolling elements out of contact) "
+                                 "is above this")
+    bearing_unloading: str = _severity("caution", "a bearing's rolling elements unload")
+    chaotic: str = _severity("caution", "the motion is chaotic")
+    quasi_periodic: str = _severity("caution", "the motion is quasi-periodic")
+    subharmonic: str = _severity("caution", "the motion is periodic with period n >= 2")
+    not_settled: str = _severity("caution", "the motion did not settle")
+    jump_rel: float = spec(0.15, gt=0.0, le=1.0, doc="a jump: neighbouring sweep points whose "
+                           "qmax differs by more than this fraction of its range")
+    hysteresis_rel: float = spec(0.05, gt=0.0, le=10.0, doc="up and down differ where "
+                                 "|qmax_up - qmax_down| exceeds this fraction of the qmax "
+                                 "range")
+    hysteresis: str = _severity("caution", "the sweep up and down end in different states")
+    erp_above_db: float | None = spec(None, ge=-400.0, le=400.0, doc="ERP level [dB re 1 "
+                                      "pW] above which a speed is flagged (unset: 6 dB below "
+                                      "the peak)")
+    erp: str = _severity("caution", "the radiated power (ERP) is above erp_above_db")
+    resonance_share_above: float = spec(0.05, ge=0.0, le=1.0, doc="a resonance speed is "
+                                        "listed where the mode's mesh strain-energy share is "
+                                        "above this")
+    coexisting: str = _severity("caution", "another state coexists (from [states])")
+
+    def rules(self) -> dict:
+        """The rules as written into ``summary.json`` ``findings.rules``."""
+        return asdict(self)

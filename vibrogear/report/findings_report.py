@@ -1,0 +1,184 @@
+"""The findings as the engineer meets them: the console's last lines, the speed-band chart
+(``findings.png``) and the first section of ``report.html``.
+
+The findings themselves are derived in :mod:`vibrogear.analyses.findings`; this module only
+writes them.
+"""
+from __future__ import annotations
+
+import html
+from pathlib import Path
+
+__all__ = ["console_lines", "plot_band_chart", "findings_html", "BAND_CHART"]
+
+BAND_CHART = "findings.png"
+#: severity -> colour of the chart and the page (colour-blind safe: red / amber / green-grey)
+COLOURS = {"avoid": "#c0392b", "caution": "#e6a817", "fine": "#9bbf9b"}
+_MAX_CONSOLE_BANDS = 7
+
+
+def _group(bands: list[dict], severities=("avoid", "caution")) -> list[tuple[str, str, str,
+                                                                             list[dict]]]:
+    """(severity, where, quantity, bands) per kind of band, most severe first."""
+    groups: dict[tuple[str, str, str], list[dict]] = {}
+    for b in bands:
+        if b["severity"] in severities:
+            groups.setdefault((b["severity"], b["where"], b["quantity"]), []).append(b)
+    order = {s: i for i, s in enumerate(("avoid", "caution", "fine"))}
+    return [(s, w, q, bs) for (s, w, q), bs in
+            sorted(groups.items(), key=lambda kv: (order[kv[0][0]], kv[0][1], kv[0][2]))]
+
+
+def _label(where: str, quantity: str) -> str:
+    return quantity if where in ("gearbox", "system") else f"{where} {quantity}"
+
+
+def _spans_text(bands: list[dict], unit: str) -> str:
+    """The merged ranges of ``bands``, each tagged "(up)" / "(down)" where every band in it
+    was seen in that sweep direction only."""
+    from ..analyses.findings_text import merged_ranges
+    from ..analyses.findings_bands import range_text
+    out = []
+    for lo, hi in merged_ranges(bands):
+        dirs = {b["direction"] for b in bands if b["from"] >= lo and b["to"] <= hi}
+        tag = f" ({dirs.pop()} only)" if len(dirs) == 1 and "both" not in dirs else ""
+        out.append(range_text(lo, hi, "") + tag)
+    return ", ".join(out) + (f" {unit}" if unit else "")
+
+
+def console_lines(findings: dict, report_path: str | None = None, *, quiet: bool = False) -> list[str]:
+    """At most ~10 lines: the verdict, the avoid / caution bands by kind, the report."""
+    unit = findings.get("param_unit", "rpm")
+    if quiet:
+        return [findings["verdict"]]
+    lines = [f"findings: {findings['verdict']}"]
+    groups = _group(findings.get("bands", []))
+    for severity, where, quantity, bands in groups[:_MAX_CONSOLE_BANDS]:
+        lines.append(f"  {severity:<7s} {_label(where, quantity)}: {_spans_text(bands, unit)}")
+    if len(groups) > _MAX_CONSOLE_BANDS:
+        lines.append(f"  ... {len(groups) - _MAX_CONSOLE_BANDS} more kinds of band in the report")
+    if report_path:
+        lines.append(f"open {report_path}")
+    return lines
+
+
+def plot_band_chart(findings: dict, path) -> Path | None:
+    """The speed-band chart: the speed axis, one row per (where, quantity) with a band,
+    bars coloured by severity, hatched where only one sweep direction shows it; events
+    (jumps, folds, resonances, the ERP peak) as ticks on their own row."""
+    bands = [b for b in findings.get("bands", []) if b["severity"] != "fine"]
+    span = findings.get("range")
+    if not bands and not findings.get("events"):
+        return None
+    from .figure import new_figure, save_figure
+    rows = []
+    for b in bands:
+        key = _label(b["where"], b["quantity"])
+        if key not in rows:
+            rows.append(key)
+    events = [e for e in findings.get("events", []) if e["kind"] in
+              ("jump", "LP", "PD", "NS", "resonance", "erp_peak")]
+    n = len(rows) + (1 if events else 0)
+    fig = new_figure(figsize=(10, 1.3 + 0.42 * max(n, 1)))
+    ax = fig.add_subplot(111)
+    for b in bands:
+        y = rows.index(_label(b["where"], b["quantity"]))
+        half = 0.5 * b.get("edge_err", 0.0)
+        left, width = b["from"] - half, b["to"] - b["from"] + 2 * half
+        ax.barh(y, width, left=left, height=0.62, color=COLOURS[b["severity"]],
+                hatch=None if b["direction"] == "both" else "///", edgecolor="white",
+                linewidth=0.3)
+    if events:
+        y = len(rows)
+        marks = {"jump": ("v", "k"), "LP": ("D", "#6c3483"), "PD": ("s", "#1f618d"),
+                 "NS": ("o", "#117864"), "resonance": ("|", "#555555"),
+                 "erp_peak": ("*", "#c0392b")}
+        for kind, (m, c) in marks.items():
+            at = [e["at"] for e in events if e["kind"] == kind]
+            if at:
+                ax.plot(at, [y] * len(at), m, color=c, ms=8, mew=2, label=kind, ls="none")
+        rows.append("events")
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22 - 0.3 / max(n, 1)),
+                  ncol=6, fontsize=8, frameon=False)
+    ax.set_yticks(range(len(rows)))
+    ax.set_yticklabels(rows, fontsize=9)
+    ax.invert_yaxis()
+    if span:
+        pad = 0.02 * (span[1] - span[0] or 1.0)
+        ax.set_xlim(span[0] - pad, span[1] + pad)
+    unit = findings.get("param_unit", "rpm")
+    ax.set_xlabel(f"driving speed [{unit}]" if unit else "excitation frequency Omega")
+    ax.grid(axis="x", alpha=0.3)
+    from matplotlib.patches import Patch
+    handles = [Patch(color=COLOURS[s], label=s) for s in ("avoid", "caution")
+               if any(b["severity"] == s for b in bands)]
+    if any(b["direction"] != "both" for b in bands):
+        handles.append(Patch(facecolor="white", edgecolor="k", hatch="///",
+                             label="one sweep direction only"))
+    if handles:
+        fig.legend(handles=handles, loc="upper right", fontsize=8, ncol=len(handles),
+                   frameon=False)
+    ax.set_title("Where to avoid or watch the gearbox" if unit == "rpm" else
+                 "Where to avoid or watch the system", loc="left", fontsize=11)
+    return save_figure(fig, path, formats=("png",))[0]
+
+
+def _esc(x) -> str:
+    return html.escape(str(x), quote=True)
+
+
+def findings_html(findings: dict, chart: str | None) -> list[str]:
+    """The findings section of ``report.html`` (its first section)."""
+    from ..analyses.findings_bands import fmt, fmt_param
+    unit = findings.get("param_unit", "rpm")
+    verdict = findings["verdict"]
+    css = "avoid" if verdict.startswith("Avoid") else "caution" if "Caution" in verdict \
+        else "fine"
+    parts = ['<h2 id="findings">Findings</h2>',
+             f'<p class="verdict verdict-{css}">{_esc(verdict)}</p>']
+    if chart:
+        parts.append(f'<figure class="wide"><img src="{_esc(chart)}" alt="speed bands">'
+                     "<figcaption>Each row is one contact or one kind of motion; a bar marks "
+                     "the speeds where its rule holds (red: avoid, amber: caution; hatched: "
+                     "seen in one sweep direction only). Bars extend half a grid step each "
+                     "side: the true edge lies within one step.</figcaption></figure>")
+    groups = _group(findings.get("bands", []))
+    if groups:
+        rows = []
+        for severity, where, quantity, bands in groups:
+            for b in bands:
+                span = (fmt_param(b["from"]) if b["from"] == b["to"] else
+                        f"{fmt_param(b['from'])}–{fmt_param(b['to'])}")
+                rows.append(f'<tr><td><span class="sev sev-{severity}">{severity}</span></td>'
+                            f"<td>{_esc(span)} {_esc(unit)} (± {_esc(fmt(b['edge_err'], 2))})"
+                            f"</td><td>{_esc(_label(where, quantity))}</td>"
+                            f"<td>{_esc(b['direction'])}</td><td>{_esc(b['evidence'])}</td>"
+                            f"<td><code>{_esc(b['metric'])} {_esc(b['op'])} "
+                            f"{_esc(fmt(b['threshold'], 3))}</code> in {_esc(b['source'])}"
+                            "</td></tr>")
+        parts.append("<table class='findings'><tr><th>severity</th><th>speeds</th>"
+                     "<th>what</th><th>sweep</th><th>evidence</th><th>rule (recompute from "
+                     "the file)</th></tr>" + "".join(rows) + "</table>")
+    fine = [b for b in findings.get("bands", []) if b["severity"] == "fine"]
+    events = findings.get("events", [])
+    if events:
+        parts.append("<h3>Events</h3><ul class='events'>")
+        for e in events[:40]:
+            parts.append(f"<li><strong>{_esc(e['kind'])}</strong> at {_esc(fmt_param(e['at']))} "
+                         f"{_esc(unit)} ({_esc(e['where'])}): {_esc(e['evidence'])}</li>")
+        if len(events) > 40:
+            parts.append(f"<li>{len(events) - 40} more in summary.json</li>")
+        parts.append("</ul>")
+    checked = findings.get("checked") or []
+    detail = ["<details><summary>What was checked, and the rules</summary>"]
+    if checked:
+        detail.append("<ul>" + "".join(f"<li>{_esc(c)}</li>" for c in checked) + "</ul>")
+    if fine:
+        detail.append("<p>Also found (severity fine): " + _esc("; ".join(
+            f"{_label(b['where'], b['quantity'])} {fmt_param(b['from'])}–{fmt_param(b['to'])} "
+            f"{unit} ({b['direction']})" for b in fine[:12])) + "</p>")
+    detail.append("<p>Rules (section <code>[findings]</code>, docs/findings.md): " + _esc(
+        ", ".join(f"{k} = {v}" for k, v in (findings.get("rules") or {}).items())) + "</p>")
+    detail.append("</details>")
+    parts += detail
+    return parts
