@@ -44,6 +44,7 @@ class _Page(HTMLParser):
         self.links: list[str] = []
         self.images: list[str] = []
         self.ids: set[str] = set()
+        self.section_ids: list[str] = []          # the ids of the <h2> sections, in order
         self.text: list[str] = []
         self.stack: list[str] = []
         self.errors: list[str] = []
@@ -53,6 +54,8 @@ class _Page(HTMLParser):
         self.tags.append(tag)
         if "id" in attrs:
             self.ids.add(attrs["id"])
+            if tag == "h2":
+                self.section_ids.append(attrs["id"])
         if attrs.get("href") is not None:
             self.links.append(attrs["href"])
         if attrs.get("src") is not None:
@@ -109,7 +112,7 @@ def _check_page(out: Path) -> tuple[_Page, str, dict]:
     in_folder = {p.relative_to(out).as_posix() for p in out.rglob("*")
                  if p.is_file() and p.name != REPORT_NAME and not p.name.startswith(".")}
     assert in_folder <= set(local), in_folder - set(local)
-    assert f"Status: {summary['status']}" in " ".join(text.split())
+    assert f"Computation: {summary['status']}" in " ".join(text.split())
     for name, value in summary["versions"].items():
         assert name in text and value in text
     for name in summary["analyses"]:
@@ -139,7 +142,10 @@ def test_impact_pair_report(impact_pair_run):
     assert "Error estimates" in text and "liouville_det_error" in text
     assert "accumulated_local_error" in text and "rhs_calls" in text
     folds = summary["results"]["continuation"]["folds"]
-    assert f"{folds[0]:.6g}" in text
+    assert f"{folds[0]:.4g}" in text
+    # the findings open the page: the first section, with the verdict of summary.json
+    assert page.section_ids[0] == "findings"
+    assert summary["findings"]["verdict"] in " ".join(text.split())
 
 
 def test_gearbox_report(tmp_path):
@@ -151,6 +157,14 @@ def test_gearbox_report(tmp_path):
     page, text, summary = _check_page(out)
     assert summary["model"] == "gearbox" and "gearbox" in text
     assert {"time_response.png", "bifurcation.png"} <= set(page.images)
+    # every band of the findings recomputes from sweep.npz with its metric, op, threshold
+    from test_findings import check_bands_recompute
+    with np.load(out / "sweep.npz") as z:
+        arrays = {k: z[k] for k in z.files}
+    findings = summary["findings"]
+    assert findings["bands"] and check_bands_recompute(arrays, findings) == len(
+        [b for b in findings["bands"] if b["source"] == "sweep.npz"])
+    assert page.section_ids[0] == "findings" and "findings.png" in page.images
     for name in ("time_response.csv", "time_response.npz", "sweep.csv", "sweep.npz",
                  "summary.json"):
         assert name in page.links

@@ -127,6 +127,39 @@ def _esc(x) -> str:
     return html.escape(str(x), quote=True)
 
 
+#: events listed openly (the others are folded)
+_KEY_EVENTS = ("LP", "jump", "resonance", "erp_peak", "coexisting")
+
+
+def _num(x) -> str:
+    from ..analyses.findings_bands import fmt
+    x = float(x)
+    return str(int(x)) if x.is_integer() else fmt(x, 3)
+
+
+def _event(e: dict, unit: str) -> str:
+    from ..analyses.findings_bands import fmt_param
+    return (f"<li><strong>{_esc(e['kind'])}</strong> at {_esc(fmt_param(e['at']))} "
+            f"{_esc(unit)} ({_esc(e['where'])}): {_esc(e['evidence'])}</li>")
+
+
+def _all_bands(findings: dict) -> str:
+    from ..analyses.findings_bands import fmt, fmt_param
+    unit = findings.get("param_unit", "rpm")
+    rows = []
+    for b in findings.get("bands", []):
+        span = fmt_param(b["from"]) if b["from"] == b["to"] else \
+            f"{fmt_param(b['from'])}–{fmt_param(b['to'])}"
+        rows.append(f"<tr><td>{_esc(b['severity'])}</td><td>{_esc(span)} {_esc(unit)}</td>"
+                    f"<td>{_esc(_label(b['where'], b['quantity']))}</td>"
+                    f"<td>{_esc(b['direction'])}</td><td>{_esc(b['evidence'])}</td>"
+                    f"<td><code>{_esc(b['metric'])} {_esc(b['op'])} {_esc(_num(b['threshold']))}"
+                    f"</code></td></tr>")
+    return ('<div class="scroll"><table><tr><th>severity</th><th>speeds</th><th>what</th>'
+            "<th>sweep</th><th>evidence</th><th>rule</th></tr>" + "".join(rows)
+            + "</table></div>")
+
+
 def findings_html(findings: dict, chart: str | None) -> list[str]:
     """The findings section of ``report.html`` (its first section)."""
     from ..analyses.findings_bands import fmt, fmt_param
@@ -146,29 +179,35 @@ def findings_html(findings: dict, chart: str | None) -> list[str]:
     if groups:
         rows = []
         for severity, where, quantity, bands in groups:
-            for b in bands:
-                span = (fmt_param(b["from"]) if b["from"] == b["to"] else
-                        f"{fmt_param(b['from'])}–{fmt_param(b['to'])}")
-                rows.append(f'<tr><td><span class="sev sev-{severity}">{severity}</span></td>'
-                            f"<td>{_esc(span)} {_esc(unit)} (± {_esc(fmt(b['edge_err'], 2))})"
-                            f"</td><td>{_esc(_label(where, quantity))}</td>"
-                            f"<td>{_esc(b['direction'])}</td><td>{_esc(b['evidence'])}</td>"
-                            f"<td><code>{_esc(b['metric'])} {_esc(b['op'])} "
-                            f"{_esc(fmt(b['threshold'], 3))}</code> in {_esc(b['source'])}"
-                            "</td></tr>")
-        parts.append("<table class='findings'><tr><th>severity</th><th>speeds</th>"
-                     "<th>what</th><th>sweep</th><th>evidence</th><th>rule (recompute from "
-                     "the file)</th></tr>" + "".join(rows) + "</table>")
+            worst = max(bands, key=lambda b: b["points"])
+            rule = f"{worst['metric']} {worst['op']} {_num(worst['threshold'])}"
+            rows.append(f'<tr><td class="nw"><span class="sev sev-{severity}">{severity}</span>'
+                        f"</td><td>{_esc(_label(where, quantity))}</td>"
+                        f"<td>{_esc(_spans_text(bands, unit))} (edges ± "
+                        f"{_esc(fmt(worst['edge_err'], 2))})</td>"
+                        f"<td>{_esc(worst['evidence'])}"
+                        + (f" <small>(widest of {len(bands)} bands)</small>" if len(bands) > 1
+                           else "") +
+                        f"</td><td><code>{_esc(rule)}</code> in {_esc(worst['source'])}</td>"
+                        "</tr>")
+        parts.append('<div class="scroll"><table class="findings"><tr><th>severity</th>'
+                     "<th>what</th><th>speeds</th><th>evidence</th><th>rule (recompute from "
+                     "the file)</th></tr>" + "".join(rows) + "</table></div>")
+        parts.append("<details><summary>Every band, one row each</summary>"
+                     + _all_bands(findings) + "</details>")
     fine = [b for b in findings.get("bands", []) if b["severity"] == "fine"]
     events = findings.get("events", [])
-    if events:
+    key = [e for e in events if e["kind"] in _KEY_EVENTS]
+    rest = [e for e in events if e["kind"] not in _KEY_EVENTS]
+    if key:
         parts.append("<h3>Events</h3><ul class='events'>")
-        for e in events[:40]:
-            parts.append(f"<li><strong>{_esc(e['kind'])}</strong> at {_esc(fmt_param(e['at']))} "
-                         f"{_esc(unit)} ({_esc(e['where'])}): {_esc(e['evidence'])}</li>")
-        if len(events) > 40:
-            parts.append(f"<li>{len(events) - 40} more in summary.json</li>")
+        parts += [_event(e, unit) for e in key[:30]]
         parts.append("</ul>")
+    if rest or len(key) > 30:
+        more = rest + key[30:]
+        parts.append(f"<details><summary>{len(more)} more events (period doublings, tori, "
+                     "...)</summary><ul class='events'>"
+                     + "".join(_event(e, unit) for e in more[:200]) + "</ul></details>")
     checked = findings.get("checked") or []
     detail = ["<details><summary>What was checked, and the rules</summary>"]
     if checked:

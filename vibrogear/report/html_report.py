@@ -67,7 +67,7 @@ figcaption { font-size: .88em; max-width: 60em; }
 details { margin: .4em 0; } summary { cursor: pointer; color: #1f4e79; }
 ul.warnings li { color: #8a5a00; }
 dl.glossary dt { font-weight: bold; } dl.glossary dd { margin: 0 0 .5em 1.5em; }
-code { overflow-wrap: anywhere; }
+code { overflow-wrap: anywhere; } td.nw, .nw { white-space: nowrap; }
 """
 
 
