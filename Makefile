@@ -23,8 +23,13 @@ demo: two-stage
 
 ## the CI test suite (fast; slow cases: make test-slow), one worker process per core
 ## (pytest-xdist; a test file stays on one worker, so its module fixtures are built once)
-test: $(STAMP)
+test: $(STAMP) $(VENV)/.browser
 	$(PY) -m pytest -n auto --dist loadfile
+
+# the test tier's browser test renders report.html in Debian's chromium
+$(VENV)/.browser: $(STAMP)
+	./scripts/setup.sh --browser
+	touch $@
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -n auto --dist loadfile

@@ -13,7 +13,9 @@ step() {   # step "what" command...: run quietly, show the log and stop on failu
     exit 1
   fi
 }
-PKGS="python3-dolfinx python3-petsc4py python3-slepc4py python3-mpi4py python3-gmsh python3-h5py-mpi python3-scipy python3-matplotlib python3-venv libopenblas0-pthread"
+# --browser: also Debian's chromium, which the test tier's browser test renders report.html in
+[ "${1:-}" = "--browser" ] && BROWSER="chromium" || BROWSER=""
+PKGS="$BROWSER python3-dolfinx python3-petsc4py python3-slepc4py python3-mpi4py python3-gmsh python3-h5py-mpi python3-scipy python3-matplotlib python3-venv libopenblas0-pthread"
 missing=""
 for p in $PKGS; do dpkg -s "$p" >/dev/null 2>&1 || missing="$missing $p"; done
 if [ -n "$missing" ]; then

@@ -168,6 +168,49 @@ def test_gearbox_report(tmp_path):
     for name in ("time_response.csv", "time_response.npz", "sweep.csv", "sweep.npz",
                  "summary.json"):
         assert name in page.links
+    _check_in_browser(out)
+
+
+#: what the page reports about itself once loaded in the browser (added to a copy only)
+_PROBE = """<script>
+window.addEventListener('load', () => {
+  const imgs = [...document.images];
+  const de = document.documentElement;
+  document.body.setAttribute('data-probe', JSON.stringify({
+    images: imgs.length,
+    broken: imgs.filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.getAttribute('src')),
+    scroll_width: de.scrollWidth, client_width: de.clientWidth,
+    first_section: document.querySelector('h2') ? document.querySelector('h2').id : null}));
+});
+</script>"""
+
+
+def _check_in_browser(out: Path) -> None:
+    """Debian's chromium renders the page at 1280 px: every image loads, nothing is wider
+    than the window, the findings are the first section (the project's set-up installs
+    chromium for the test tier: scripts/setup.sh --browser)."""
+    import html as html_mod
+    import re
+    import shutil
+    import subprocess
+    browser = shutil.which("chromium")
+    assert browser, "chromium is not installed: run ./scripts/setup.sh --browser"
+    probe = out / "browser_probe.html"
+    text = (out / REPORT_NAME).read_text(encoding="utf-8")
+    probe.write_text(text.replace("</body>", _PROBE + "</body>"), encoding="utf-8")
+    try:
+        done = subprocess.run(
+            [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+             "--window-size=1280,1000", "--virtual-time-budget=10000", "--dump-dom",
+             probe.as_uri()], capture_output=True, text=True, timeout=120)
+    finally:
+        probe.unlink()
+    found = re.search(r'data-probe="([^"]*)"', done.stdout)
+    assert found, done.stderr[-2000:]
+    state = json.loads(html_mod.unescape(found.group(1)))
+    assert state["images"] >= 3 and state["broken"] == [], state
+    assert state["scroll_width"] <= state["client_width"] <= 1280, state
+    assert state["first_section"] == "findings", state
 
 
 def test_failed_run_report(tmp_path):
