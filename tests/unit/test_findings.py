@@ -188,3 +188,21 @@ def test_findings_section_errors_name_the_field():
         build(FindingsConfig, {"rattle": "never"})
     with pytest.raises(ConfigError, match="contact_fraction_below"):
         build(FindingsConfig, {"contact_fraction_below": 1.5})
+
+
+def test_map_bands_per_load():
+    """A map of 2 loads x 5 speeds, up only: at 10 N m the mesh loses contact at 300-400
+    rpm, at 50 N m nowhere; the band names its load and recomputes from map.npz[:, j, :]."""
+    rpm = np.array([100.0, 200.0, 300.0, 400.0, 500.0])
+    cf = np.ones((1, 2, 5))
+    cf[0, 0, 2:4] = 0.8
+    arrays = {"rpm": rpm, "torque": np.array([10.0, 50.0]), "direction": np.array(["up"]),
+              "ok": np.ones((1, 2, 5), bool), "contact_fraction_G1": cf,
+              "impacts_drive_G1": np.zeros((1, 2, 5)), "impacts_back_G1": np.zeros((1, 2, 5))}
+    f = derive_findings({"map.npz": arrays}, {}, FindingsConfig())
+    loss = [b for b in f["bands"] if b["quantity"] == "contact loss"]
+    assert [(b["where"], b["from"], b["to"], b["load_index"]) for b in loss] == \
+        [("G1 at 10 N m", 300.0, 400.0, 0)]
+    j = loss[0]["load_index"]
+    held = rpm[(arrays[loss[0]["metric"]][0, j] < loss[0]["threshold"])]
+    assert set(held) == {300.0, 400.0}

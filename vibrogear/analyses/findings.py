@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .findings_bands import Band, sweep_bands
+from .findings_bands import Band, map_bands, sweep_bands
 from .findings_events import branch_events, erp_findings, resonance_events, states_findings
 from .findings_text import verdict_text
 
@@ -105,6 +105,11 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
         bands += b
         events += e
         checked += c
+    grid = sources.get("map.npz")
+    if grid is not None and np.asarray(grid.get("rpm", [])).size:
+        b, c = map_bands(grid, rules, param_unit=param_unit)
+        bands += b
+        checked += c
     branch = sources.get("branch.npz")
     if branch is not None and np.asarray(branch.get("param", [])).size:
         events += branch_events(branch, **units)
@@ -152,7 +157,7 @@ def _nvh_direction(records: dict) -> str:
 
 
 def _span(sources) -> tuple[float, float] | None:
-    for name, key in (("sweep.npz", "param"), ("erp.csv", "rpm"),
+    for name, key in (("sweep.npz", "param"), ("map.npz", "rpm"), ("erp.csv", "rpm"),
                       ("states.npz", "attractor_param")):
         arrays = sources.get(name)
         if arrays is not None and np.asarray(arrays.get(key, [])).size:

@@ -168,6 +168,26 @@ def sweep_bands(arrays: dict, rules, *, param_unit: str, length_scale: float,
     """Bands and jump events of a ``sweep.npz`` and what was checked; ``monitored``: the
     contact whose deformation ``qmin``/``qmax`` are (a gearbox: the first mesh)."""
     meshes, bearings = mesh_and_bearing_names(arrays)
+    bands = _contact_bands(arrays, meshes, bearings, rules, param_unit)
+    bands += _motion_bands(arrays, rules, dict(param_unit=param_unit))
+    hyst, events = _hysteresis(arrays, rules, param_unit, length_scale, length_unit,
+                               monitored)
+    bands += hyst
+    checked = [f"sweep ({', '.join(sorted(set(np.asarray(arrays.get('direction', ['up']), str).tolist())))}"
+               f", {np.unique(np.asarray(arrays['param'])).size} speeds): contact loss and rattle "
+               f"of {', '.join(meshes) or 'the contacts'}"
+               + (f", unloading of {', '.join(bearings)}" if bearings else "")
+               + ", motion class, jumps and hysteresis"]
+    return bands, events, checked
+
+
+def _span_text(v) -> str:
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}–{fmt(hi)}"
+
+
+def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
+    """Contact loss, rattle and double-sided impacts per mesh, unloading per bearing."""
     bands: list[Band] = []
     per = "per mesh period" if param_unit == "rpm" else "per excitation period"
     kw = dict(param_unit=param_unit)
@@ -211,26 +231,38 @@ def sweep_bands(arrays: dict, rules, *, param_unit: str, length_scale: float,
                                      severity=rules.bearing_unloading),
                         lambda idx, b=b, key=key: f"{b}: {_stat(arrays, key, idx)} rolling "
                         "elements out of contact on average", **kw)
-    bands += _motion_bands(arrays, rules, kw)
-    hyst, events = _hysteresis(arrays, rules, param_unit, length_scale, length_unit,
-                               monitored)
-    bands += hyst
-    checked = [f"sweep ({', '.join(sorted(set(np.asarray(arrays.get('direction', ['up']), str).tolist())))}"
-               f", {np.unique(np.asarray(arrays['param'])).size} speeds): contact loss and rattle "
-               f"of {', '.join(meshes) or 'the contacts'}"
-               + (f", unloading of {', '.join(bearings)}" if bearings else "")
-               + ", motion class, jumps and hysteresis"]
-    return bands, events, checked
-
-
-def _span_text(v) -> str:
-    lo, hi = float(np.min(v)), float(np.max(v))
-    return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}–{fmt(hi)}"
+    return bands
 
 
 def _points(n: int) -> str:
     """'1 point' / 'n points' (of the file: both directions counted)."""
     return f"{n} point" + ("" if n == 1 else "s")
+
+
+def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list[str]]:
+    """Contact-loss, rattle, double-sided and bearing bands of a ``map.npz`` at each load:
+    the map's (directions, loads, speeds) grids are read one load at a time as a sweep;
+    each band names its load (``load_index`` into ``torque``, the array's middle axis)."""
+    rpm = np.asarray(arrays["rpm"], float)
+    dirs = [str(d) for d in np.asarray(arrays["direction"])]
+    torque = np.asarray(arrays["torque"], float)
+    meshes, bearings = mesh_and_bearing_names(arrays)
+    keys = [k for k in arrays if k.startswith(("contact_fraction_", "impacts_back_",
+                                               "impacts_drive_", "unloaded_", "rattle_"))]
+    bands = []
+    for j, t in enumerate(torque):
+        as_sweep = {"param": np.tile(rpm, len(dirs)), "direction": np.repeat(dirs, rpm.size),
+                    "ok": np.asarray(arrays["ok"], bool)[:, j, :].ravel()}
+        for k in keys:
+            as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
+        for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit):
+            bands.append(Band(**{**b.__dict__, "where": f"{b.where} at {fmt(t, 3)} N m",
+                                 "source": "map.npz",
+                                 "extra": {**b.extra, "load_index": j, "torque": float(t)}}))
+    checked = [f"map ({torque.size} loads x {rpm.size} speeds): contact loss and rattle of "
+               f"{', '.join(meshes)}" + (f", unloading of {', '.join(bearings)}" if bearings
+                                         else "")]
+    return bands, checked
 
 
 def _with(band: Band, **extra) -> Band:
