@@ -256,7 +256,7 @@ def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list
         for k in keys:
             as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
         for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit):
-            bands.append(Band(**{**b.__dict__, "where": f"{b.where} at {fmt(t, 3)} N m",
+            bands.append(Band(**{**b.__dict__, "where": f"{b.where} at {t:.3g} N m",
                                  "source": "map.npz",
                                  "extra": {**b.extra, "load_index": j, "torque": float(t)}}))
     checked = [f"map ({torque.size} loads x {rpm.size} speeds): contact loss and rattle of "
