@@ -206,3 +206,19 @@ def test_map_bands_per_load():
     j = loss[0]["load_index"]
     held = rpm[(arrays[loss[0]["metric"]][0, j] < loss[0]["threshold"])]
     assert set(held) == {300.0, 400.0}
+
+
+def test_runup_bands_merge_close_periods():
+    """A run-up over 1000 mesh periods from 100 to 1099 rpm with losses in periods 200-210
+    and 230-240 (one band, 20 periods apart) and 700 (another band)."""
+    rpm = 100.0 + np.arange(1000)
+    losses = np.zeros(1000)
+    losses[200:211] = 1
+    losses[230:241] = 2
+    losses[700] = 1
+    arrays = {"runs": np.array(["up"]), "meshes": np.array(["G2"]), "up_rpm": rpm,
+              "up_losses_G2": losses}
+    f = derive_findings({"runup.npz": arrays}, {}, FindingsConfig())
+    got = [(b["where"], b["from"], b["to"], b["points"]) for b in f["bands"]]
+    assert got == [("G2", 300.0, 340.0, 22), ("G2", 800.0, 800.0, 1)]
+    assert all(b["edge_err"] == 1.0 and b["direction"] == "up" for b in f["bands"])

@@ -26,13 +26,14 @@ from __future__ import annotations
 import numpy as np
 
 from .findings_bands import Band, map_bands, sweep_bands
-from .findings_events import branch_events, erp_findings, resonance_events, states_findings
+from .findings_events import (branch_events, erp_findings, resonance_events, runup_findings,
+                              states_findings)
 from .findings_text import verdict_text
 
 __all__ = ["derive_findings", "run_findings", "read_sources", "SOURCE_FILES", "Band"]
 
 #: the files findings are derived from (as the run's analyses list them in ``files``)
-SOURCE_FILES = ("sweep.npz", "branch.npz", "erp.csv", "map.npz", "states.npz")
+SOURCE_FILES = ("sweep.npz", "branch.npz", "erp.csv", "map.npz", "states.npz", "runup.npz")
 
 
 def read_sources(results: dict) -> dict[str, dict[str, np.ndarray]]:
@@ -110,6 +111,10 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
         b, c = map_bands(grid, rules, param_unit=param_unit)
         bands += b
         checked += c
+    runup = sources.get("runup.npz")
+    if runup is not None:
+        bands += runup_findings(runup, rules, param_unit=param_unit)
+        checked.append("run-up / run-down: contact losses over the instantaneous speed")
     branch = sources.get("branch.npz")
     if branch is not None and np.asarray(branch.get("param", [])).size:
         events += branch_events(branch, **units)

@@ -6,7 +6,11 @@ import numpy as np
 
 from .findings_bands import Band, fmt, segments
 
-__all__ = ["branch_events", "resonance_events", "erp_findings", "states_findings"]
+__all__ = ["branch_events", "resonance_events", "erp_findings", "states_findings",
+           "runup_findings", "RUNUP_MERGE_PERIODS"]
+
+#: a run-up's contact-loss periods closer than this many mesh periods form one band
+RUNUP_MERGE_PERIODS = 50
 
 #: what a special point of a branch means, in plain words
 LABELS = {"LP": "fold (LP): the branch turns back; a jump between coexisting responses",
@@ -113,3 +117,40 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
                        f"disturbances end there (95 %: {fmt(100 * lo[j], 2)}–"
                        f"{fmt(100 * hi[j], 2)} %)"})
     return bands, events
+
+
+def runup_findings(arrays: dict, rules, *, param_unit: str) -> list[Band]:
+    """Contact loss during a run-up / run-down: per run ``<d>`` and mesh, the speeds
+    (``<d>_rpm``, the mean speed of each mesh period) of the periods with contact losses
+    (``<d>_losses_<mesh>`` > 0), periods closer than :data:`RUNUP_MERGE_PERIODS` joined into
+    one band; ``edge_err``: the largest speed change over one mesh period in the band."""
+    runs = [str(r) for r in np.asarray(arrays.get("runs", arrays.get("directions", [])))]
+    meshes = [str(m) for m in np.asarray(arrays.get("meshes", []))]
+    bands = []
+    for run in runs:
+        rpm = np.asarray(arrays.get(f"{run}_rpm", []), float)
+        direction = "down" if run.startswith("down") else "up"
+        for m in meshes:
+            key = f"{run}_losses_{m}"
+            if key not in arrays or rpm.size == 0:
+                continue
+            losses = np.asarray(arrays[key], float)
+            hit = np.flatnonzero(losses > 0)
+            if hit.size == 0:
+                continue
+            cuts = np.flatnonzero(np.diff(hit) > RUNUP_MERGE_PERIODS)
+            for group in np.split(hit, cuts + 1):
+                i0, i1 = int(group[0]), int(group[-1])
+                seg = rpm[i0:i1 + 1]
+                step = float(np.max(np.abs(np.diff(rpm[max(i0 - 1, 0):i1 + 2]))))
+                label = run.replace("_no_inertia", " (no inertia torque)")
+                bands.append(Band("contact loss in the run-up" if direction == "up" else
+                                  "contact loss in the run-down", m, direction,
+                                  float(seg.min()), float(seg.max()), rules.contact_loss,
+                                  key, ">", 0.0,
+                                  f"{m} loses contact in {group.size} of {i1 - i0 + 1} mesh "
+                                  f"periods of the {label} run ({int(losses[group].sum())} "
+                                  "losses)", source="runup.npz", edge_err=step,
+                                  points=int(group.size),
+                                  extra={"param": f"{run}_rpm", "run": run}))
+    return bands
