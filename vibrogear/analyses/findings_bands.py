@@ -12,10 +12,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..config.numbers import fmt, fmt_param, range_text
 from ..solvers.sequential.motion import CHAOTIC, NOT_SETTLED, APERIODIC, QUASI_PERIODIC
 
-__all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands",
-           "mesh_and_bearing_names", "PARAM_UNITS", "fmt", "fmt_param", "range_text"]
+__all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands", "map_bands",
+           "mesh_and_bearing_names", "PARAM_UNITS"]
 
 #: the comparison operators a band may state
 OPS = {">": operator.gt, ">=": operator.ge, "<": operator.lt, "<=": operator.le,
@@ -47,34 +48,6 @@ class Band:
                 "metric": self.metric, "op": self.op, "threshold": self.threshold,
                 "evidence": self.evidence, "source": self.source, "edge_err": self.edge_err,
                 "points": self.points, **self.extra}
-
-
-def fmt(x: float, digits: int = 2) -> str:
-    """``x`` to ``digits`` significant digits, plainly (no exponent for ordinary sizes)."""
-    x = float(x)
-    if not np.isfinite(x):
-        return str(x)
-    if x == 0:
-        return "0"
-    mag = int(np.floor(np.log10(abs(x))))
-    if -3 <= mag < 6:
-        decimals = max(digits - 1 - mag, 0)
-        return f"{x:.{decimals}f}"
-    return f"{x:.{digits - 1}e}"
-
-
-def fmt_param(x: float) -> str:
-    """A speed (or Omega) as a reader writes it: 4 significant digits, whole numbers from
-    1000 up (4883 rpm, 0.872)."""
-    x = float(x)
-    return f"{x:.0f}" if abs(x) >= 1000 else f"{x:.4g}"
-
-
-def range_text(lo: float, hi: float, unit: str) -> str:
-    u = f" {unit}" if unit else ""
-    if fmt_param(lo) == fmt_param(hi):
-        return f"{fmt_param(lo)}{u}"
-    return f"{fmt_param(lo)}–{fmt_param(hi)}{u}"
 
 
 def test_mask(values, op: str, threshold: float) -> np.ndarray:

@@ -2,22 +2,9 @@
 plain words."""
 from __future__ import annotations
 
-from .findings_bands import fmt_param, range_text
+from ..config.numbers import fmt_param, merged_ranges, range_text
 
-__all__ = ["verdict_text", "merged_ranges", "ranges_text"]
-
-
-def merged_ranges(bands: list[dict]) -> list[tuple[float, float]]:
-    """The union of the bands' [from, to] ranges, merged where they touch or overlap
-    (within one grid step)."""
-    spans = sorted((b["from"], b["to"], b.get("edge_err", 0.0)) for b in bands)
-    out: list[list[float]] = []
-    for lo, hi, step in spans:
-        if out and lo <= out[-1][1] + 1.01 * step:
-            out[-1][1] = max(out[-1][1], hi)
-        else:
-            out.append([lo, hi])
-    return [(a, b) for a, b in out]
+__all__ = ["verdict_text", "ranges_text"]
 
 
 def ranges_text(bands: list[dict], unit: str) -> str:

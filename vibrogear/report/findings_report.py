@@ -9,6 +9,8 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from ..config.numbers import fmt, fmt_param, merged_ranges, range_text
+
 __all__ = ["console_lines", "plot_band_chart", "findings_html", "BAND_CHART"]
 
 BAND_CHART = "findings.png"
@@ -36,8 +38,6 @@ def _label(where: str, quantity: str) -> str:
 def _spans_text(bands: list[dict], unit: str) -> str:
     """The merged ranges of ``bands``, each tagged "(up)" / "(down)" where every band in it
     was seen in that sweep direction only."""
-    from ..analyses.findings_text import merged_ranges
-    from ..analyses.findings_bands import range_text
     out = []
     for lo, hi in merged_ranges(bands):
         dirs = {b["direction"] for b in bands if b["from"] >= lo and b["to"] <= hi}
@@ -132,19 +132,16 @@ _KEY_EVENTS = ("LP", "jump", "resonance", "erp_peak", "coexisting")
 
 
 def _num(x) -> str:
-    from ..analyses.findings_bands import fmt
     x = float(x)
     return str(int(x)) if x.is_integer() else fmt(x, 3)
 
 
 def _event(e: dict, unit: str) -> str:
-    from ..analyses.findings_bands import fmt_param
     return (f"<li><strong>{_esc(e['kind'])}</strong> at {_esc(fmt_param(e['at']))} "
             f"{_esc(unit)} ({_esc(e['where'])}): {_esc(e['evidence'])}</li>")
 
 
 def _all_bands(findings: dict) -> str:
-    from ..analyses.findings_bands import fmt, fmt_param
     unit = findings.get("param_unit", "rpm")
     rows = []
     for b in findings.get("bands", []):
@@ -162,7 +159,6 @@ def _all_bands(findings: dict) -> str:
 
 def findings_html(findings: dict, chart: str | None) -> list[str]:
     """The findings section of ``report.html`` (its first section)."""
-    from ..analyses.findings_bands import fmt, fmt_param
     unit = findings.get("param_unit", "rpm")
     verdict = findings["verdict"]
     css = "avoid" if verdict.startswith("Avoid") else "caution" if "Caution" in verdict \
