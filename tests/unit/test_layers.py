@@ -23,6 +23,7 @@ ARCH = ROOT / "docs" / "architecture.md"
 #: first.  Equal numbers share a layer.  docs/architecture.md, section "Layers", has this table.
 LAYERS = {
     "__init__.py": 0,       # the version
+    "status.py": 0,         # the one status enumeration and Outcome (solvers, analyses, runner)
     "verification/": 0,     # exact references: share no code with what they check
     "config/": 1,
     "cache.py": 2,

@@ -15,7 +15,7 @@ from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
-from vibrogear.solvers.status import MESSAGES, Status, from_code
+from vibrogear.status import MESSAGES, Status, from_code
 from vibrogear.verification import impact_exact as ex
 
 CONFIGS = sorted(Path("configs").glob("*.toml"))
@@ -161,7 +161,7 @@ def test_every_config_passes_check(path, capsys):
 def _check_outcome(res, counters: set):
     """``res.outcome``: a Status, a message, integer counters (at least ``counters``, all
     >= 0), a wall time >= 0 and an error estimate of floats or None."""
-    from vibrogear.solvers.status import Outcome
+    from vibrogear.status import Outcome
 
     out = res.outcome
     assert isinstance(out, Outcome) and isinstance(out.status, Status)

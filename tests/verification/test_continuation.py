@@ -12,7 +12,7 @@ from vibrogear.solvers.periodic.continuation import (ContinuationOptions, Period
                                             PseudoArclength, continuation)
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import periodic_flow
-from vibrogear.solvers.status import Status
+from vibrogear.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
 from vibrogear.config.options import SweepOptions
 from vibrogear.verification.impact_exact import ImpactParams

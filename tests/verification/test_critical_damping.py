@@ -15,7 +15,7 @@ from vibrogear.cli import main
 from vibrogear.config import load_scene
 from vibrogear.solvers.periodic.continuation import ContinuationOptions, PseudoArclength
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
-from vibrogear.solvers.status import Status
+from vibrogear.status import Status
 from reference import impact_exact as ex  # the flow and the periodic orbits
 
 SCENE = "configs/impact_pair.toml"

@@ -26,7 +26,7 @@ from vibrogear.solvers.periodic.continuation import (ContinuationOptions, Period
 from vibrogear.solvers.periodic.floquet import neutral_directions, split_trivial
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import periodic_flow, shoot
-from vibrogear.solvers.status import Status
+from vibrogear.status import Status
 from vibrogear.solvers.sequential.sweep import classify_period
 from vibrogear.config.options import ShootingOptions
 

@@ -20,7 +20,7 @@ from vibrogear.config import load_scene
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.integrator.rtol_limit import loosest_rtol
-from vibrogear.solvers.status import Status
+from vibrogear.status import Status
 from vibrogear.solvers.integrator.trust import assess, mechanical_energy
 
 ROOT = Path(__file__).resolve().parents[2]

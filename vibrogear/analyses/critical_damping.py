@@ -30,7 +30,7 @@ from ..solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitP
                                     continuation)
 from ..solvers.integrator.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium
-from ..solvers.status import Status
+from ..status import Status
 
 __all__ = ["FoldScan", "CriticalDampingResult", "CriticalDampingFigures", "fold_scan",
            "critical_zeta", "run_critical_damping"]

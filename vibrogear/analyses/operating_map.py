@@ -37,7 +37,7 @@ from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.integrator.contact_eval import contact_history
 from ..solvers.integrator.integrate import integrate
 from ..solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
-from ..solvers.status import Status
+from ..status import Status
 from ..solvers.sequential.sweep import assemble_result, sweep_units
 from ..solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling

@@ -21,7 +21,7 @@ from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
-from ..solvers.status import Status
+from ..status import Status
 from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
 from ..config.options import SweepOptions
 from .study import Study, integration_options

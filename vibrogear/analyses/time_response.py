@@ -16,7 +16,7 @@ from ..solvers.integrator.contact_eval import contact_history
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrator.integrate import integrate
 from ..solvers.integrator.rtol_limit import loosest_rtol
-from ..solvers.status import Status
+from ..status import Status
 from .study import Study, integration_options
 
 __all__ = ["TimeResponseResult", "run"]

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..models.contact_law import evaluate_set
 from ..models.reduced import ReducedModel
-from .status import Outcome, Status
+from ..status import Outcome, Status
 
 __all__ = ["StaticResult", "static_equilibrium", "static_forces"]
 

@@ -29,7 +29,7 @@ from .variational import BLAS_MIN_WORK, saltation, variational_step
 __all__ = ["dopri_loop", "loop_inputs", "LoopResult", "JAC_AUTO", "JAC_LOOPS", "JAC_BLAS"]
 
 # status codes returned by the loop (numba has no enums): the values of the integrator
-# members of solvers.status.Status, which maps them (from_code)
+# members of vibrogear.status.Status, which maps them (from_code)
 _OK, _MAX_STEPS, _NONFINITE, _CHATTERING, _STEP_TOO_SMALL, _GRAZING = 0, -1, -2, -3, -4, -5
 
 PI_BETA = 0.08  # PI step-size controller

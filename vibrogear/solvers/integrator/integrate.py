@@ -13,7 +13,7 @@ from ...config.options import IntegrationOptions   # defined once, with the [int
 from ...models.reduced import ReducedModel
 from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, LoopResult, dopri_loop, loop_inputs
 from .kernels import model_arrays
-from ..status import Outcome, Status, from_code
+from ...status import Outcome, Status, from_code
 from .trust import assess
 
 __all__ = ["IntegrationOptions", "Trajectory", "integrate"]

@@ -40,7 +40,7 @@ import numpy as np
 from ...config.options import IntegrationOptions
 from ...models.contact_law import evaluate_set
 from ...models.reduced import ReducedModel
-from ..status import Status
+from ...status import Status
 
 __all__ = ["assess", "deformation_scale", "mechanical_energy", "is_undriven"]
 

@@ -13,7 +13,7 @@ import numpy as np
 from ...config.options import IntegrationOptions
 from ...models.reduced import ReducedModel
 from .floquet import split_trivial, stability
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "BranchPoint", "Branch", "SpecialPoint",
            "ContinuationResult", "stability_notes"]

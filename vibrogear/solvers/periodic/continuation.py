@@ -52,7 +52,7 @@ from .corrector import (QUASI_NEWTON_MOVE, CorrectorProblem, adapted_step, corre
 from .shooting import PeriodicFlow, periodic_flow, residual_norm, shoot
 from .special_points import COARSE_LOCATE_ITER, grazing_note, locate, switch_counts
 from ..integrator.split_flow import ColumnSplit
-from ..status import Status
+from ...status import Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "ContinuationOptions", "BranchPoint",
            "Branch", "SpecialPoint", "ContinuationResult", "continuation"]

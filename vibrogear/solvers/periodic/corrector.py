@@ -18,7 +18,7 @@ import scipy.linalg
 
 from .branch import PseudoArclength
 from .shooting import PeriodicFlow, periodic_flow, periodic_residual, residual_norm
-from ..status import Status
+from ...status import Status
 
 __all__ = ["CorrectorProblem", "tangent", "tangent_and_start", "correct", "predictor",
            "adapted_step", "tangent_turned", "QUASI_NEWTON_ITER",

@@ -34,7 +34,7 @@ import numpy as np
 
 from ...config.options import IntegrationOptions
 from ...pipeline.executors import blas_threads
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 from .branch import PseudoArclength
 from .corrector import (QUASI_NEWTON_MOVE, adapted_step, correct, predictor, tangent,
                         tangent_turned)

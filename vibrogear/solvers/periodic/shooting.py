@@ -46,7 +46,7 @@ from ...models.reduced import ReducedModel
 from .floquet import (floquet_multipliers, liouville_error, neutral_directions, split_trivial,
                       stability)
 from ..integrator.integrate import IntegrationOptions, Trajectory, integrate
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 from ...config.options import ShootingOptions
 
 __all__ = ["PeriodicFlow", "periodic_flow", "periodic_residual", "ShootingResult", "shoot",

@@ -22,7 +22,7 @@ import scipy.linalg as sla
 
 from ...models.rotor.model import RotorModel, dof_groups, lowest_modes
 from ...models.rotor.elements import PHI, THETA, U, V
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 
 __all__ = ["RotorModes", "ReducedRotor", "reduce_rotor", "rotor_modes", "classify_whirl",
            "modal_energy_share", "RPM", "basis_error_estimate", "MODE_TYPES", "ERROR_LIMIT"]

@@ -30,7 +30,7 @@ import numpy as np
 
 from ...models.reduced import ReducedModel
 from ..integrator.integrate import IntegrationOptions, integrate
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 
 __all__ = ["LyapunovResult", "largest_lyapunov", "tangent_chunk", "block_estimate",
            "state_scale", "initial_direction", "D0", "CHUNK"]

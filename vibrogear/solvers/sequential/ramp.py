@@ -54,7 +54,7 @@ from ...config.options import IntegrationOptions
 from ...models.contact_law import harmonic_series
 from ...models.reduced import Forcing, ReducedModel
 from ..integrator.integrate import integrate
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 
 __all__ = ["SpeedProfile", "RampResult", "ramp"]
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..integrator.integrate import integrate
-from ..status import Status
+from ...status import Status
 from .motion import monitored_deformation
 
 __all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds"]

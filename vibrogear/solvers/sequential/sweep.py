@@ -37,7 +37,7 @@ from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
 from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
 from .strob_evidence import spectral_evidence
-from ..status import Outcome, Status
+from ...status import Outcome, Status
 from .sweep_point import PHASES, PointRecord, run_point
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",

@@ -62,7 +62,7 @@ from .orbit_check import check_orbit, near_periods
 from .record_window import RecordWindow, record_extrema, record_window
 from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
                      metrics_with_errors, monitored_deformation, motion_class)
-from ..status import Status
+from ...status import Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
            "SETTLE_WINDOW", "PHASES"]
