@@ -124,7 +124,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             seen = {**_load_saved(name, scene.model_kind, ctx.out, previous), **previous}
             outcome = invoke(load(entry.analysis), study if entry.study else None, scene, ctx,
                              seen)
-            record = dict(outcome.summary)
+            record = outcome.record()
             if outcome.warnings:
                 record["warnings"] = list(outcome.warnings)
             if entry.report is not None and ctx.root:

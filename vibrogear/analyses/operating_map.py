@@ -37,7 +37,7 @@ from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.integrator.contact_eval import contact_history
 from ..solvers.integrator.integrate import integrate
 from ..solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
-from ..status import Status
+from ..status import Outcome, Status
 from ..solvers.sequential.sweep import assemble_result, sweep_units
 from ..solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
@@ -78,6 +78,18 @@ class OperatingMap:
     def grid(self, name: str) -> np.ndarray:
         """(directions, loads, speeds) array of a per-point quantity (see :func:`grid_array`)."""
         return grid_array(self, name)
+
+    @property
+    def outcome(self) -> Outcome:
+        """The map as a whole (each row's sweep holds its points' statuses)."""
+        defects = [r.error_estimate["max_periodicity_defect"] for r in self.rows]
+        return Outcome(self.status_code, self.status_message, {
+            "points": sum(r.param.size for r in self.rows),
+            "failed_points": sum(int(np.sum(r.status != 0)) for r in self.rows),
+            "rhs_calls": sum(r.rhs_calls for r in self.rows)}, self.wall_time, {
+            "rtol": self.rows[0].rtol if self.rows else None,
+            "atol": self.rows[0].atol if self.rows else None,
+            "max_periodicity_defect": max((d or 0.0) for d in defects) if defects else None})
 
 
 def grid_array(m: OperatingMap, name: str) -> np.ndarray:
@@ -267,7 +279,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         summary["curves"] = curves.summary()
     if res.note:
         summary["resume"] = res.note
-    return AnalysisOutcome(summary=summary, result=res,
+    return AnalysisOutcome(summary=summary, result=res, solver=res.outcome,
                            partial_files=(ctx.out / PARTIAL_NAME,) if ctx.root else ())
 
 
@@ -280,9 +292,7 @@ def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
     rhs = sum(r.rhs_calls for r in res.rows)
     n = int(walls.size)
     solver = float(np.sum(new_walls))
-    return {
-        "status": "ok" if res.status_code == Status.OK else "partial",
-        "message": res.status_message,
+    return {           # status, message, error estimate: the runner's spine (res.outcome)
         "speeds_rpm": [float(res.rpm[0]), float(res.rpm[-1]), int(res.rpm.size)],
         "loads": {"given_as": res.load_kind, "torque_N_m": [float(x) for x in res.torque],
                   "twist_rad": [float(x) for x in res.twist], "scale": [float(x) for x in res.scale],
@@ -291,15 +301,11 @@ def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
         "directions": list(res.directions), "points": n, "resumed_points": res.resumed,
         "failed_points": int(sum(int(np.sum(r.status != 0)) for r in res.rows)),
         "motion_classes": {c: names.count(c) for c in MOTION_LEGEND if c in names},
-        "cost": {"solver_wall_s": res.wall_time, "point_wall_s_sum": solver,
+        "cost": {"point_wall_s_sum": solver,
                  "point_wall_s_mean": solver / max(n, 1),
                  "point_wall_s_max": float(new_walls.max()) if new_walls.size else None,
                  "rhs_calls_per_point": rhs / max(n, 1),
                  "workers": res.workers,
                  "points_per_second": (n - res.resumed) / res.wall_time
                  if res.wall_time > 0 else None},
-        "error_estimate": {"rtol": res.rows[0].rtol, "atol": res.rows[0].atol,
-                           "max_periodicity_defect": max(
-                               (r.error_estimate["max_periodicity_defect"] or 0.0)
-                               for r in res.rows)},
     }

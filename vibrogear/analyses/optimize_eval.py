@@ -128,7 +128,7 @@ def metric_values(outcome: AnalysisOutcome, name: str) -> np.ndarray | None:
     vals = getattr(r, name, None) if r is not None and not name.startswith("_") else None
     if isinstance(vals, np.ndarray) and vals.dtype.kind in "iuf":
         return vals.astype(float).ravel()
-    return _summary_value(outcome.summary, name)
+    return _summary_value(outcome.record(), name)
 
 
 def available_metrics(outcome: AnalysisOutcome) -> list[str]:
@@ -143,7 +143,7 @@ def available_metrics(outcome: AnalysisOutcome) -> list[str]:
         names += ["LP", "PD", "NS", "qmax"]
     if r is not None and hasattr(r, "__dict__"):
         names += [k for k, v in vars(r).items() if isinstance(v, np.ndarray)]
-    names += _summary_paths(outcome.summary)
+    names += _summary_paths(outcome.record())
     return list(dict.fromkeys(names))
 
 

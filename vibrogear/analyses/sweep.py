@@ -109,18 +109,16 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                         f"look 'not periodic'; use rtol <= {cfg.period_tol:g}")
     up = res.direction == "up"
     classes = {str(int(k)): int(np.sum(res.period_n == k)) for k in np.unique(res.period_n)}
+    # status, message, counters, wall time, error estimate: the runner's spine, from
+    # res.outcome; here the domain entries
     summary = {
-        "status": "ok" if res.status_code == Status.OK else "partial",
-        "message": res.status_message, "points": int(res.param.size),
+        "points": int(res.param.size),
         "resumed_points": resumed, "failed_points": failed, "period_classes": classes,
         "points_with_contact_loss": int(np.sum(res.impacts > 0)),
         "monitored": study.monitor.name or study.monitor.label,
-        "steps": res.steps, "rhs_calls": res.rhs_calls, "events": res.events,
-        "solver_wall_s": res.wall_time,
         "point_wall_split_s": {k: round(v, 3) for k, v in res.timings.items()},
         "jumps_up": jumps(res.param[up], res.qmax[up]),
         "jumps_down": jumps(res.param[~up], res.qmax[~up]),
-        "error_estimate": res.error_estimate,
     }
     summary.update(motion_summary(res, cfg.transient_periods + cfg.extra_transient_periods))
     if store is not None and store.note:
@@ -129,7 +127,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     keep = store is None or res.status_code == Status.STOPPED_BY_CALLBACK
     return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
                            partial_files=() if keep else (store.path,),
-                           warnings=tuple(warnings))
+                           warnings=tuple(warnings), solver=res.outcome)
 
 
 def motion_summary(res: SweepResult, budget: int) -> dict:

@@ -16,12 +16,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..status import Outcome, Status
 from .units_base import Terminated, is_root
 from .progress import Progress
 
 __all__ = ["AnalysisOutcome", "RunContext", "NumericalFailure", "LostUnits", "Terminated",
-           "WriteFailure",
-           "is_root_process"]
+           "WriteFailure", "is_root_process", "spine"]
 
 
 
@@ -63,6 +63,27 @@ class AnalysisOutcome:
     result: Any = None
     partial_files: tuple[Path, ...] = ()
     warnings: tuple[str, ...] = field(default=())
+    #: the solver's :class:`~vibrogear.status.Outcome` (``result.outcome``): the runner
+    #: writes its status, message, counters, wall time and error estimate (:func:`spine`);
+    #: the analysis's ``summary`` keeps only its domain entries
+    solver: Outcome | None = None
+
+    def record(self) -> dict:
+        """The analysis's entry of ``summary.json``: the spine, then the domain entries."""
+        return {**spine(self.solver), **self.summary}
+
+
+def spine(outcome: Outcome | None) -> dict:
+    """What every analysis's summary starts with, from its solver's outcome: ``status``
+    (``ok`` where the solver succeeded, ``partial`` where some points failed, else the
+    status's name), ``message``, ``counters``, ``solver_wall_s`` and ``error_estimate``.
+    No outcome (an analysis without an iterative solver): ``status`` ok."""
+    if outcome is None:
+        return {"status": "ok"}
+    status = "ok" if outcome.ok else "partial" if outcome.status == Status.PARTIAL \
+        else outcome.status.text
+    return {"status": status, "message": outcome.message, "counters": dict(outcome.counters),
+            "solver_wall_s": outcome.wall_s, "error_estimate": dict(outcome.error_estimate)}
 
 
 @dataclass(frozen=True)
