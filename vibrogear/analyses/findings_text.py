@@ -62,4 +62,7 @@ def verdict_text(bands: list[dict], checked: list[str], span, partial: list[str]
         text += f" Caution {_where(caution, unit)}: {_reasons(caution)}."
     elif not avoid:
         text = f"No speed to avoid or watch{where} by the rules checked."
+        if not any(c.startswith("coexisting states") for c in checked):
+            text += (" The sweep follows one state up and one down: other states may "
+                     "coexist (vibrogear states finds them).")
     return text + tail
