@@ -188,6 +188,10 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
             both = dict(arrays)
             both[f"double_sided_{m}"] = np.minimum(np.asarray(arrays[back], float),
                                                    np.asarray(arrays[drive], float))
+            # a double-sided band that is exactly a rattle band says nothing new: kept
+            # only where the two differ
+            rattling = {(b.direction, b.start, b.stop) for b in bands
+                        if b.quantity == "rattle" and b.where == m}
             bands += [_with(b, compare=f"min({back}, {drive})")
                       for b in _bands(both, dict(quantity="double-sided impacts", where=m,
                                                  metric=f"double_sided_{m}", op=">",
@@ -196,14 +200,22 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
                                       lambda idx, m=m, back=back, drive=drive:
                                       f"{m} hits both flanks: {_stat(arrays, drive, idx)} "
                                       f"drive and {_stat(arrays, back, idx)} back impacts "
-                                      f"{per}", **kw)]
+                                      f"{per}", **kw)
+                      if (b.direction, b.start, b.stop) not in rattling]
+    ok = np.asarray(arrays.get("ok", np.ones(np.asarray(arrays["param"]).size, bool)), bool)
     for b in bearings:
         key = f"unloaded_{b}"
+        if key not in arrays or not np.any(ok):
+            continue
+        # a loaded rolling bearing has elements outside its load zone at any speed: the
+        # band is where more unload than at the run's quietest point
+        least = float(np.min(np.asarray(arrays[key], float)[ok]))
         bands += _bands(arrays, dict(quantity="bearing unloading", where=b, metric=key,
-                                     op=">", threshold=rules.unloaded_above,
+                                     op=">", threshold=least + rules.unloaded_above,
                                      severity=rules.bearing_unloading),
-                        lambda idx, b=b, key=key: f"{b}: {_stat(arrays, key, idx)} rolling "
-                        "elements out of contact on average", **kw)
+                        lambda idx, b=b, key=key, least=least:
+                        f"{b}: {_stat(arrays, key, idx)} rolling elements out of contact on "
+                        f"average ({fmt(least)} at the quietest point)", **kw)
     return bands
 
 

@@ -12,27 +12,73 @@ def ranges_text(bands: list[dict], unit: str) -> str:
     return ", ".join(range_text(a, b, "") for a, b in spans) + (f" {unit}" if unit else "")
 
 
-#: quantity -> what it says in a sentence ({w}: where)
-PHRASES = {"contact loss": "{w} loses contact", "rattle": "{w} rattles",
-           "double-sided impacts": "{w} hits both flanks",
-           "bearing unloading": "bearing {w} unloads",
-           "chaotic motion": "chaotic motion", "quasi-periodic motion": "quasi-periodic motion",
-           "subharmonic motion": "subharmonic motion", "motion not settled":
-           "motion that did not settle", "aperiodic motion": "aperiodic motion",
-           "hysteresis (up and down differ)": "up and down sweeps differ (jumps)",
-           "radiated power": "the housing radiates most",
-           "coexisting states": "other states coexist"}
+#: the kinds of band, most telling first (the console and the verdict keep this order)
+PRIORITY = ("contact loss", "rattle", "double-sided impacts", "coexisting states",
+            "chaotic motion", "subharmonic motion", "quasi-periodic motion",
+            "motion not settled", "aperiodic motion", "hysteresis (up and down differ)",
+            "bearing unloading", "radiated power")
+#: quantity -> (singular, plural) phrase of the places ({w}) where it happens
+PHRASES = {"contact loss": ("{w} loses contact", "{w} lose contact"),
+           "rattle": ("{w} rattles", "{w} rattle"),
+           "double-sided impacts": ("{w} hits both flanks", "{w} hit both flanks"),
+           "bearing unloading": ("bearing {w} unloads", "bearings {w} unload"),
+           "hysteresis (up and down differ)": ("up and down sweeps differ (jumps)",) * 2,
+           "radiated power": ("the housing radiates most",) * 2,
+           "coexisting states": ("other states coexist",) * 2}
+_RUNS = (" in the run-up", " in the run-down")
+
+
+def base_quantity(quantity: str) -> str:
+    """The kind of a band, a run-up's or run-down's contact loss counted as contact loss."""
+    for suffix in _RUNS:
+        if quantity.endswith(suffix):
+            return quantity[:-len(suffix)]
+    return quantity
+
+
+def rank(quantity: str) -> int:
+    base = base_quantity(quantity)
+    return PRIORITY.index(base) if base in PRIORITY else len(PRIORITY)
+
+
+def _and(items: list[str]) -> str:
+    return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 
 
 def _reasons(bands: list[dict]) -> str:
-    seen: list[str] = []
-    for b in bands:
-        text = PHRASES.get(b["quantity"], "{w} " + b["quantity"]).format(w=b["where"])
-        if text not in seen:
-            seen.append(text)
-    if len(seen) > 1:
-        return ", ".join(seen[:-1]) + " and " + seen[-1]
-    return seen[0] if seen else ""
+    """The kinds of ``bands`` in one clause: 'G1 and G2 lose contact (also in the run-up),
+    G2 rattles, chaotic and quasi-periodic motion'."""
+    steady: dict[str, list[str]] = {}          # kind -> places, from sweeps and maps
+    runs: dict[str, list[str]] = {}            # kind -> "run-up" / "run-down"
+    for b in sorted(bands, key=lambda b: rank(b["quantity"])):
+        base = base_quantity(b["quantity"])
+        places = steady.setdefault(base, [])
+        if base != b["quantity"]:
+            run = b["quantity"][len(base) + len(" in the "):]
+            if run not in runs.setdefault(base, []):
+                runs[base].append(run)
+            if not any(x["quantity"] == base for x in bands) and b["where"] not in places:
+                places.append(b["where"])
+        elif b["where"] not in places and b["where"] not in ("gearbox", "system"):
+            places.append(b["where"])
+    parts, motion = [], []
+    for base, where in steady.items():
+        if base.endswith(" motion"):
+            motion.append(base[:-len(" motion")])
+            continue
+        single, plural = PHRASES.get(base, ("{w} " + base, "{w} " + base))
+        if base == "bearing unloading":
+            where = [w.removeprefix("bearing_") for w in where]
+        text = (plural if len(where) > 1 else single).format(w=_and(where) if where else "")
+        in_sweep = any(x["quantity"] == base for x in bands)
+        if runs.get(base):
+            text += f" (also in the {' and '.join(runs[base])})" if in_sweep else \
+                f" in the {' and '.join(runs[base])}"
+        parts.append(text.strip())
+    if motion:
+        n = sum(1 for p in steady if rank(p) < PRIORITY.index("chaotic motion"))
+        parts.insert(min(n, len(parts)), f"{_and(motion)} motion")
+    return _and(parts) if parts else ""
 
 
 def _where(bands: list[dict], unit: str) -> str:

@@ -39,9 +39,9 @@ class FindingsConfig:
                                      "period) is above this")
     rattle: str = _severity("avoid", "a mesh rattles (back-flank impacts)")
     double_sided: str = _severity("avoid", "a mesh hits both flanks")
-    unloaded_above: float = spec(0.5, ge=0.0, le=1e4, doc="a bearing unloads where "
+    unloaded_above: float = spec(1.5, ge=0.0, le=1e4, doc="a bearing unloads where "
                                  "unloaded_<bearing> (mean rolling elements out of contact) "
-                                 "is above this")
+                                 "exceeds its least value over the run by more than this")
     bearing_unloading: str = _severity("caution", "a bearing's rolling elements unload")
     chaotic: str = _severity("caution", "the motion is chaotic")
     quasi_periodic: str = _severity("caution", "the motion is quasi-periodic")

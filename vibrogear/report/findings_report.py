@@ -16,19 +16,23 @@ __all__ = ["console_lines", "plot_band_chart", "findings_html", "BAND_CHART"]
 BAND_CHART = "findings.png"
 #: severity -> colour of the chart and the page (colour-blind safe: red / amber / green-grey)
 COLOURS = {"avoid": "#c0392b", "caution": "#e6a817", "fine": "#9bbf9b"}
-_MAX_CONSOLE_BANDS = 7
+_MAX_CONSOLE_BANDS = 6
 
 
 def _group(bands: list[dict], severities=("avoid", "caution")) -> list[tuple[str, str, str,
                                                                              list[dict]]]:
-    """(severity, where, quantity, bands) per kind of band, most severe first."""
+    """(severity, where, kind, bands) per kind of band and place, most severe and most
+    telling first; a run-up's or run-down's contact loss joins its mesh's contact loss."""
+    from ..analyses.findings_text import base_quantity, rank
     groups: dict[tuple[str, str, str], list[dict]] = {}
     for b in bands:
         if b["severity"] in severities:
-            groups.setdefault((b["severity"], b["where"], b["quantity"]), []).append(b)
+            key = (b["severity"], b["where"], base_quantity(b["quantity"]))
+            groups.setdefault(key, []).append(b)
     order = {s: i for i, s in enumerate(("avoid", "caution", "fine"))}
     return [(s, w, q, bs) for (s, w, q), bs in
-            sorted(groups.items(), key=lambda kv: (order[kv[0][0]], kv[0][1], kv[0][2]))]
+            sorted(groups.items(), key=lambda kv: (order[kv[0][0]], rank(kv[0][2]),
+                                                   kv[0][1]))]
 
 
 def _label(where: str, quantity: str) -> str:
@@ -46,6 +50,19 @@ def _spans_text(bands: list[dict], unit: str) -> str:
     return ", ".join(out) + (f" {unit}" if unit else "")
 
 
+def _runs_text(bands: list[dict], unit: str) -> str:
+    """The speeds of a kind of band: the sweep's (or map's), then the run-up's and
+    run-down's."""
+    steady = [b for b in bands if not b["quantity"].endswith(("run-up", "run-down"))]
+    parts = [_spans_text(steady, unit)] if steady else []
+    for run in ("run-up", "run-down"):
+        these = [b for b in bands if b["quantity"].endswith(run)]
+        if these:
+            parts.append(f"{run} " + _spans_text(these, unit).replace(
+                " (up only)", "").replace(" (down only)", ""))
+    return "; ".join(parts)
+
+
 def console_lines(findings: dict, report_path: str | None = None, *, quiet: bool = False) -> list[str]:
     """At most ~10 lines: the verdict, the avoid / caution bands by kind, the report."""
     unit = findings.get("param_unit", "rpm")
@@ -54,7 +71,7 @@ def console_lines(findings: dict, report_path: str | None = None, *, quiet: bool
     lines = [f"findings: {findings['verdict']}"]
     groups = _group(findings.get("bands", []))
     for severity, where, quantity, bands in groups[:_MAX_CONSOLE_BANDS]:
-        lines.append(f"  {severity:<7s} {_label(where, quantity)}: {_spans_text(bands, unit)}")
+        lines.append(f"  {severity:<7s} {_label(where, quantity)}: {_runs_text(bands, unit)}")
     if len(groups) > _MAX_CONSOLE_BANDS:
         lines.append(f"  ... {len(groups) - _MAX_CONSOLE_BANDS} more kinds of band in the report")
     if report_path:
