@@ -168,7 +168,10 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
         cf, back, drive = f"contact_fraction_{m}", f"impacts_back_{m}", f"impacts_drive_{m}"
 
         def loss(idx, m=m, cf=cf, drive=drive):
-            return (f"{m} in contact {_stat(arrays, cf, idx, 2, 100, '%')} of the time, "
+            out = {"out": 1.0 - np.asarray(arrays[cf], float)}
+            if f"{cf}_err" in arrays:
+                out["out_err"] = arrays[f"{cf}_err"]
+            return (f"{m} out of contact {_stat(out, 'out', idx, 2, 100, '%')} of the time, "
                     f"{_stat(arrays, drive, idx)} drive-flank re-impacts {per}")
 
         def rattle(idx, m=m, back=back):

@@ -36,7 +36,16 @@ def _group(bands: list[dict], severities=("avoid", "caution")) -> list[tuple[str
 
 
 def _label(where: str, quantity: str) -> str:
-    return quantity if where in ("gearbox", "system") else f"{where} {quantity}"
+    if where in ("gearbox", "system"):
+        return quantity
+    if quantity == "bearing unloading":
+        return f"bearing {where.removeprefix('bearing_')} unloading"
+    return f"{where} {quantity}"
+
+
+def _one_way(band: dict) -> bool:
+    """Seen in one sweep direction only (a run-up's band has its run's direction)."""
+    return band["direction"] != "both" and band["source"] != "runup.npz"
 
 
 def _spans_text(bands: list[dict], unit: str) -> str:
@@ -103,8 +112,9 @@ def plot_band_chart(findings: dict, path) -> Path | None:
         half = 0.5 * b.get("edge_err", 0.0)
         left, width = b["from"] - half, b["to"] - b["from"] + 2 * half
         ax.barh(y, width, left=left, height=0.62, color=COLOURS[b["severity"]],
-                hatch=None if b["direction"] == "both" else "///", edgecolor="white",
+                hatch="///" if _one_way(b) else None, edgecolor="white",
                 linewidth=0.3)
+    marker_handles = []
     if events:
         y = len(rows)
         marks = {"jump": ("v", "k"), "LP": ("D", "#6c3483"), "PD": ("s", "#1f618d"),
@@ -113,10 +123,9 @@ def plot_band_chart(findings: dict, path) -> Path | None:
         for kind, (m, c) in marks.items():
             at = [e["at"] for e in events if e["kind"] == kind]
             if at:
-                ax.plot(at, [y] * len(at), m, color=c, ms=8, mew=2, label=kind, ls="none")
+                marker_handles += ax.plot(at, [y] * len(at), m, color=c, ms=8, mew=2,
+                                          label=kind.replace("_", " "), ls="none")
         rows.append("events")
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22 - 0.3 / max(n, 1)),
-                  ncol=6, fontsize=8, frameon=False)
     ax.set_yticks(range(len(rows)))
     ax.set_yticklabels(rows, fontsize=9)
     ax.invert_yaxis()
@@ -129,15 +138,18 @@ def plot_band_chart(findings: dict, path) -> Path | None:
     from matplotlib.patches import Patch
     handles = [Patch(color=COLOURS[s], label=s) for s in ("avoid", "caution")
                if any(b["severity"] == s for b in bands)]
-    if any(b["direction"] != "both" for b in bands):
+    if any(_one_way(b) for b in bands):
         handles.append(Patch(facecolor="white", edgecolor="k", hatch="///",
                              label="one sweep direction only"))
+    handles += marker_handles
     if handles:
-        fig.legend(handles=handles, loc="upper right", fontsize=8, ncol=len(handles),
+        fig.legend(handles=handles, loc="lower center", fontsize=8, ncol=min(len(handles), 9),
                    frameon=False)
     ax.set_title("Where to avoid or watch the gearbox" if unit == "rpm" else
                  "Where to avoid or watch the system", loc="left", fontsize=11)
-    return save_figure(fig, path, formats=("png",))[0]
+    height = fig.get_size_inches()[1]
+    fig.tight_layout(rect=(0, 0.35 / height if handles else 0, 1, 1))
+    return save_figure(fig, path, formats=("png",), tight=False)[0]
 
 
 def _esc(x) -> str:
@@ -192,14 +204,15 @@ def findings_html(findings: dict, chart: str | None) -> list[str]:
     if groups:
         rows = []
         for severity, where, quantity, bands in groups:
-            worst = max(bands, key=lambda b: b["points"])
+            steady = [b for b in bands if b["source"] != "runup.npz"] or bands
+            worst = max(steady, key=lambda b: b["points"])
             rule = f"{worst['metric']} {worst['op']} {_num(worst['threshold'])}"
             rows.append(f'<tr><td class="nw"><span class="sev sev-{severity}">{severity}</span>'
                         f"</td><td>{_esc(_label(where, quantity))}</td>"
-                        f"<td>{_esc(_spans_text(bands, unit))} (edges ± "
+                        f"<td>{_esc(_runs_text(bands, unit))} (edges ± "
                         f"{_esc(fmt(worst['edge_err'], 2))})</td>"
                         f"<td>{_esc(worst['evidence'])}"
-                        + (f" <small>(widest of {len(bands)} bands)</small>" if len(bands) > 1
+                        + (f" <small>(widest of {len(steady)} bands)</small>" if len(steady) > 1
                            else "") +
                         f"</td><td><code>{_esc(rule)}</code> in {_esc(worst['source'])}</td>"
                         "</tr>")

@@ -104,7 +104,7 @@ def render_html_report(out, summary: dict) -> str:
         f"<h1>{_esc(title)}</h1>",
         f"<p>Computation: {_status_badge(status)} &middot; scene "
         f"<code>{_esc(summary.get('source', ''))}</code> &middot; "
-        f"{_esc(_fmt(((summary.get('wall_time_s') or {}).get('total')), 3))} s</p>",
+        f"{_esc(_wall((summary.get('wall_time_s') or {}).get('total')))}</p>",
         _nav(names, findings is not None, "gearbox.png" in folder),
     ]
     parts += _failure_notes(results)
@@ -141,6 +141,15 @@ def render_html_report(out, summary: dict) -> str:
         parts.append("<p>No files.</p>")
     parts += ["</body>", "</html>", ""]
     return "\n".join(parts)
+
+
+def _wall(seconds) -> str:
+    """A run's wall time as people say it: 38 s, 4 min 12 s."""
+    if not isinstance(seconds, (int, float)) or not math.isfinite(seconds):
+        return "n/a"
+    if seconds < 100:
+        return f"{seconds:.3g} s"
+    return f"{int(seconds // 60)} min {int(round(seconds % 60))} s"
 
 
 def _nav(names, findings: bool, drawing: bool) -> str:
