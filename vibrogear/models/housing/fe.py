@@ -25,6 +25,7 @@ from .fe_eigen import HousingSolveError, _eigensolve, _matmul
 from .fe_post import _bore_values, _locate, _preview, _surface_values, _write_shapes
 from .result import HousingModes
 from .surface_data import outer_surface
+from .surface_mesh import boundary_surface
 
 __all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes", "assemble_mesh_matrices"]
 
@@ -77,6 +78,8 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
     skin = outer_surface(*_surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
                                           Vloc, comm))
+    shape = boundary_surface(dmesh, ftags, mesh.base_tag, mesh.bore_tags, bores, uh, Vloc,
+                             material.rho, comm)
     timings["postprocess"] = time.perf_counter() - t0
 
     shapes_path = None
@@ -97,7 +100,7 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
         n_fallback_points=int(n_fallback), status=status, message=message, converged_reason=reason,
         n_converged=int(nconv), timings=timings, peak_memory_mb=float(peak), n_processes=comm.size,
         shapes_path=shapes_path, preview_points=prev_pts, preview_values=prev_vals,
-        **skin.as_fields(),
+        **skin.as_fields(), **shape,
     )
 
 
