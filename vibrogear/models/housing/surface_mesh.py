@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["boundary_surface", "triangulate_facets", "wall_planes", "classify_points",
+__all__ = ["boundary_surface", "triangulate_facets", "wall_planes", "classify_points", "outer_skin",
            "mode_labels", "SHAPE_FIELDS", "empty_shape_fields", "WALL_NAMES", "BOSS_RADIUS_FACTOR"]
 
 SHAPE_FIELDS = ("shape_vertices", "shape_triangles", "shape_facet_tag", "shape_values",
@@ -32,12 +32,15 @@ SHAPE_FIELDS = ("shape_vertices", "shape_triangles", "shape_facet_tag", "shape_v
 #: the six outer wall planes, in the order of :data:`_DIRECTIONS` (names of the parametric
 #: box: front wall at y = 0, back wall at y = width, x from the left end to the right end)
 WALL_NAMES = ("left end wall", "right end wall", "front wall", "back wall", "base", "top wall")
+_PAIRS = ("both end walls", "front and back walls", "base and top wall")
 _DIRECTIONS = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], float)
 #: points within this many bore radii of a bore's axis (and within its axial extent) belong to
 #: the bore's region (the parametric bosses are 1.5-1.7 bore radii)
 BOSS_RADIUS_FACTOR = 1.7
 #: a mode is named after one region when that region holds at least this share of its energy
 DOMINANT_SHARE = 0.4
+#: ... or a pair of opposite walls, the two largest shares, together at least this share
+PAIR_SHARE = 0.3
 
 
 def empty_shape_fields(m: int = 0) -> dict:
@@ -60,9 +63,15 @@ def triangulate_facets(nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"facets with {nodes.shape[1]} vertices: expected 3 (tetrahedra) or 4 (hexahedra)")
 
 
-def _outer_pieces(verts: np.ndarray, tris: np.ndarray) -> np.ndarray:
-    """Mask of the triangles in the connected pieces that reach the bounding box (the outer
-    skin; a closed housing's cavity walls do not reach it)."""
+def outer_skin(verts: np.ndarray, tris: np.ndarray, tags: np.ndarray | None = None) -> np.ndarray:
+    """Mask of the non-bore triangles (``tags`` < 2) in the connected pieces that reach the
+    bounding box: the outer skin (the bores, left out, are what joins it to a closed
+    housing's cavity)."""
+    if tags is not None:
+        out = np.zeros(len(tris), bool)
+        sel = np.asarray(tags) < 2
+        out[sel] = outer_skin(verts, np.asarray(tris)[sel])
+        return out
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
@@ -91,7 +100,7 @@ def wall_planes(verts: np.ndarray, tris: np.ndarray, tags: np.ndarray) -> np.nda
     n = np.cross(b - a, c - a)
     area = 0.5 * np.linalg.norm(n, axis=1)
     unit = n / np.maximum(2 * area, 1e-300)[:, None]
-    keep = _outer_pieces(verts, tris) & (np.asarray(tags) < 2)
+    keep = outer_skin(verts, tris, tags)
     size = float(np.ptp(verts, axis=0).max())
     centre = (a + b + c) / 3.0
     for k, d in enumerate(_DIRECTIONS):
@@ -134,9 +143,13 @@ def region_names(bores) -> tuple[str, ...]:
 
 
 def _wall_motion(u: np.ndarray, normal: np.ndarray) -> str:
-    """'bending' when the motion normal to the wall carries most of the vertices' |u|^2."""
+    """'bending' when the motion normal to the wall carries most of the vertices' |u|^2, else
+    'sway along <axis>' (the in-plane axis with the larger share)."""
     total = float(np.sum(u * u))
-    return "bending" if total > 0 and float(np.sum((u @ normal) ** 2)) > 0.5 * total else "in-plane"
+    if total > 0 and float(np.sum((u @ normal) ** 2)) > 0.5 * total:
+        return "bending"
+    share = np.sum(u * u, axis=0) * (np.abs(normal) < 0.5)
+    return f"sway along {'xyz'[int(np.argmax(share))]}"
 
 
 def _bore_motion(x: np.ndarray, u: np.ndarray, axis: np.ndarray) -> str:
@@ -163,8 +176,9 @@ def _bore_motion(x: np.ndarray, u: np.ndarray, axis: np.ndarray) -> str:
 
 def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region) -> tuple[str, ...]:
     """A label per mode: the region with the largest kinetic-energy share and its motion
-    ("front wall bending (71 % of KE)"), or "mixed: A 35 %, B 30 %" below
-    :data:`DOMINANT_SHARE`."""
+    ("front wall bending (71 % of KE)"); below :data:`DOMINANT_SHARE`, the pair of opposite
+    walls with the two largest shares when they hold :data:`PAIR_SHARE` ("both end walls
+    bending (37 % of KE)"), else "mixed: A 35 %, B 30 %"."""
     out = []
     for i, e in enumerate(np.asarray(energy, float)):
         if not e.size or not np.isfinite(e).all() or e.sum() <= 0:
@@ -173,8 +187,16 @@ def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
         e = e / e.sum()
         order = np.argsort(e)[::-1]
         k = int(order[0])
+        j = int(order[1]) if e.size > 1 else k
+        if e[k] < DOMINANT_SHARE and k < 6 and j < 6 and k // 2 == j // 2 \
+                and e[k] + e[j] >= PAIR_SHARE:               # a pair of opposite walls
+            motions = {_wall_motion(np.asarray(values[vertex_region == r, :, i], float), normals[r])
+                       for r in (k, j)}
+            motion = motions.pop() if len(motions) == 1 else "moving"
+            out.append(f"{_PAIRS[k // 2]} {motion} ({100 * (e[k] + e[j]):.0f} % of KE)")
+            continue
         if e[k] < DOMINANT_SHARE:
-            out.append("mixed: " + ", ".join(f"{names[j]} {100 * e[j]:.0f} %" for j in order[:2]))
+            out.append("mixed: " + ", ".join(f"{names[r]} {100 * e[r]:.0f} %" for r in order[:2]))
             continue
         sel = vertex_region == k
         u = np.asarray(values[sel, :, i], float)
