@@ -22,7 +22,8 @@ from ..models.housing.surface_mesh import outer_skin
 from .figure import write_figure
 
 __all__ = ["view_angles", "feature_edges", "face_normals", "draw_surface", "plot_mode_shapes",
-           "plot_surface_field", "mode_panel_data", "DEFAULT_FRACTION"]
+           "plot_surface_field", "mode_panel_data", "DEFAULT_FRACTION", "vertex_normal_field",
+           "ods_drawing"]
 
 #: the largest displacement of a drawn mode, as a fraction of the box's largest edge
 DEFAULT_FRACTION = 0.06
@@ -87,7 +88,7 @@ def feature_edges(verts: np.ndarray, tris: np.ndarray, *, angle_deg: float = 30.
 def _shade(rgba: np.ndarray, normals: np.ndarray, cam: np.ndarray) -> np.ndarray:
     light = _LIGHT + 0.6 * cam
     light = light / np.linalg.norm(light)
-    k = 0.45 + 0.55 * np.clip(normals @ light, 0.0, 1.0)
+    k = 0.55 + 0.45 * np.clip(normals @ light, -1.0, 1.0)     # wrapped: no two sides alike
     out = rgba.copy()
     out[:, :3] *= k[:, None]
     return out
@@ -99,7 +100,8 @@ def draw_surface(ax, verts, tris, face_value, *, displacement=None, cmap="viridi
     """Draw the triangles ``tris`` of ``verts`` (+ ``displacement``) on the 3D axes ``ax``
     coloured by ``face_value`` (nt,) through ``cmap`` / ``norm``; returns the
     Poly3DCollection of the coloured faces (its face count: the faces drawn)."""
-    from matplotlib import cm, colors
+    import matplotlib
+    from matplotlib import colors
     from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
 
     verts = np.asarray(verts, float)
@@ -109,7 +111,7 @@ def draw_surface(ax, verts, tris, face_value, *, displacement=None, cmap="viridi
     nrm = face_normals(moved, tris)
     front = (nrm @ cam > 0.0) if cull else np.ones(len(tris), bool)
     norm = norm or colors.Normalize(float(np.min(face_value)), float(np.max(face_value)))
-    rgba = cm.get_cmap(cmap)(norm(np.asarray(face_value, float)))
+    rgba = matplotlib.colormaps[cmap](norm(np.asarray(face_value, float)))
     if shade:
         rgba = _shade(rgba, nrm, cam)
     ax.computed_zorder = False
@@ -234,3 +236,46 @@ def plot_surface_field(path: Path, verts, tris, face_value, *, displacement=None
     write_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
+
+
+def vertex_normal_field(verts, tris, mid_values) -> tuple[np.ndarray, np.ndarray]:
+    """(value per vertex (nv, ...), unit vertex normals (nv, 3)) from values at the triangles'
+    edge midpoints (nt, 3, ...) in the order (a, b), (b, c), (c, a): each vertex takes the mean
+    of the midpoints on its edges; normals are area-weighted."""
+    verts, tris = np.asarray(verts, float), np.asarray(tris)
+    mid = np.asarray(mid_values)
+    acc = np.zeros((len(verts),) + mid.shape[2:], dtype=mid.dtype)
+    cnt = np.zeros(len(verts))
+    for q, (i, j) in enumerate(((0, 1), (1, 2), (2, 0))):
+        for corner in (i, j):
+            np.add.at(acc, tris[:, corner], mid[:, q])
+            np.add.at(cnt, tris[:, corner], 1.0)
+    p = verts[tris]
+    fn = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    vn = np.zeros_like(verts)
+    for c in range(3):
+        np.add.at(vn, tris[:, c], fn)
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    return acc / np.maximum(cnt, 1.0).reshape((-1,) + (1,) * (acc.ndim - 1)), vn
+
+
+def ods_drawing(verts, tris, mid_values, modal_velocity, omega: float, *,
+                fraction: float = DEFAULT_FRACTION):
+    """(complex displacement (nv, 3) along the vertex normals, scaled so its largest amplitude
+    is ``fraction`` of the box, view) of the harmonic whose modal velocity amplitudes are
+    ``modal_velocity`` (m,) at ``omega`` [rad/s]; ``mid_values`` (nt, 3, m) the modes' normal
+    displacement at the edge midpoints.  The camera faces the side whose faces carry the most
+    area x |v|^2."""
+    v_mid = np.asarray(mid_values) @ np.asarray(modal_velocity)          # (nt, 3) complex
+    v_vert, vn = vertex_normal_field(verts, tris, v_mid)
+    w = v_vert / (1j * omega)                                             # displacement
+    top = max(float(np.abs(w).max()), 1e-300)
+    span = float(np.ptp(np.asarray(verts), axis=0).max())
+    disp = (fraction * span / top) * w[:, None] * vn
+    fnrm = face_normals(np.asarray(verts, float), np.asarray(tris))
+    p = np.asarray(verts)[tris]
+    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    power = area * np.mean(np.abs(v_mid) ** 2, axis=1)
+    dirs = np.vstack([np.eye(3), -np.eye(3)])
+    side = int(np.argmax([(power * (fnrm @ d > 0.9)).sum() for d in dirs]))
+    return disp, view_angles(dirs[side])
