@@ -1,7 +1,8 @@
 """Housing FE model, stage 1 of 3: dolfinx 0.5.2 elasticity assembly and the solve driver.
 
 The housing FE modules (``fe``: assembly, ``fe_eigen``: the eigen-solve, ``fe_post``: values at
-the bores, on the skin and in XDMF) are the only ones of vibrogear that import dolfinx, PETSc or
+the bores, on the skin and in XDMF; ``surface_mesh.boundary_surface``: the boundary for
+pictures) are the only ones of vibrogear that import dolfinx, PETSc or
 SLEPc, always inside functions, so importing them costs nothing.  Under ``mpirun`` the mesh is
 read on rank 0 and partitioned by dolfinx; K and M are assembled and solved distributed.
 Meshing, the on-disk cache and the MPI orchestration live in :mod:`.run` (``housing_modes``).
