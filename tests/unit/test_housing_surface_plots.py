@@ -107,24 +107,27 @@ def test_wall_planes_and_regions_of_the_box(surface):
 
 
 def test_mode_labels_name_the_wall_and_its_motion():
-    names = ("left end wall", "right end wall", "front wall", "back wall", "base", "top wall")
+    names = ("left end wall", "right end wall", "front wall", "back wall", "base", "top wall",
+             "bore 1 (in/front)")
     normals = np.vstack([-np.eye(3)[0], np.eye(3)[0], -np.eye(3)[1], np.eye(3)[1],
-                         -np.eye(3)[2], np.eye(3)[2]])
-    verts = np.array([[0.1, 0.0, 0.1], [0.2, 0.0, 0.1], [0.1, 0.0, 0.2]])
-    region = np.full(3, 2)                                     # all on the front wall
-    values = np.zeros((3, 3, 3))
-    values[:, 1, 0] = 1.0                                      # mode 1 along the front's normal
-    values[:, 0, 1] = 1.0                                      # mode 2 in its plane, along x
-    values[:, 1, 2] = 1.0
-    energy = np.array([[0, 0, .7, .1, 0, .2], [0, 0, .5, .1, 0, .4], [.2, .2, .15, .15, 0, .3]])
+                         -np.eye(3)[2], np.eye(3)[2], -np.eye(3)[1]])
+    verts = np.array([[0.1, 0.0, 0.1], [0.2, 0.0, 0.1], [0.1, 0.0, 0.2],
+                      [0.1, 0.3, 0.1], [0.2, 0.3, 0.1], [0.1, 0.3, 0.2]])
+    region = np.array([2, 2, 2, 3, 3, 3])                      # front wall, back wall
+    values = np.zeros((6, 3, 5))
+    values[:, 1, [0, 2, 3]] = 1.0                              # along the front wall's normal
+    values[:, 0, 1] = 1.0                                      # in its plane, along x
+    energy = np.array([[0, 0, .7, .1, 0, .2, 0],
+                       [0, 0, .5, .1, 0, .4, 0],
+                       [0, 0, .3, .1, 0, .4 - .1, .3],         # front .3 + its bore .3
+                       [0, .3, .2, .25, 0, .1, .15],           # front + bore .35, back .25: pair
+                       [.15, .1, .25, .05, 0, .35, .1]])
     labels = mode_labels(energy, names, normals, verts, values, region)
     assert labels[0] == "front wall bending (70 % of KE)"
     assert labels[1] == "front wall sway along x (50 % of KE)"
-    assert labels[2].startswith("mixed: top wall 30 %")
-    energy[2] = [.18, .17, .15, .15, 0, .35]                   # 35 % left + right: a wall pair
-    region[:] = 0
-    values[:, 0, 2] = 1.0
-    assert mode_labels(energy, names, normals, verts, values, region)[2].startswith("mixed")
+    assert labels[2] == "front wall with bore 1 bending (60 % of KE)"
+    assert labels[3] == "front and back walls bending (60 % of KE)"
+    assert labels[4] == "mixed: top wall 35 %, front wall 25 %"
 
 
 def _res(s, mode=0):

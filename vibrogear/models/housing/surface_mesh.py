@@ -39,7 +39,7 @@ _DIRECTIONS = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1]
 BOSS_RADIUS_FACTOR = 1.7
 #: a mode is named after one region when that region holds at least this share of its energy
 DOMINANT_SHARE = 0.4
-#: ... or a pair of opposite walls, the two largest shares, together at least this share
+#: ... or a pair of opposite walls (with their bores) together at least this share
 PAIR_SHARE = 0.3
 
 
@@ -175,34 +175,50 @@ def _bore_motion(x: np.ndarray, u: np.ndarray, axis: np.ndarray) -> str:
 
 
 def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region) -> tuple[str, ...]:
-    """A label per mode: the region with the largest kinetic-energy share and its motion
-    ("front wall bending (71 % of KE)"); below :data:`DOMINANT_SHARE`, the pair of opposite
-    walls with the two largest shares when they hold :data:`PAIR_SHARE` ("both end walls
-    bending (37 % of KE)"), else "mixed: A 35 %, B 30 %"."""
+    """A label per mode from its kinetic-energy shares, the first that applies:
+
+    1. one region (wall or bore) holds :data:`DOMINANT_SHARE`: it and its motion,
+       "front wall bending (71 % of KE)", "bore 2 (input/back) rocking (45 % of KE)";
+    2. one wall with the bores in it (a bore belongs to the wall its axis points through)
+       holds it: "front wall with bores 1, 3 bending (52 % of KE)" (the wall's motion);
+    3. two opposite walls with their bores hold :data:`PAIR_SHARE`, the smaller at least a
+       quarter of the two: "front and back walls bending (44 % of KE)";
+    4. else "mixed: A 35 %, B 30 %" (the two largest regions)."""
+    n_wall = 6
+    owner = np.array([int(np.argmax(normals[:n_wall] @ normals[r])) for r in range(n_wall, len(names))],
+                     dtype=int)
     out = []
     for i, e in enumerate(np.asarray(energy, float)):
         if not e.size or not np.isfinite(e).all() or e.sum() <= 0:
             out.append("")
             continue
         e = e / e.sum()
+        group = e[:n_wall].copy()
+        np.add.at(group, owner, e[n_wall:])
         order = np.argsort(e)[::-1]
-        k = int(order[0])
-        j = int(order[1]) if e.size > 1 else k
-        if e[k] < DOMINANT_SHARE and k < 6 and j < 6 and k // 2 == j // 2 \
-                and e[k] + e[j] >= PAIR_SHARE:               # a pair of opposite walls
-            motions = {_wall_motion(np.asarray(values[vertex_region == r, :, i], float), normals[r])
-                       for r in (k, j)}
+        k, w = int(order[0]), int(np.argmax(group))
+        pairs = group.reshape(3, 2)                   # (left, right), (front, back), (base, top)
+        ok = pairs.min(axis=1) >= 0.25 * pairs.sum(axis=1)
+        p = int(np.argmax(np.where(ok, pairs.sum(axis=1), -1.0)))
+        pair = 2 * p + np.arange(2)
+        motion_of = lambda r: _wall_motion(np.asarray(values[vertex_region == r, :, i], float),  # noqa: E731
+                                           normals[r])
+        if e[k] >= DOMINANT_SHARE:
+            sel = vertex_region == k
+            u = np.asarray(values[sel, :, i], float)
+            motion = (_wall_motion(u, normals[k]) if k < n_wall else
+                      _bore_motion(verts[sel], u, normals[k]) if sel.sum() >= 3 else "")
+            out.append(f"{names[k]} {motion} ({100 * e[k]:.0f} % of KE)".replace("  ", " "))
+        elif group[w] >= DOMINANT_SHARE:
+            bores = np.flatnonzero(owner == w) + 1
+            with_b = f" with bore{'s' if bores.size > 1 else ''} {', '.join(map(str, bores))}" if bores.size else ""
+            out.append(f"{names[w]}{with_b} {motion_of(w)} ({100 * group[w]:.0f} % of KE)")
+        elif ok[p] and group[pair].sum() >= PAIR_SHARE:
+            motions = {motion_of(r) for r in pair}
             motion = motions.pop() if len(motions) == 1 else "moving"
-            out.append(f"{_PAIRS[k // 2]} {motion} ({100 * (e[k] + e[j]):.0f} % of KE)")
-            continue
-        if e[k] < DOMINANT_SHARE:
+            out.append(f"{_PAIRS[p]} {motion} ({100 * group[pair].sum():.0f} % of KE)")
+        else:
             out.append("mixed: " + ", ".join(f"{names[r]} {100 * e[r]:.0f} %" for r in order[:2]))
-            continue
-        sel = vertex_region == k
-        u = np.asarray(values[sel, :, i], float)
-        motion = (_wall_motion(u, normals[k]) if k < 6 else
-                  _bore_motion(verts[sel], u, normals[k]) if sel.sum() >= 3 else "")
-        out.append(f"{names[k]} {motion} ({100 * e[k]:.0f} % of KE)".replace("  ", " "))
     return tuple(out)
 
 
