@@ -273,3 +273,65 @@ def test_plot_key_validated_and_outside_the_cache_key():
     assert housing_cache_key(a, "modes") == housing_cache_key(b, "modes")
     with pytest.raises(ConfigError, match="housing.modes.plot"):
         load_scene(small, ("housing.modes.plot=[0]",))
+
+
+@pytest.fixture(scope="module")
+def small(tmp_path_factory):
+    """configs/housing_small.toml solved in a private cache, and its mesh file."""
+    import os
+    from pathlib import Path
+
+    from vibrogear.cache import open_entry
+    from vibrogear.config import load_scene
+    from vibrogear.models.housing.run import housing_cache_key, housing_modes
+
+    d = tmp_path_factory.mktemp("vgcache")
+    old = os.environ.get("VIBROGEAR_CACHE_DIR")
+    os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
+    try:
+        cfg = load_scene(Path(__file__).resolve().parents[2] / "configs" / "housing_small.toml").housing
+        res = housing_modes(cfg)
+        yield res, open_entry(housing_cache_key(cfg, "mesh")) / "mesh.msh"
+    finally:
+        if old is None:
+            os.environ.pop("VIBROGEAR_CACHE_DIR")
+        else:
+            os.environ["VIBROGEAR_CACHE_DIR"] = old
+
+
+def test_housing_boundary_is_the_msh_boundary_and_energy_sums_to_one(small):
+    """The boundary triangles of the solved housing are the faces of the .msh tetrahedra that
+    belong to one tetrahedron only (counted by numpy from the file, not from dolfinx), and the
+    base-tagged ones the file's base facets; the region energies of each mass-normalised mode
+    sum to 1 (x^T M x = 1)."""
+    from vibrogear.geometry.housing import BASE_TAG, read_msh_arrays
+
+    res, msh = small
+    x, tets, facets, tags = read_msh_arrays(msh)
+    faces = np.sort(np.concatenate([tets[:, [0, 1, 2]], tets[:, [0, 1, 3]], tets[:, [0, 2, 3]],
+                                    tets[:, [1, 2, 3]]]), axis=1)
+    uniq, count = np.unique(faces, axis=0, return_counts=True)
+    boundary = uniq[count == 1]
+    assert res.has_shapes and len(res.shape_triangles) == len(boundary)
+    assert len(res.shape_vertices) == np.unique(boundary).size
+    assert np.count_nonzero(res.shape_facet_tag == 1) == np.count_nonzero(tags == BASE_TAG)
+    np.testing.assert_allclose(res.region_energy.sum(axis=1), 1.0, rtol=1e-8)
+    assert len(res.mode_labels) == res.n_modes and all(res.mode_labels)
+
+
+def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
+    import csv
+
+    from PIL import Image
+    from vibrogear.report.housing_report import write_modes_outputs
+
+    res, _ = small
+    files = write_modes_outputs(res, tmp_path, draw=(1, 2, 3, 4, 5, 6, 7, 99))
+    assert files["plot"] == "housing_modes.png" and files["plot_2"] == "housing_modes_2.png"
+    assert files["animation"] == "housing_mode_1_anim.png"
+    assert (tmp_path / "housing_mode_1_anim.png").stat().st_size <= 1_000_000
+    with Image.open(tmp_path / "housing_mode_1_anim.png") as im:
+        assert im.n_frames == 16
+    with (tmp_path / "modes.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["dominant_motion"] for r in rows] == list(res.mode_labels)
