@@ -91,7 +91,7 @@ def test_vertex_values_and_kinetic_energy(surface):
     e = s["region_energy"].sum(axis=1)
     assert e[0] == pytest.approx(RHO * np.prod(BOX), rel=1e-10)
     assert e[1] == pytest.approx(RHO * BOX[1] * BOX[2] * BOX[0] ** 3 / 3, rel=1e-10)
-    assert len(s["mode_labels"]) == 3
+    assert len(s["shape_vertex_region"]) == len(x)
 
 
 def test_wall_planes_and_regions_of_the_box(surface):
@@ -122,21 +122,26 @@ def test_mode_labels_name_the_wall_and_its_motion():
                        [0, 0, .3, .1, 0, .4 - .1, .3],         # front .3 + its bore .3
                        [0, .3, .2, .25, 0, .1, .15],           # front + bore .35, back .25: pair
                        [.15, .1, .25, .05, 0, .35, .1]])
-    labels = mode_labels(energy, names, normals, verts, values, region)
+    labels, where = mode_labels(energy, names, normals, verts, values, region)
     assert labels[0] == "front wall bending (70 % of KE)"
     assert labels[1] == "front wall sway along x (50 % of KE)"
     assert labels[2] == "front wall with bore 1 bending (60 % of KE)"
     assert labels[3] == "front and back walls bending (60 % of KE)"
     assert labels[4] == "mixed: top wall 35 %, front wall 25 %"
+    assert where.tolist() == [2, 2, 2, 2, 5]          # the region each picture faces
 
 
 def _res(s, mode=0):
     """A HousingModes-like view of a boundary_surface dict for the plotting functions."""
     m = s["shape_values"].shape[-1]
+    from vibrogear.models.housing.surface_mesh import mode_labels as labels
+
+    motion = labels(s["region_energy"], s["region_names"], s["region_normals"], s["shape_vertices"],
+                    s["shape_values"], s["shape_vertex_region"])
     return SimpleNamespace(shape_vertices=s["shape_vertices"], shape_triangles=s["shape_triangles"],
                            shape_values=s["shape_values"], shape_facet_tag=s["shape_facet_tag"],
                            region_energy=s["region_energy"], region_normals=s["region_normals"],
-                           mode_labels=s["mode_labels"], freqs_hz=np.arange(1.0, m + 1) * 100,
+                           mode_motion=lambda: motion, freqs_hz=np.arange(1.0, m + 1) * 100,
                            bore_names=(), degree=2, n_dofs=123)
 
 
@@ -316,7 +321,8 @@ def test_housing_boundary_is_the_msh_boundary_and_energy_sums_to_one(small):
     assert len(res.shape_vertices) == np.unique(boundary).size
     assert np.count_nonzero(res.shape_facet_tag == 1) == np.count_nonzero(tags == BASE_TAG)
     np.testing.assert_allclose(res.region_energy.sum(axis=1), 1.0, rtol=1e-8)
-    assert len(res.mode_labels) == res.n_modes and all(res.mode_labels)
+    labels, where = res.mode_motion()
+    assert len(labels) == res.n_modes and all(labels) and where.max() < len(res.region_names)
 
 
 def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
@@ -334,4 +340,4 @@ def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
         assert im.n_frames == 16
     with (tmp_path / "modes.csv").open() as fh:
         rows = list(csv.DictReader(fh))
-    assert [r["dominant_motion"] for r in rows] == list(res.mode_labels)
+    assert [r["dominant_motion"] for r in rows] == list(res.mode_motion()[0])

@@ -57,7 +57,7 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True,
     out.mkdir(parents=True, exist_ok=True)
     files = {}
     dom = _dominant(res)
-    motion = [res.mode_labels[i] if i < len(res.mode_labels) else "" for i in range(res.n_modes)]
+    motion = list(res.mode_motion()[0]) if hasattr(res, "mode_motion") else [""] * res.n_modes
     atomic_write_csv(out / "modes.csv",
                      ["index", "frequency_hz", "damping_ratio", "residual", "dominant_direction",
                       "dominant_motion"],

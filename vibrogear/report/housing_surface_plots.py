@@ -162,18 +162,18 @@ def _bore_rings(ax, verts, tris, tags, n_bores: int) -> None:
         ax.text(*tip, str(b + 1), fontsize=7, color="k", zorder=5)
 
 
-def mode_panel_data(res, i: int, fraction: float = DEFAULT_FRACTION):
+def mode_panel_data(res, i: int, fraction: float = DEFAULT_FRACTION, motion=None):
     """(displacement (nv, 3) scaled so its largest vertex value is ``fraction`` of the box's
-    largest edge, face colour value (nt,): mean vertex |u| / max |u|, view, title)."""
+    largest edge, face colour value (nt,): mean vertex |u| / max |u|, view, title) of mode
+    ``i``; ``motion``: ``res.mode_motion()`` (labels, regions), computed when not given."""
     verts, tris = res.shape_vertices, res.shape_triangles
     u = np.asarray(res.shape_values[:, :, i], float)
     mag = np.linalg.norm(u, axis=1)
     top = max(float(mag.max()), 1e-300)
     span = float(np.ptp(verts, axis=0).max())
-    e = np.asarray(res.region_energy[i]) if len(res.region_energy) else np.zeros(0)
-    view = view_angles(res.region_normals[int(np.argmax(e))]) if e.size else (22.0, -65.0)
-    label = res.mode_labels[i] if i < len(res.mode_labels) else ""
-    title = f"mode {i + 1}: {res.freqs_hz[i]:.4g} Hz" + (f"\n{label}" if label else "")
+    labels, regions = motion if motion is not None else res.mode_motion()
+    view = view_angles(res.region_normals[int(regions[i])]) if len(res.region_normals) else (22.0, -65.0)
+    title = f"mode {i + 1}: {res.freqs_hz[i]:.4g} Hz" + (f"\n{labels[i]}" if labels[i] else "")
     return fraction * span / top * u, mag[tris].mean(axis=1) / top, view, title
 
 
@@ -191,9 +191,10 @@ def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float =
     hatch = _hatched(res.shape_triangles, res.shape_facet_tag)
     norm = colors.Normalize(0.0, 1.0)
     axes = []
+    motion = res.mode_motion()
     for k, i in enumerate(modes):
         ax = fig.add_subplot(rows, cols, k + 1, projection="3d")
-        disp, val, view, ttl = mode_panel_data(res, i, fraction)
+        disp, val, view, ttl = mode_panel_data(res, i, fraction, motion)
         draw_surface(ax, res.shape_vertices, res.shape_triangles, val, displacement=disp,
                      norm=norm, view=view, hatch=hatch, tags=res.shape_facet_tag)
         _bore_rings(ax, res.shape_vertices, res.shape_triangles, res.shape_facet_tag,

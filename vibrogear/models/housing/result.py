@@ -79,8 +79,8 @@ class HousingModes:
     shape_values: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_values"])
     region_normals: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_normals"])
     region_energy: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_energy"])
+    shape_vertex_region: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_vertex_region"])
     region_names: tuple[str, ...] = ()
-    mode_labels: tuple[str, ...] = ()
 
     @property
     def n_modes(self) -> int:
@@ -105,6 +105,16 @@ class HousingModes:
         """Whether the boundary surface and the modes' displacement at its vertices are known."""
         return bool(len(self.shape_triangles)) and self.shape_values.shape[-1] == self.n_modes
 
+    def mode_motion(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """(the dominant motion of each mode, e.g. "front wall bending (71 % of KE)", the region
+        each picture should face): :func:`.surface_mesh.mode_labels` of the stored shares
+        ("" / 0 without the boundary surface)."""
+        if not self.has_shapes or not len(self.region_energy):
+            return ("",) * self.n_modes, np.zeros(self.n_modes, dtype=np.int64)
+        from .surface_mesh import mode_labels
+        return mode_labels(self.region_energy, self.region_names, self.region_normals,
+                           self.shape_vertices, self.shape_values, self.shape_vertex_region)
+
     def bore(self, i: int) -> np.ndarray:
         """Mode values at the coupling points of bore ``i``: (n_i, 3, m), no padding."""
         return self.bore_values[i, :self.bore_n_points[i]]
@@ -118,7 +128,7 @@ def save_modes(res: HousingModes, folder: Path) -> None:
                                           "orthogonality_error", "mass_kg", "n_fallback_points",
                                           "status", "message", "converged_reason", "n_converged",
                                           "peak_memory_mb", "n_processes", "source_info",
-                                          "region_names", "mode_labels")}
+                                          "region_names")}
     meta["timings"] = dict(res.timings)
     meta["shapes"] = res.shapes_path.name if res.shapes_path is not None else None
     (folder / "meta.json").write_text(json.dumps(meta, indent=1))
@@ -133,7 +143,6 @@ def load_modes(folder: Path, *, key: str = "") -> HousingModes:
     meta["bore_n_points"] = tuple(meta["bore_n_points"])
     meta["bore_names"] = tuple(meta["bore_names"])
     meta["region_names"] = tuple(meta["region_names"])
-    meta["mode_labels"] = tuple(meta["mode_labels"])
     return HousingModes(**arrays, **meta, cached=True, cache_key=key,
                         shapes_path=(folder / shapes) if shapes else None)
 

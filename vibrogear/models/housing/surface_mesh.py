@@ -15,10 +15,14 @@ each mode's dominant motion.  Fields carried by :class:`~.result.HousingModes`:
 - ``shape_triangles``   (nt, 3)     vertex indices, outward orientation
 - ``shape_facet_tag``   (nt,)       0: free surface, 1: supported (fixed) base, 2 + b: bore b
 - ``shape_values``      (nv, 3, m)  mass-normalised displacement (float32), 1/sqrt(kg)
+- ``shape_vertex_region`` (nv,)     region of each vertex (index into ``region_names``)
 - ``region_normals``    (R, 3)      outward normal of each region (wall plane / bore axis)
 - ``region_energy``     (m, R)      integral of rho |phi_i|^2 over each region (sums to 1 over
                                     the regions for mass-normalised modes)
-- meta: ``region_names`` (R,) and ``mode_labels`` (m,): e.g. "front wall bending (71 % of KE)"
+- meta: ``region_names`` (R,): the six walls, then "bore b (name)"
+
+:func:`mode_labels` names each mode from these ("front wall bending (71 % of KE)") and gives
+the region its picture should face.
 """
 from __future__ import annotations
 
@@ -28,7 +32,7 @@ __all__ = ["boundary_surface", "triangulate_facets", "wall_planes", "classify_po
            "mode_labels", "SHAPE_FIELDS", "empty_shape_fields", "WALL_NAMES", "BOSS_RADIUS_FACTOR"]
 
 SHAPE_FIELDS = ("shape_vertices", "shape_triangles", "shape_facet_tag", "shape_values",
-                "region_normals", "region_energy")
+                "shape_vertex_region", "region_normals", "region_energy")
 #: the six outer wall planes, in the order of :data:`_DIRECTIONS` (names of the parametric
 #: box: front wall at y = 0, back wall at y = width, x from the left end to the right end)
 WALL_NAMES = ("left end wall", "right end wall", "front wall", "back wall", "base", "top wall")
@@ -46,6 +50,7 @@ PAIR_SHARE = 0.3
 def empty_shape_fields(m: int = 0) -> dict:
     return {"shape_vertices": np.zeros((0, 3)), "shape_triangles": np.zeros((0, 3), np.int32),
             "shape_facet_tag": np.zeros(0, np.int16), "shape_values": np.zeros((0, 3, m), np.float32),
+            "shape_vertex_region": np.zeros(0, np.int16),
             "region_normals": np.zeros((0, 3)), "region_energy": np.zeros((m, 0))}
 
 
@@ -174,20 +179,25 @@ def _bore_motion(x: np.ndarray, u: np.ndarray, axis: np.ndarray) -> str:
     return max(parts, key=parts.get)
 
 
-def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region) -> tuple[str, ...]:
-    """A label per mode from its kinetic-energy shares, the first that applies:
+def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
+                ) -> tuple[tuple[str, ...], np.ndarray]:
+    """(a label per mode, the region its picture should face (m,)) from the kinetic-energy
+    shares, the first rule that applies (a bore belongs to the wall its axis points through;
+    a wall's "group" is the wall with its bores):
 
-    1. one region (wall or bore) holds :data:`DOMINANT_SHARE`: it and its motion,
-       "front wall bending (71 % of KE)", "bore 2 (input/back) rocking (45 % of KE)";
-    2. one wall with the bores in it (a bore belongs to the wall its axis points through)
-       holds it: "front wall with bores 1, 3 bending (52 % of KE)" (the wall's motion);
-    3. two opposite walls with their bores hold :data:`PAIR_SHARE`, the smaller at least a
-       quarter of the two: "front and back walls bending (44 % of KE)";
-    4. else "mixed: A 35 %, B 30 %" (the two largest regions)."""
+    1. the largest group and the opposite one hold :data:`PAIR_SHARE`, the smaller at least
+       half the larger: "front and back walls bending (44 % of KE)";
+    2. one region holds :data:`DOMINANT_SHARE`: "front wall bending (71 % of KE)",
+       "bore 2 (input/back) rocking (45 % of KE)";
+    3. one group holds it: "front wall with bores 1, 3 bending (52 % of KE)";
+    4. else "mixed: A 35 %, B 30 %" (the two largest regions).
+
+    A wall's motion is "bending" when the motion normal to it carries most of its vertices'
+    |u|^2, else "sway along" the in-plane axis with more; a boss's by a rigid fit."""
     n_wall = 6
     owner = np.array([int(np.argmax(normals[:n_wall] @ normals[r])) for r in range(n_wall, len(names))],
                      dtype=int)
-    out = []
+    out, where = [], np.zeros(len(energy), dtype=np.int64)
     for i, e in enumerate(np.asarray(energy, float)):
         if not e.size or not np.isfinite(e).all() or e.sum() <= 0:
             out.append("")
@@ -197,35 +207,36 @@ def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
         np.add.at(group, owner, e[n_wall:])
         order = np.argsort(e)[::-1]
         k, w = int(order[0]), int(np.argmax(group))
-        pairs = group.reshape(3, 2)                   # (left, right), (front, back), (base, top)
-        ok = pairs.min(axis=1) >= 0.25 * pairs.sum(axis=1)
-        p = int(np.argmax(np.where(ok, pairs.sum(axis=1), -1.0)))
-        pair = 2 * p + np.arange(2)
+        o = w ^ 1                                                # the opposite wall
         motion_of = lambda r: _wall_motion(np.asarray(values[vertex_region == r, :, i], float),  # noqa: E731
                                            normals[r])
-        if e[k] >= DOMINANT_SHARE:
+        if group[o] >= 0.5 * group[w] and group[w] + group[o] >= PAIR_SHARE:
+            motions = {motion_of(r) for r in (w, o)}
+            motion = motions.pop() if len(motions) == 1 else "moving"
+            out.append(f"{_PAIRS[w // 2]} {motion} ({100 * (group[w] + group[o]):.0f} % of KE)")
+            where[i] = w
+        elif e[k] >= DOMINANT_SHARE:
             sel = vertex_region == k
             u = np.asarray(values[sel, :, i], float)
             motion = (_wall_motion(u, normals[k]) if k < n_wall else
                       _bore_motion(verts[sel], u, normals[k]) if sel.sum() >= 3 else "")
             out.append(f"{names[k]} {motion} ({100 * e[k]:.0f} % of KE)".replace("  ", " "))
+            where[i] = k
         elif group[w] >= DOMINANT_SHARE:
             bores = np.flatnonzero(owner == w) + 1
             with_b = f" with bore{'s' if bores.size > 1 else ''} {', '.join(map(str, bores))}" if bores.size else ""
             out.append(f"{names[w]}{with_b} {motion_of(w)} ({100 * group[w]:.0f} % of KE)")
-        elif ok[p] and group[pair].sum() >= PAIR_SHARE:
-            motions = {motion_of(r) for r in pair}
-            motion = motions.pop() if len(motions) == 1 else "moving"
-            out.append(f"{_PAIRS[p]} {motion} ({100 * group[pair].sum():.0f} % of KE)")
+            where[i] = w
         else:
             out.append("mixed: " + ", ".join(f"{names[r]} {100 * e[r]:.0f} %" for r in order[:2]))
-    return tuple(out)
+            where[i] = k
+    return tuple(out), where
 
 
 def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rho: float,
                      comm) -> dict:
     """The fields of the module docstring (on rank 0; empty on the others) plus the meta
-    ``region_names`` and ``mode_labels``: every exterior facet of ``dmesh`` triangulated and
+    ``region_names``: every exterior facet of ``dmesh`` triangulated and
     oriented outwards, the modes ``Vloc`` (local DOF x m) at its vertices, their energy per
     region."""
     import dolfinx.mesh
@@ -277,7 +288,7 @@ def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rh
     centroids = x[gdofs[:n_cells]].mean(axis=1)
     pieces = comm.gather((x[used], np.searchsorted(used, tri), ftag, vals, centroids, cell_e), root=0)
     if comm.rank != 0:
-        return {**empty_shape_fields(m), "region_names": (), "mode_labels": ()}
+        return {**empty_shape_fields(m), "region_names": ()}
     from .surface_data import _merge_vertices
 
     offs = np.cumsum([0] + [len(p[0]) for p in pieces])
@@ -294,8 +305,7 @@ def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rh
     energy = np.zeros((m, n_reg))
     np.add.at(energy.T, cell_region, np.vstack([p[5] for p in pieces]))
     names, normals = region_names(bores), region_normals(planes, bores)
-    vregion = classify_points(verts, planes, bores)
     return {"shape_vertices": verts, "shape_triangles": merged.astype(np.int32),
             "shape_facet_tag": tags, "shape_values": values.astype(np.float32),
-            "region_normals": normals, "region_energy": energy, "region_names": names,
-            "mode_labels": mode_labels(energy, names, normals, verts, values, vregion)}
+            "shape_vertex_region": classify_points(verts, planes, bores).astype(np.int16),
+            "region_normals": normals, "region_energy": energy, "region_names": names}
