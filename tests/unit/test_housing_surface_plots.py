@@ -341,3 +341,37 @@ def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
     with (tmp_path / "modes.csv").open() as fh:
         rows = list(csv.DictReader(fh))
     assert [r["dominant_motion"] for r in rows] == list(res.mode_motion()[0])
+
+
+def test_ods_faces_the_moving_side_and_is_written(surface, tmp_path):
+    """One 'mode' whose normal displacement is 1 on the x = L face only: the drawing moves
+    only that face's vertices (along +x), the camera looks at it, the files are written."""
+    from vibrogear.analyses.housing_surface import SurfaceMap
+    from vibrogear.report.housing_surface_plots import face_normals, ods_drawing, view_angles
+    from vibrogear.report.nvh_report import write_ods
+
+    _, s = surface
+    v, t = s["shape_vertices"], s["shape_triangles"]
+    on_face = np.isclose(v[t][:, :, 0], BOX[0]).all(axis=1)
+    mid = np.zeros((len(t), 3, 1))
+    mid[on_face] = 1.0
+    disp, view = ods_drawing(v, t, mid, np.array([2.0j]), 100.0)
+    assert view == view_angles((1, 0, 0))
+    moved = np.abs(disp).max(axis=1) > 0
+    assert np.all(np.isclose(v[moved, 0], BOX[0]))
+    inner = np.isclose(v[:, 0], BOX[0]) & (v[:, 1] > 1e-9) & (v[:, 1] < BOX[1] - 1e-9) \
+        & (v[:, 2] > 1e-9) & (v[:, 2] < BOX[2] - 1e-9)
+    np.testing.assert_allclose(np.real(disp[inner]) / np.abs(disp[inner]).max(), [[1, 0, 0]] * inner.sum(),
+                               atol=1e-12)                      # 2j / (i 100) = 0.02: real, along +x
+    area = 0.5 * np.linalg.norm(np.cross(v[t][:, 1] - v[t][:, 0], v[t][:, 2] - v[t][:, 0]), axis=1)
+    smap = SurfaceMap(columns=np.arange(1), values=mid, weights=np.repeat(area[:, None] / 3, 3, 1),
+                      vertices=v, triangles=t, areas=area)
+    r = SimpleNamespace(surface=smap, ods={"rpm": 1500.0, "bin": 3, "erp_share": 0.8,
+                                           "modal_velocity": np.array([2.0j])},
+                        velocity_fields={1500.0: np.where(on_face, 1e-3, 1e-7)}, rpm=np.array([1500.0]),
+                        freq_hz=np.array([[0.0, 10.0, 20.0, 30.0]]), order=np.arange(4) / 2,
+                        erp_db=np.array([60.0]), study=None)
+    files = write_ods(r, tmp_path)
+    assert set(files) == {"ods_png", "ods_animation"}
+    assert (tmp_path / "housing_ods_anim.png").stat().st_size <= 1_000_000
+    assert face_normals(v, t)[on_face][0] @ [1, 0, 0] == pytest.approx(1.0)

@@ -128,26 +128,29 @@ def write(scene, outcome, out, previous=None) -> dict:
             path = write_surface_velocity(out / f"surface_velocity_{p:.0f}.xdmf", s.vertices,
                                           s.triangles, v)
             files[f"surface_velocity_{p:.0f}"] = str(path)
-        files.update(write_ods(r, out))
+        hcfg = getattr(scene, "housing", None)
+        files.update(write_ods(r, out, draw=hcfg.modes.plot if hcfg is not None else (1, 2, 3, 4, 5, 6)))
     if r.branch is not None:
         files.update(write_branch(scene, r, out, max_hz, title))
     return files
 
 
-def write_ods(r, out: Path) -> dict:
+def write_ods(r, out: Path, draw=(1, 2, 3, 4, 5, 6)) -> dict:
     """``housing_ods.png`` + ``housing_ods_anim.png``: the operating deflection shape at the
     ERP peak on the outer surface, coloured by the RMS normal velocity of all harmonics in dB
     re 1e-9 m/s, deformed by the harmonic with the most ERP; and ``nvh_housing_modes.png``:
-    the housing's first six master modes in this synthesis, shaded (when they carry the
-    boundary surface)."""
+    the housing's master modes ``draw`` (1-based, the first six of them) in this synthesis,
+    shaded (when they carry the boundary surface)."""
     from .housing_animation import animate_surface
     from .housing_surface_plots import ods_drawing, plot_mode_shapes, plot_surface_field
 
     files, s, ods = {}, r.surface, r.ods
     hm = getattr(getattr(r.study, "gearbox", None), "housing", None)
     if hm is not None and getattr(hm, "has_shapes", False):
-        plot_mode_shapes(hm, out / "nvh_housing_modes.png", range(min(6, hm.n_modes)))
-        files["housing_modes_png"] = str(out / "nvh_housing_modes.png")
+        modes = [i - 1 for i in dict.fromkeys(draw) if i <= hm.n_modes][:6]
+        if modes:
+            plot_mode_shapes(hm, out / "nvh_housing_modes.png", modes)
+            files["housing_modes_png"] = str(out / "nvh_housing_modes.png")
     if not ods or ods["rpm"] not in r.velocity_fields:
         return files
     k = int(np.flatnonzero(r.rpm == ods["rpm"])[0])
