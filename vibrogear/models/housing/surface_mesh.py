@@ -223,8 +223,8 @@ def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
             out.append(f"{names[k]} {motion} ({100 * e[k]:.0f} % of KE)".replace("  ", " "))
             where[i] = k
         elif group[w] >= DOMINANT_SHARE:
-            bores = np.flatnonzero(owner == w) + 1
-            with_b = f" with bore{'s' if bores.size > 1 else ''} {', '.join(map(str, bores))}" if bores.size else ""
+            bores = ", ".join(str(b + 1) for b in np.flatnonzero(owner == w))
+            with_b = f" with bore{'s' if ',' in bores else ''} {bores}" if bores else ""
             out.append(f"{names[w]}{with_b} {motion_of(w)} ({100 * group[w]:.0f} % of KE)")
             where[i] = w
         else:
@@ -242,7 +242,6 @@ def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rh
     import dolfinx.mesh
     import ufl
     from dolfinx import cpp, fem
-    from mpi4py import MPI
 
     tdim = dmesh.topology.dim
     fdim = tdim - 1
