@@ -141,8 +141,9 @@ def draw_surface(ax, verts, tris, face_value, *, displacement=None, cmap="viridi
     return coll
 
 
-def _bore_rings(ax, verts, tris, tags, n_bores: int) -> None:
-    """A black ring at the outer end of each bore (tag 2 + b) and its number."""
+def _bore_rings(ax, verts, tris, tags, n_bores: int, cam) -> None:
+    """A black ring at the outer end of each bore (tag 2 + b) that faces the camera ``cam``
+    (unit vector towards it), and its number."""
     for b in range(n_bores):
         sel = np.unique(tris[tags == 2 + b])
         if sel.size < 3:
@@ -154,7 +155,10 @@ def _bore_rings(ax, verts, tris, tags, n_bores: int) -> None:
         s = (p - c) @ ax_dir
         r = float(np.median(np.linalg.norm((p - c) - np.outer(s, ax_dir), axis=1)))
         # the outer end: the one farther from the centre of the whole surface
-        out_end = s.max() if (c - verts.mean(axis=0)) @ ax_dir >= 0 else s.min()
+        outward = (c - verts.mean(axis=0)) @ ax_dir >= 0
+        out_end = s.max() if outward else s.min()
+        if (ax_dir if outward else -ax_dir) @ cam <= 0.0:       # on the far side: hidden
+            continue
         th = np.linspace(0, 2 * np.pi, 49)
         ring = c + out_end * ax_dir + r * (np.outer(np.cos(th), vt[0]) + np.outer(np.sin(th), vt[1]))
         ax.plot(ring[:, 0], ring[:, 1], ring[:, 2], color="k", lw=1.1, zorder=4)
@@ -198,7 +202,7 @@ def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float =
         draw_surface(ax, res.shape_vertices, res.shape_triangles, val, displacement=disp,
                      norm=norm, view=view, hatch=hatch, tags=res.shape_facet_tag)
         _bore_rings(ax, res.shape_vertices, res.shape_triangles, res.shape_facet_tag,
-                    len(res.bore_names))
+                    len(res.bore_names), camera_direction(*view))
         ax.set_title(ttl, fontsize=9)
         axes.append(ax)
     span = float(np.ptp(res.shape_vertices, axis=0).max())
@@ -206,11 +210,25 @@ def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float =
                  label="|u| / max |u| of the mode")
     fig.suptitle(title or (f"housing mode shapes (P{res.degree}, {res.n_dofs:,} DOF): largest "
                            f"displacement drawn as {100 * fraction:.0f} % of the box "
-                           f"({span:.3g} m); numbered rings: bores; hatched: supported faces"),
-                 fontsize=10)
+                           f"({span:.3g} m); numbered rings: bores; hatched: supported faces\n"
+                           + _wall_key(res.region_normals)), fontsize=10)
     write_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
+
+
+def _wall_key(normals) -> str:
+    """Where the named walls are and which bores sit in them."""
+    normals = np.asarray(normals, float)
+    if len(normals) < 6:
+        return ""
+    owner = np.argmax(normals[6:] @ normals[:6].T, axis=1) if len(normals) > 6 else np.zeros(0, int)
+    parts = []
+    for k, (name, where) in enumerate(zip(("left end", "right end", "front", "back"),
+                                          ("x min", "x max", "y min", "y max"))):
+        bores = ", ".join(str(b + 1) for b in np.flatnonzero(owner == k))
+        parts.append(f"{name} wall at {where}" + (f" (bores {bores})" if bores else ""))
+    return "; ".join(parts) + "; base at z min, top wall at z max"
 
 
 def _hatched(tris, tags) -> np.ndarray:
