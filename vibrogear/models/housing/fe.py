@@ -79,8 +79,10 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
     skin = outer_surface(*_surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
                                           Vloc, comm))
+    t1 = time.perf_counter()
     shape = boundary_surface(dmesh, ftags, mesh.base_tag, mesh.bore_tags, bores, uh, Vloc,
                              material.rho, comm)
+    timings["boundary_surface"] = time.perf_counter() - t1
     timings["postprocess"] = time.perf_counter() - t0
 
     shapes_path = None
