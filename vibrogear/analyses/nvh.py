@@ -40,7 +40,7 @@ from .line_sources import label_points, natural_frequencies, point_summary, swee
 from .study import Study, integration_options
 
 __all__ = ["NvhResult", "BranchSpectra", "run", "steady_points", "order_lines",
-           "branch_spectra"]
+           "branch_spectra", "operating_shape"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,11 +68,24 @@ class NvhResult:
     #: evidence name -> (P,): the DTE spectrum's torus base pair and broadband measures
     evidence: dict = field(default_factory=dict)
     motion_class: np.ndarray | None = None   # (P,) the sweep's class per point (-1: none)
+    #: the operating deflection shape at the ERP peak (:func:`operating_shape`; {} without)
+    ods: dict = field(default_factory=dict)
 
     @property
     def erp_db(self) -> np.ndarray | None:
         """(P,) ERP level [dB re 1e-12 W] (None without surface data)."""
         return None if self.erp_w is None else erp_db(self.erp_w)
+
+
+def operating_shape(rpm: float, rates: np.ndarray, per_bin: np.ndarray) -> dict:
+    """The harmonic of the largest ERP among the bins above 0 of one steady point: ``rpm``,
+    ``bin`` (k), ``erp_share`` (its part of the point's ERP) and ``modal_velocity`` (m,),
+    complex: the modal rates' part at bin k is Re(X exp(2 pi i k t / span))."""
+    k = 1 + int(np.argmax(per_bin[1:]))
+    n = rates.shape[-1]
+    X = np.fft.rfft(rates, axis=-1)[:, k] * ((1.0 if 2 * k == n else 2.0) / n)
+    return {"rpm": float(rpm), "bin": k, "erp_share": float(per_bin[k] / max(per_bin.sum(), 1e-300)),
+            "modal_velocity": X}
 
 
 def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
@@ -267,8 +280,8 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                 erp_bins.append(erp_spectrum(smap.gram, rates, cfg.rho_air, cfg.c_air))
                 if p in want:
                     rates_at[p] = rates
-                elif not want and erp[-1] > best[0]:
-                    best = (erp[-1], (p, rates))     # no speeds asked: the largest ERP
+                if erp[-1] > best[0]:
+                    best = (erp[-1], (p, rates))     # the largest ERP: its field and ODS
             kept.append(p)
     if not kept:
         raise NumericalFailure(f"nvh: every steady point failed; first: {warnings[0]}")
@@ -277,6 +290,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     rpm = np.array(kept)
     erp_w = np.array(erp) if smap is not None else None
     fields = {p: rms_velocity_field(smap, r) for p, r in sorted(rates_at.items())}
+    ods = {} if best[1] is None else operating_shape(*best[1], erp_bins[kept.index(best[1][0])])
     branch = None
     if cfg.branch_spectra:
         cont = (previous or {}).get("continuation")
@@ -311,7 +325,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                     parseval=parseval, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                     shaft_names=shaft_names, source=source, erp_w=erp_w, erp_note=note,
                     erp_per_bin=np.array(erp_bins) if smap is not None else None,
-                    surface=smap, velocity_fields=fields, study=study, branch=branch)
+                    surface=smap, velocity_fields=fields, study=study, branch=branch, ods=ods)
     summary = {"status": "ok" if not warnings else "partial", "points": int(rpm.size),
                "source": source, "record_periods": R, "samples_per_period": S,
                "resolution_orders": 1.0 / R, "window": "none (whole mesh periods)",
@@ -326,7 +340,9 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
         summary.update({"erp_max_w": float(erp_w[k]), "erp_max_db": float(erp_db(erp_w[k])),
                         "erp_max_at_rpm": float(rpm[k]), "surface_area_m2": smap.area,
                         "surface_facets": int(smap.areas.size), "rho_air": cfg.rho_air,
-                        "c_air": cfg.c_air, "velocity_fields_rpm": sorted(fields)})
+                        "c_air": cfg.c_air, "velocity_fields_rpm": sorted(fields),
+                        "ods_order": float(order[ods["bin"]]),
+                        "ods_erp_share": ods["erp_share"]})
     else:
         summary["erp"] = note
     if branch is not None:

@@ -171,6 +171,8 @@ class HousingModesConfig:
                        doc="eigen-solver: direct (block, krylovschur, subspace: Cholesky of K) or iterative "
                            "for housings beyond the direct factor (krylovschur_gamg: CG + GAMG)")
     shapes: int = spec(12, ge=0, le=5000, doc="mode shapes written to XDMF")
+    plot: tuple[int, ...] = spec((1, 2, 3, 4, 5, 6), ge=1, le=5000, max_len=60,
+                                 doc="modes (1-based) drawn as shaded surfaces, 6 per figure")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -234,6 +236,7 @@ class HousingConfig:
         import hashlib
 
         d = dataclasses.asdict(self)
+        d["modes"].pop("plot")               # what is drawn, not what is solved
         # the edge grading enters the keys only where it is on (keys of ungraded scenes unchanged),
         # resolved and at the top level, so that the mesh entry's key (which replaces "mesh") has it
         for k in ("edge_size", "edge_distance"):

@@ -1,8 +1,11 @@
 """Files and figures of the housing analyses.
 
-* ``write_modes`` (:mod:`vibrogear.analyses.housing`, ``modes``): ``modes.csv``,
-  ``housing_modes.npz`` (the coupling data), ``mode_shapes.xdmf/.h5`` (when shapes were
-  written) and ``housing_modes.png`` (previews of the first modes);
+* ``write_modes`` (:mod:`vibrogear.analyses.housing`, ``modes``): ``modes.csv`` (with the
+  dominant motion of each mode), ``housing_modes.npz`` (the coupling data),
+  ``mode_shapes.xdmf/.h5`` (when shapes were written), ``housing_modes.png`` (the modes of
+  ``[housing.modes] plot``, 6 per figure, shaded on the boundary surface; more figures
+  ``housing_modes_2.png``, ...; the old point previews where the modes carry no surface) and
+  ``housing_mode_<n>_anim.png`` (the first of them swinging, an animated PNG);
 * ``write_sweep`` (:mod:`vibrogear.analyses.housing_sweep`): ``housing_sweep.csv`` and
   ``housing_sweep.png``;
 * ``write_convergence`` (:mod:`vibrogear.analyses.housing_study`):
@@ -47,16 +50,19 @@ def _atomic_copy(src: Path, dst: Path) -> None:
         raise
 
 
-def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
+def write_modes_outputs(res, out: Path, *, plot: bool = True,
+                        draw: tuple[int, ...] = (1, 2, 3, 4, 5, 6)) -> dict[str, str]:
     """modes.csv, housing_modes.npz (coupling data), shapes XDMF, PNG of the first modes."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     files = {}
     dom = _dominant(res)
+    motion = list(res.mode_motion()[0]) if hasattr(res, "mode_motion") else [""] * res.n_modes
     atomic_write_csv(out / "modes.csv",
-                     ["index", "frequency_hz", "damping_ratio", "residual", "dominant_direction"],
+                     ["index", "frequency_hz", "damping_ratio", "residual", "dominant_direction",
+                      "dominant_motion"],
                      [[i + 1, f"{f:.8g}", f"{res.damping_ratios[i]:.6g}",
-                       f"{res.residuals[i]:.3e}", dom[i]] for i, f in enumerate(res.freqs_hz)])
+                       f"{res.residuals[i]:.3e}", dom[i], motion[i]] for i, f in enumerate(res.freqs_hz)])
     files["modes"] = "modes.csv"
     atomic_write_npz(out / "housing_modes.npz", dict(
         freqs_hz=res.freqs_hz, bore_values=res.bore_values, bore_points=res.bore_points,
@@ -72,15 +78,42 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True) -> dict[str, str]:
             if s.is_file():
                 _atomic_copy(s, out / f"mode_shapes{ext}")
         files["shapes"] = "mode_shapes.xdmf"
-    if plot and res.n_modes and len(res.preview_points):
+    if plot and res.n_modes and getattr(res, "has_shapes", False):
+        files.update(_shaded_modes(res, out, draw))
+    elif plot and res.n_modes and len(res.preview_points):
         from .housing_plots import plot_mode_previews
         plot_mode_previews(res, out / "housing_modes.png")
         files["plot"] = "housing_modes.png"
     return files
 
 
+def _shaded_modes(res, out: Path, draw) -> dict[str, str]:
+    """The modes ``draw`` (1-based; those beyond the solved count left out) 6 per figure, and
+    the first one animated."""
+    from .housing_animation import animate_surface
+    from .housing_surface_plots import _hatched, mode_panel_data, plot_mode_shapes
+
+    modes = [i - 1 for i in dict.fromkeys(draw) if i <= res.n_modes]
+    files = {}
+    for g in range(0, len(modes), 6):
+        name = "housing_modes.png" if g == 0 else f"housing_modes_{g // 6 + 1}.png"
+        plot_mode_shapes(res, out / name, modes[g:g + 6])
+        files["plot" if g == 0 else f"plot_{g // 6 + 1}"] = name
+    if modes:
+        from matplotlib import colors
+
+        disp, val, view, title = mode_panel_data(res, modes[0])
+        name = f"housing_mode_{modes[0] + 1}_anim.png"
+        animate_surface(out / name, res.shape_vertices, res.shape_triangles, val, disp,
+                        title=title, view=view, norm=colors.Normalize(0.0, 1.0),
+                        tags=res.shape_facet_tag,
+                        hatch=_hatched(res.shape_triangles, res.shape_facet_tag))
+        files["animation"] = name
+    return files
+
+
 def write_modes(scene, outcome, out, previous=None) -> dict[str, str]:
-    return write_modes_outputs(outcome.result, Path(out))
+    return write_modes_outputs(outcome.result, Path(out), draw=scene.housing.modes.plot)
 
 
 def write_sweep(scene, outcome, out, previous=None) -> dict[str, str]:

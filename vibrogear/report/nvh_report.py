@@ -1,5 +1,7 @@
 """Files of ``nvh``: ``spectra.npz``, ``erp.csv``, ``nvh_waterfall_<quantity>.png``,
-``erp.png`` and ``surface_velocity_<rpm>.xdmf`` / ``.h5`` (ParaView).
+``erp.png``, ``surface_velocity_<rpm>.xdmf`` / ``.h5`` (ParaView), and with a housing
+``housing_ods.png`` / ``housing_ods_anim.png`` (the operating deflection shape at the ERP
+peak) and ``nvh_housing_modes.png`` (:func:`write_ods`).
 
 ``spectra.npz``: ``rpm`` (P,), ``order`` (K,) bin frequency in orders of the first mesh,
 ``freq_hz`` (P, K), and per quantity q in ``dte`` [m], ``mesh_force`` [N],
@@ -45,7 +47,10 @@ import numpy as np
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .nvh_plots import plot_erp, plot_waterfall
 
-__all__ = ["write", "write_branch", "write_surface_velocity", "line_arrays"]
+__all__ = ["write", "write_branch", "write_surface_velocity", "line_arrays", "write_ods", "V_REF"]
+
+#: reference of the velocity levels [m/s]
+V_REF = 1e-9
 
 _LABELS = {"dte": "dynamic transmission error", "mesh_force": "mesh force",
            "bearing_force": "bearing force"}
@@ -123,8 +128,50 @@ def write(scene, outcome, out, previous=None) -> dict:
             path = write_surface_velocity(out / f"surface_velocity_{p:.0f}.xdmf", s.vertices,
                                           s.triangles, v)
             files[f"surface_velocity_{p:.0f}"] = str(path)
+        hcfg = getattr(scene, "housing", None)
+        files.update(write_ods(r, out, draw=hcfg.modes.plot if hcfg is not None else (1, 2, 3, 4, 5, 6)))
     if r.branch is not None:
         files.update(write_branch(scene, r, out, max_hz, title))
+    return files
+
+
+def write_ods(r, out: Path, draw=(1, 2, 3, 4, 5, 6)) -> dict:
+    """``housing_ods.png`` + ``housing_ods_anim.png``: the operating deflection shape at the
+    ERP peak on the outer surface, coloured by the RMS normal velocity of all harmonics in dB
+    re 1e-9 m/s, deformed by the harmonic with the most ERP; and ``nvh_housing_modes.png``:
+    the housing's master modes ``draw`` (1-based, the first six of them) in this synthesis,
+    shaded (when they carry the boundary surface)."""
+    from .housing_animation import animate_surface
+    from .housing_surface_plots import ods_drawing, plot_mode_shapes, plot_surface_field
+
+    files, s, ods = {}, r.surface, r.ods
+    hm = getattr(getattr(r.study, "gearbox", None), "housing", None)
+    if hm is not None and getattr(hm, "has_shapes", False):
+        modes = [i - 1 for i in dict.fromkeys(draw) if i <= hm.n_modes][:6]
+        if modes:
+            plot_mode_shapes(hm, out / "nvh_housing_modes.png", modes)
+            files["housing_modes_png"] = str(out / "nvh_housing_modes.png")
+    if not ods or ods["rpm"] not in r.velocity_fields:
+        return files
+    k = int(np.flatnonzero(r.rpm == ods["rpm"])[0])
+    f_hz = float(r.freq_hz[k, ods["bin"]])
+    disp, view = ods_drawing(s.vertices, s.triangles, s.values, ods["modal_velocity"], 2 * np.pi * f_hz)
+    with np.errstate(divide="ignore"):
+        level = 20.0 * np.log10(np.maximum(r.velocity_fields[ods["rpm"]], 1e-300) / V_REF)
+    top = float(level.max())
+    label = "RMS normal velocity, dB re 1e-9 m/s"
+    what = (f"ERP peak {r.erp_db[k]:.1f} dB re 1e-12 W at {ods['rpm']:.0f} rpm; shape: order "
+            f"{r.order[ods['bin']]:.3g} ({f_hz:.0f} Hz, {100 * ods['erp_share']:.0f} % of the ERP)")
+    plot_surface_field(out / "housing_ods.png", s.vertices, s.triangles, level, displacement=np.real(disp),
+                       label=label, view=view, vmin=top - 40.0, vmax=top,
+                       title=f"operating deflection shape of the housing\n{what}")
+    files["ods_png"] = str(out / "housing_ods.png")
+    from matplotlib import colors
+
+    animate_surface(out / "housing_ods_anim.png", s.vertices, s.triangles, level, disp,
+                    title=f"ODS at {ods['rpm']:.0f} rpm, {f_hz:.0f} Hz", view=view, cmap="inferno",
+                    norm=colors.Normalize(top - 40.0, top))
+    files["ods_animation"] = str(out / "housing_ods_anim.png")
     return files
 
 

@@ -1,7 +1,8 @@
 """Housing FE model, stage 1 of 3: dolfinx 0.5.2 elasticity assembly and the solve driver.
 
 The housing FE modules (``fe``: assembly, ``fe_eigen``: the eigen-solve, ``fe_post``: values at
-the bores, on the skin and in XDMF) are the only ones of vibrogear that import dolfinx, PETSc or
+the bores, on the skin and in XDMF; ``surface_mesh.boundary_surface``: the boundary for
+pictures) are the only ones of vibrogear that import dolfinx, PETSc or
 SLEPc, always inside functions, so importing them costs nothing.  Under ``mpirun`` the mesh is
 read on rank 0 and partitioned by dolfinx; K and M are assembled and solved distributed.
 Meshing, the on-disk cache and the MPI orchestration live in :mod:`.run` (``housing_modes``).
@@ -25,6 +26,7 @@ from .fe_eigen import HousingSolveError, _eigensolve, _matmul
 from .fe_post import _bore_values, _locate, _preview, _surface_values, _write_shapes
 from .result import HousingModes
 from .surface_data import outer_surface
+from .surface_mesh import boundary_surface
 
 __all__ = ["HousingModes", "HousingSolveError", "solve_mesh_modes", "assemble_mesh_matrices"]
 
@@ -77,6 +79,10 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
     skin = outer_surface(*_surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
                                           Vloc, comm))
+    t1 = time.perf_counter()
+    shape = boundary_surface(dmesh, ftags, mesh.base_tag, mesh.bore_tags, bores, uh, Vloc,
+                             material.rho, comm)
+    timings["boundary_surface"] = time.perf_counter() - t1
     timings["postprocess"] = time.perf_counter() - t0
 
     shapes_path = None
@@ -97,7 +103,7 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
         n_fallback_points=int(n_fallback), status=status, message=message, converged_reason=reason,
         n_converged=int(nconv), timings=timings, peak_memory_mb=float(peak), n_processes=comm.size,
         shapes_path=shapes_path, preview_points=prev_pts, preview_values=prev_vals,
-        **skin.as_fields(),
+        **skin.as_fields(), **shape,
     )
 
 

@@ -27,11 +27,12 @@ from typing import Mapping
 import numpy as np
 
 from .surface_data import SURFACE_FIELDS, empty_surface_fields
+from .surface_mesh import SHAPE_FIELDS, empty_shape_fields
 
 __all__ = ["HousingModes", "save_modes", "load_modes"]
 
 _ARRAYS = ("freqs_hz", "bore_values", "bore_points", "bore_centers", "bore_axes",
-           "bore_center_values", "residuals", "preview_points", "preview_values") + SURFACE_FIELDS
+           "bore_center_values", "residuals", "preview_points", "preview_values") + SURFACE_FIELDS + SHAPE_FIELDS
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -70,6 +71,16 @@ class HousingModes:
     surface_areas: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_areas"])
     surface_weights: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_weights"])
     surface_values: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_values"])
+    # the whole boundary triangulated, the modes at its vertices, energy per wall / bore
+    # (:mod:`.surface_mesh`; empty when the modes come from another program)
+    shape_vertices: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_vertices"])
+    shape_triangles: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_triangles"])
+    shape_facet_tag: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_facet_tag"])
+    shape_values: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_values"])
+    region_normals: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_normals"])
+    region_energy: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_energy"])
+    shape_vertex_region: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_vertex_region"])
+    region_names: tuple[str, ...] = ()
 
     @property
     def n_modes(self) -> int:
@@ -89,6 +100,21 @@ class HousingModes:
         """Whether the outer surface and the modes' normal displacement there are known."""
         return bool(self.surface_areas.size) and self.surface_values.shape[-1] == self.n_modes
 
+    @property
+    def has_shapes(self) -> bool:
+        """Whether the boundary surface and the modes' displacement at its vertices are known."""
+        return bool(len(self.shape_triangles)) and self.shape_values.shape[-1] == self.n_modes
+
+    def mode_motion(self) -> tuple[tuple[str, ...], np.ndarray]:
+        """(the dominant motion of each mode, e.g. "front wall bending (71 % of KE)", the region
+        each picture should face): :func:`.surface_mesh.mode_labels` of the stored shares
+        ("" / 0 without the boundary surface)."""
+        if not self.has_shapes or not len(self.region_energy):
+            return ("",) * self.n_modes, np.zeros(self.n_modes, dtype=np.int64)
+        from .surface_mesh import mode_labels
+        return mode_labels(self.region_energy, self.region_names, self.region_normals,
+                           self.shape_vertices, self.shape_values, self.shape_vertex_region)
+
     def bore(self, i: int) -> np.ndarray:
         """Mode values at the coupling points of bore ``i``: (n_i, 3, m), no padding."""
         return self.bore_values[i, :self.bore_n_points[i]]
@@ -101,7 +127,8 @@ def save_modes(res: HousingModes, folder: Path) -> None:
     meta = {k: getattr(res, k) for k in ("bore_n_points", "bore_names", "beta", "n_dofs", "degree",
                                           "orthogonality_error", "mass_kg", "n_fallback_points",
                                           "status", "message", "converged_reason", "n_converged",
-                                          "peak_memory_mb", "n_processes", "source_info")}
+                                          "peak_memory_mb", "n_processes", "source_info",
+                                          "region_names")}
     meta["timings"] = dict(res.timings)
     meta["shapes"] = res.shapes_path.name if res.shapes_path is not None else None
     (folder / "meta.json").write_text(json.dumps(meta, indent=1))
@@ -115,6 +142,7 @@ def load_modes(folder: Path, *, key: str = "") -> HousingModes:
     meta["source_info"] = meta.get("source_info") or {}
     meta["bore_n_points"] = tuple(meta["bore_n_points"])
     meta["bore_names"] = tuple(meta["bore_names"])
+    meta["region_names"] = tuple(meta["region_names"])
     return HousingModes(**arrays, **meta, cached=True, cache_key=key,
                         shapes_path=(folder / shapes) if shapes else None)
 

@@ -35,8 +35,8 @@ __all__ = ["HousingModes", "HousingMatrices", "housing_modes", "housing_matrices
 log = logging.getLogger(__name__)
 
 #: layout of the modes / matrices cache entries, part of their keys: entries of an older
-#: layout (1: no outer-surface data) are rebuilt, never misread
-CACHE_FORMAT = 2
+#: layout (1: no outer-surface data, 2: no boundary-surface shapes) are rebuilt, never misread
+CACHE_FORMAT = 3
 
 
 class HousingNumericalError(ArithmeticError):
