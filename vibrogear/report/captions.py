@@ -47,7 +47,17 @@ CAPTIONS = {
                                 "the budget was enough.",
     "states.png": "The danger map: every state found from random disturbances at each speed, "
                   "coloured by motion class, sized by how many disturbances end there.",
-    "housing_modes.png": "Housing mode shapes at the bores and walls.",
+    "housing_modes.png": "Housing mode shapes: the surface deformed by each mode and coloured by "
+                         "displacement, each panel labelled with the wall or bore that moves "
+                         "most (share of the mode's kinetic energy).",
+    r"housing_modes_\d+\.png": "More housing mode shapes.",
+    "nvh_housing_modes.png": "The housing's first mode shapes in this gearbox: which wall moves "
+                             "in each.",
+    r"housing_mode_\d+_anim\.png": "The first housing mode, animated.",
+    "housing_ods.png": "Operating deflection shape at the ERP peak: the housing surface coloured "
+                       "by RMS normal velocity (dB re 1e-9 m/s); the coloured walls radiate "
+                       "most.",
+    "housing_ods_anim.png": "The operating deflection shape at the ERP peak, animated.",
     "work_precision.png": "Error against run time of the integrator for each tolerance.",
     "shooting_precision.png": "Error against run time of the shooting method.",
     "critical_damping.png": "The primary resonance's folds against damping: they meet at the "

@@ -110,6 +110,10 @@ def render_html_report(out, summary: dict) -> str:
     parts += _failure_notes(results)
     if findings is not None:
         parts += findings_html(findings, "findings.png" if "findings.png" in folder else None)
+        if "housing_ods.png" in folder:          # where the housing radiates, at the ERP peak
+            parts.append("<h3>Where the housing radiates (at the ERP peak)</h3>")
+            parts += [_figure(rel) for rel in ("housing_ods.png", "housing_ods_anim.png")
+                      if rel in folder]
     notes = summary.get("notes") or []
     if notes:
         parts.append("<h3>Notes on the model</h3><ul>")
