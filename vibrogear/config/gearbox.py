@@ -259,6 +259,14 @@ class GearboxConfig:
                         raise ConfigError(f"{p}.position", f"node already carries gear "
                                           f"{occupied[(s, node)]!r}")
                     occupied[(s, node)] = item.name
+        for i, b in enumerate(self.bearings):
+            if b.outer_shaft:
+                p = f"{path}.bearings[{i}]"
+                so = self.shaft_index(b.outer_shaft, f"{p}.outer_shaft")
+                if b.outer_shaft == b.shaft:
+                    raise ConfigError(f"{p}.outer_shaft", "must differ from shaft (the shaft "
+                                      "the outer ring sits in)")
+                self.shafts[so].node(b.outer_position, f"{p}.outer_position")
         bearing_nodes: dict[tuple[int, int], int] = {}
         for i, b in enumerate(self.bearings):
             s = self.shaft_index(b.shaft, "")

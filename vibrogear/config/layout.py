@@ -59,7 +59,7 @@ def _check_bore_names(housing) -> None:
 
 def _check_free_bearings(cfg) -> None:
     for i, b in enumerate(cfg.bearings):
-        if b.type != "spring" and b.elements is None:
+        if b.type != "spring" and b.elements is None and b.element_set() is None:
             raise ConfigError(f"gearbox.bearings[{i}].elements", f"a {b.type!r} bearing without "
                               "a housing needs its number of rolling elements (an integer 3..200)")
 
@@ -86,6 +86,8 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
     used: dict[tuple[str, str], int] = {}
     for i, b in enumerate(cfg.bearings):
         p = f"gearbox.bearings[{i}]"
+        if b.outer_shaft:                 # between two shafts: no bore
+            continue
         sh = cfg.shafts[cfg.shaft_index(b.shaft, f"{p}.shaft")]
         bore = bores[sh.bore]
         y = sh.y0 + b.position

@@ -137,8 +137,10 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
 
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
-    """Read, override (``section.key=value``) and validate a scene file."""
-    data = read_toml(path)
+    """Read, override (``section.key=value``) and validate a scene file; a REXS model
+    (``.rexs``, ``.rexsj``) is imported first (:mod:`.rexs`)."""
+    from .rexs import import_rexs, is_rexs_path
+    data = import_rexs(path).data if is_rexs_path(path) else read_toml(path)
     try:
         return scene_from_dict(data, overrides, base_dir=Path(path).parent)
     except RecursionError:
