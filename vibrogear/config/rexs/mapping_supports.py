@@ -205,7 +205,7 @@ def loads(model, shafts, gears, stages, order, report):
         couplings.append({
             "name": f"{role}{c.id}", "shaft": sid,
             "position": round(c.number("u_coordinate_on_shaft", src) - shafts[sid]["u0"], 12),
-            "role": role, "stiffness": stiffness, "torque": float(f"{torque:.6g}"),
+            "role": role, "stiffness": stiffness, "torque": float(f"{torque:.10g}"),
             "damping": float(f"{2e-4 * stiffness:.3g}"),
             "_comment": f"REXS external_load {c.id} ({c.name}), load case {k + 1}"})
         report.mapped.append(f"external_load {c.id} -> coupling '{role}{c.id}' ({role}) on "

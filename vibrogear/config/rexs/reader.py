@@ -86,7 +86,7 @@ class Component:
         if not math.isfinite(x):
             raise ConfigError(source, f"component {self.id} ({self.type}): attribute {attr!r} "
                               f"must be finite, got {value!r}")
-        return x * UNIT_FACTORS[unit]
+        return float(f"{x * UNIT_FACTORS[unit]:.12g}")    # 0.0045, not 0.0045000000000000005
 
     def vector(self, attr: str, source: str) -> tuple[float, float, float]:
         value, unit = self.raw(attr, source), self.attributes[attr][1]

@@ -1,0 +1,163 @@
+"""``vibrogear import`` of the FVA two-stage industrial gearbox (REXS 1.4, Bearinx export;
+tests/data/rexs/, Apache-2.0) and of broken copies of it: every bad file exits 2 naming the
+component, and writes nothing."""
+import json
+import re
+import tomllib
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from vibrogear.cli import main
+from vibrogear.config import load_scene
+from vibrogear.config.rexs import import_rexs
+from vibrogear.config.rexs.scene_toml import scene_toml
+
+DATA = Path(__file__).resolve().parents[1] / "data" / "rexs"
+XML = DATA / "FVA-Industriegetriebe_2stufig_1-4.rexs"
+JSN = DATA / "FVA-Industriegetriebe_2stufig_1-4.rexsj"
+
+
+def test_xml_and_json_give_the_same_scene():
+    a, b = import_rexs(XML).data, import_rexs(JSN).data
+    assert a["scene"].pop("description").endswith(".rexs (REXS 1.4)")
+    assert b["scene"].pop("description").endswith(".rexsj (REXS 1.4)")
+    assert a == b
+
+
+def test_fva_model_as_published():
+    """The model's own numbers: stage 1 z = 27/51 at m_n = 4.5 mm, beta = 21 deg; stage 2
+    23/34 at 6.5 mm, 10 deg; both centre distances 190 mm; input and output shafts coaxial,
+    the input running in the output (concept bearing 36); bearings 6210-2Z, 33014, 33012."""
+    sc = load_scene(XML)
+    gb = sc.gearbox
+    assert [s.name for s in gb.shafts] == ["shaft12", "shaft13", "shaft14"]
+    teeth = {g.name: (g.teeth, g.module, g.helix_angle) for g in gb.gears}
+    assert teeth["gear15"] == (27, 0.0045, 21.0) and teeth["gear17"] == (51, 0.0045, 21.0)
+    assert teeth["gear16"] == (23, 0.0065, 10.0) and teeth["gear18"] == (34, 0.0065, 10.0)
+    x = {s.name: (s.x, s.z) for s in gb.shafts}
+    assert x["shaft12"] == x["shaft14"]
+    assert abs(x["shaft13"][0] - x["shaft12"][0]) == pytest.approx(0.19, abs=1e-12)
+    b = {b.name: b for b in gb.bearings}
+    assert b["bearing36"].outer_shaft == "shaft14" and b["bearing36"].shaft == "shaft12"
+    assert {b["bearing33"].designation, b["bearing34"].designation,
+            b["bearing35"].designation} == {"6210-2Z", "33014", "33012"}
+    # the load: load case 3 (35 % of the time) 456 N m at 1234 rpm on the input
+    motor = next(c for c in gb.couplings if c.role == "motor")
+    assert motor.torque == 456.0 and sc.time_response.rpm == 1234.0
+    # the output torque: input x (51/27)(34/23), lossless
+    load = next(c for c in gb.couplings if c.role == "load")
+    assert load.torque == pytest.approx(456 * 51 / 27 * 34 / 23, rel=1e-6)
+    # every gear, bearing and coupling sits on a node (loading would have raised), and no
+    # element is longer than 20 mm
+    for s in gb.shafts:
+        assert max(sec.length / sec.elements for sec in s.sections) <= 0.02 + 1e-12
+
+
+def test_toml_reads_back_and_names_components(tmp_path):
+    imp = import_rexs(XML)
+    text = scene_toml(imp)
+    assert tomllib.loads(text) == imp.data
+    assert "# REXS concept_bearing 36" in text and "# REXS cylindrical_stage 19" in text
+    for part in ("mapped (", "assumed (", "ignored ("):
+        assert f"#   {part}" in text
+    # every component of the file appears in the report (nothing silently dropped)
+    report = "\n".join(imp.report.lines())
+    for c in imp.model.components.values():
+        if c.type not in ("shaft_section", "material", "cylindrical_gear_flank"):
+            assert re.search(rf"\b{c.type} {c.id}\b", report), c.label()
+
+
+def test_import_cli_writes_a_scene_that_checks(tmp_path, capsys):
+    out = tmp_path / "fva.toml"
+    assert main(["import", str(JSN), "-o", str(out)]) == 0
+    assert main(["check", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "twist 0.02 rad" in text and "contact constant" in text
+    assert main(["check", str(XML)]) == 0
+
+
+def _xml_root():
+    return ET.parse(XML).getroot()
+
+
+def _write_xml(root, path):
+    path.write_bytes(ET.tostring(root))
+    return path
+
+
+def _component(root, cid):
+    return next(c for c in root.iter("component") if c.get("id") == cid)
+
+
+def _broken_missing_attribute(root):
+    g = _component(root, "15")
+    g.remove(next(a for a in g if a.get("id") == "number_of_teeth"))
+
+
+def _broken_missing_reference(root):
+    rel = next(r for r in root.iter("relation") if r.get("id") == "5")
+    next(iter(rel)).set("id", "999")
+
+
+def _broken_stage_on_one_shaft(root):
+    rel = next(r for r in root.iter("relation") if r.get("id") == "7")   # shaft 13 <- gear 17
+    next(x for x in rel if x.get("role") == "assembly").set("id", "12")
+
+
+def _broken_planetary(root):
+    comps = root.find("components")
+    ET.SubElement(comps, "component", id="900", type="planetary_stage", name="PS")
+
+
+def _broken_unit(root):
+    s = _component(root, "21")
+    next(a for a in s if a.get("id") == "length").set("unit", "furlong")
+
+
+@pytest.mark.parametrize("breaker, words", [
+    (_broken_missing_attribute, ["component 15", "'number_of_teeth'"]),
+    (_broken_missing_reference, ["999"]),
+    (_broken_stage_on_one_shaft, ["component 19", "two shafts"]),
+    (_broken_planetary, ["component 900", "'planetary_stage'"]),
+    (_broken_unit, ["component 21", "'length'", "furlong"]),
+])
+def test_bad_rexs_exits_2_naming_the_component(tmp_path, capsys, breaker, words):
+    root = _xml_root()
+    breaker(root)
+    bad = _write_xml(root, tmp_path / "bad.rexs")
+    out = tmp_path / "scene.toml"
+    assert main(["import", str(bad), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    for w in words:
+        assert w in err, err
+    assert not out.exists()
+    assert main(["check", str(bad)]) == 2
+
+
+@pytest.mark.parametrize("text, words", [
+    ("hello, not a model", ["neither XML"]),
+    ("<notamodel/>", ["root is <notamodel>"]),
+    ("{\"rexs\": 1}", ["\"model\" object"]),
+    ("<model version=\"1.4\"><components>", ["not well-formed XML"]),
+])
+def test_not_rexs_exits_2(tmp_path, capsys, text, words):
+    bad = tmp_path / ("bad.rexsj" if text.startswith("{") else "bad.rexs")
+    bad.write_text(text)
+    out = tmp_path / "scene.toml"
+    assert main(["import", str(bad), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+    assert not out.exists()
+
+
+def test_json_missing_attribute(tmp_path, capsys):
+    doc = json.loads(JSN.read_text())
+    sec = next(c for c in doc["model"]["components"] if c["id"] == 24)
+    sec["attributes"] = [a for a in sec["attributes"] if a["id"] != "outer_diameter_begin"]
+    bad = tmp_path / "bad.rexsj"
+    bad.write_text(json.dumps(doc))
+    assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "component 24" in err and "'outer_diameter_begin'" in err
