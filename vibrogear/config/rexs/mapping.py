@@ -85,10 +85,7 @@ def _parts(model, assembly_id: str, part_type: str) -> list:
 
 
 def _owner(model, part_id: str, owner_type: str):
-    for r in model.relations_of("assembly"):
-        if r.ref("part") == part_id and model.components[r.ref("assembly")].type == owner_type:
-            return model.components[r.ref("assembly")]
-    return None
+    return model.owner(part_id, owner_type)
 
 
 class Frame:

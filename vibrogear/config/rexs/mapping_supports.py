@@ -163,8 +163,8 @@ def _load_case(model) -> int:
 
 def loads(model, shafts, gears, stages, order, report):
     """(couplings, the load case used, as {"index", "rpm", "torque", "speeds", "torques"})."""
-    from .mapping import _owner
     src = model.source
+    _owner = type(model).owner
     if not model.load_cases:
         raise ConfigError(src, "the model has no load case (load_spectrum/load_case): the "
                           "speed and torque come from it")

@@ -143,6 +143,14 @@ class RexsModel:
     def relations_of(self, rtype: str) -> list[Relation]:
         return [r for r in self.relations if r.type == rtype]
 
+    def owner(self, part_id: str, owner_type: str) -> Component | None:
+        """The component of ``owner_type`` that has ``part_id`` as an assembly part."""
+        for r in self.relations_of("assembly"):
+            if r.ref("part") == part_id and r.ref("assembly") is not None and \
+                    self.components[r.ref("assembly")].type == owner_type:
+                return self.components[r.ref("assembly")]
+        return None
+
 
 def _xml_value(attr):
     arr = attr.find("array")
