@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from .base import ConfigError
+from .base import ConfigError, ErrorList
 
 __all__ = ["check_layout", "bore_spans", "gear_tip_radius", "time_response_bytes",
            "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
@@ -36,16 +36,21 @@ def gear_tip_radius(gear) -> float:
 def check_layout(scene) -> None:
     """Every cross-section check that needs no model: bores, bearings, gears in the cavity,
     rolling elements, and the size of a time response."""
+    errs = ErrorList()
     if scene.housing is not None:
-        _check_bore_names(scene.housing)
+        with errs.catch():
+            _check_bore_names(scene.housing)
     if scene.gearbox is not None:
-        if scene.housing is not None:
-            _check_gearbox_in_housing(scene.gearbox, scene.housing)
-        else:
-            _check_free_bearings(scene.gearbox)
+        with errs.catch():
+            if scene.housing is not None:
+                _check_gearbox_in_housing(scene.gearbox, scene.housing)
+            else:
+                _check_free_bearings(scene.gearbox)
         # the gear-mesh geometry needs the model layer: vibrogear.pipeline.validate
     if scene.time_response is not None and "time_response" in scene.scene.analyses:
-        _check_time_response_size(scene)
+        with errs.catch():
+            _check_time_response_size(scene)
+    errs.raise_if()
 
 
 def _check_bore_names(housing) -> None:
@@ -83,6 +88,7 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
                                   "y axis (shafts run along y)")
         return
     t = housing.wall_thickness
+    errs = ErrorList()
     used: dict[tuple[str, str], int] = {}
     for i, b in enumerate(cfg.bearings):
         p = f"gearbox.bearings[{i}]"
@@ -95,41 +101,58 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
         side = min(spans, key=lambda s: _outside(y, spans[s]))
         lo, hi = spans[side]
         if _outside(y, spans[side]) > BEARING_SLACK_WALLS * t:
-            raise ConfigError(f"{p}.position", f"bearing at housing y = {y:.6g} m (shaft y0 + "
-                              f"position) is {_outside(y, spans[side]):.3g} m from the nearest "
-                              f"bore of {sh.bore!r} ({side}, y = {lo:.6g}..{hi:.6g} m); it must lie "
-                              f"within one wall thickness ({t:g} m) of a bore: check the shaft's "
-                              "y0 and the bearing position")
+            centre = 0.5 * (lo + hi)
+            errs.add(ConfigError(f"{p}.position", f"bearing at housing y = {y:.6g} m (shaft y0 "
+                                 f"{sh.y0!r} + position {b.position!r}) is "
+                                 f"{_outside(y, spans[side]):.3g} m from the nearest bore of "
+                                 f"{sh.bore!r} ({side}, y = {lo:.6g}..{hi:.6g} m); it must lie "
+                                 f"within one wall thickness ({t!r} m) of a bore: set position = "
+                                 f"{centre - sh.y0:.6g} (the {side} bore's middle) or move the "
+                                 "shaft's y0"))
+            continue
         if (sh.bore, side) in used:
-            raise ConfigError(f"{p}.position", f"the {side} bore of {sh.bore!r} already carries "
-                              f"gearbox.bearings[{used[(sh.bore, side)]}]: one bearing per bore")
+            errs.add(ConfigError(f"{p}.position", f"the {side} bore of {sh.bore!r} already "
+                                 f"carries gearbox.bearings[{used[(sh.bore, side)]}]: one "
+                                 "bearing per bore"))
+            continue
         used[(sh.bore, side)] = i
         if b.elements is not None and b.elements != bore.rolling_elements:
-            raise ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
-                              f"{bore.rolling_elements} coupling points (housing.bores "
-                              f"rolling_elements); give {bore.rolling_elements} or leave "
-                              f"elements out, got {b.elements}")
+            errs.add(ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
+                                 f"{bore.rolling_elements} coupling points (housing.bores "
+                                 f"rolling_elements); give {bore.rolling_elements} or leave "
+                                 f"elements out, got {b.elements}"))
     L, W, H = housing.length, housing.width, housing.height
     for k, g in enumerate(cfg.gears):
         p = f"gearbox.gears[{k}]"
         s = cfg.shaft_index(g.shaft, f"{p}.shaft")
         bore = bores[cfg.shafts[s].bore]
         ra, y = gear_tip_radius(g), cfg.shafts[s].y0 + g.position
-        for axis, centre, top, low_name, high_name in (
-                ("x", bore.x, L, "the wall at x = 0", f"the wall at x = {L:g}"),
-                ("z", bore.z, H, "the housing floor", "the housing top")):
-            for gap, where in ((centre - ra - t, low_name), (top - t - centre - ra, high_name)):
-                if gap < 0:
-                    raise ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch radius "
-                                      f"+ module, axis at {axis} = {centre:.6g} m) reaches "
-                                      f"{-gap:.3g} m into {where} (cavity {axis} = {t:g}.."
-                                      f"{top - t:g} m): use a smaller gear or move the bore "
-                                      f"{bore.name!r}")
+        for axis, centre, top, size in (("x", bore.x, L, "length"), ("z", bore.z, H, "height")):
+            low, high = ra + t, top - t - ra       # where the axis may lie
+            if centre < low or centre > high:
+                into = low - centre if centre < low else centre - high
+                where = ("the wall at x = 0" if axis == "x" else "the housing floor") \
+                    if centre < low else (f"the wall at x = {L!r}" if axis == "x"
+                                          else "the housing top")
+                fix = (f"move bore {bore.name!r} to {axis} = {low:.6g} m or more"
+                       if centre < low else f"move bore {bore.name!r} to {axis} = "
+                       f"{high:.6g} m or less, or make housing.{size} >= "
+                       f"{centre + ra + t:.6g} m")
+                if low > high:
+                    fix = f"make housing.{size} >= {2 * (ra + t):.6g} m (the gear is wider)"
+                errs.add(ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch "
+                                     f"radius + module, axis at {axis} = {centre!r} m) reaches "
+                                     f"{into:.3g} m into {where} (cavity {axis} = {t!r}.."
+                                     f"{top - t:.6g} m): {fix}"))
         half = 0.5 * g.width
         if y - half < t or y + half > W - t:
-            raise ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
-                              f"{y + half:.6g} m) is not inside the cavity (y = {t:g}.."
-                              f"{W - t:g} m): check the shaft's y0 and the gear position")
+            errs.add(ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
+                                 f"{y + half:.6g} m) is not inside the cavity (y = {t!r}.."
+                                 f"{W - t:.6g} m): set position between "
+                                 f"{t + half - cfg.shafts[s].y0:.6g} and "
+                                 f"{W - t - half - cfg.shafts[s].y0:.6g} m or move the shaft's "
+                                 "y0"))
+    errs.raise_if()
 
 
 def _outside(y: float, span: tuple[float, float]) -> float:

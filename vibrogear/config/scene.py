@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
+from .base import ConfigError, ErrorList, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
@@ -82,31 +82,42 @@ class Scene:
         if self.gearbox is not None and self.rotor is not None:
             raise ConfigError("rotor", "a gearbox scene defines its shafts in [[gearbox.shafts]]; "
                               "[rotor] is for single-rotor scenes")
+        errs = ErrorList()          # every problem found, reported together
         for i, analysis in enumerate(self.scene.analyses):
-            allowed = ANALYSIS_MODELS[analysis]
-            if not any(getattr(self, s) is not None for s in allowed):
-                raise ConfigError(f"scene.analyses[{i}]", f"{analysis!r} needs a model section "
-                                  f"[{'] or ['.join(allowed)}]")
-            section = ANALYSIS_SECTION[analysis]
-            if section is not None and getattr(self, section) is None:
-                raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
-            if analysis == "campbell" and self.rotor is not None and self.rotor.campbell is None:
-                raise ConfigError("rotor.campbell", "missing section: analysis 'campbell' needs "
-                                  "[rotor.campbell] (rpm_max, ...)")
+            with errs.catch():
+                self._check_analysis(i, analysis)
         if self.housing_sweep is not None and self.housing is not None:
-            self.housing_sweep.housing_points(self.housing, "housing_sweep")
+            with errs.catch():
+                self.housing_sweep.housing_points(self.housing, "housing_sweep")
         if self.map is not None and self.gearbox is not None and "map" in self.scene.analyses:
-            self.map.check_couplings(self.gearbox, "map")
+            with errs.catch():
+                self.map.check_couplings(self.gearbox, "map")
         # scene.analyses is the verb alone for `vibrogear runup` / `vibrogear nnm` (the CLI
         # rebuilds the scene with it), so these also run for a verb the scene does not list
         if self.runup is not None and self.gearbox is not None and "runup" in self.scene.analyses:
-            self.runup.check_gearbox(self.gearbox, "runup")
+            with errs.catch():
+                self.runup.check_gearbox(self.gearbox, "runup")
         if self.nnm is not None and "nnm" in self.scene.analyses:
-            self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
+            with errs.catch():
+                self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
         from .layout import check_layout        # checks across sections, in one place
-        check_layout(self)
+        with errs.catch():
+            check_layout(self)
+        errs.raise_if()
         if self.optimize is not None:           # the evaluated scene at the variables' bounds
             self.optimize.check_scene(self, scene_from_dict, "optimize")
+
+    def _check_analysis(self, i: int, analysis: str) -> None:
+        allowed = ANALYSIS_MODELS[analysis]
+        if not any(getattr(self, s) is not None for s in allowed):
+            raise ConfigError(f"scene.analyses[{i}]", f"{analysis!r} needs a model section "
+                              f"[{'] or ['.join(allowed)}]")
+        section = ANALYSIS_SECTION[analysis]
+        if section is not None and getattr(self, section) is None:
+            raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
+        if analysis == "campbell" and self.rotor is not None and self.rotor.campbell is None:
+            raise ConfigError("rotor.campbell", "missing section: analysis 'campbell' needs "
+                              "[rotor.campbell] (rpm_max, ...)")
 
 
 @dataclass(frozen=True)

@@ -277,15 +277,16 @@ def import_rexs(path, *, name: str | None = None) -> RexsImport:
     data["gearbox"]["shafts"] = []
     for k, sid in enumerate(order):
         sh = shafts[sid]
-        secs = mesh_sections(sh["sections"], sh["features"], path=f"shaft {sid}")
+        secs = sh["sections"]        # meshed when the scene loads (nodes at every feature)
+        n_el = sum(s["elements"] for s in mesh_sections(secs, sh["features"]))
         data["gearbox"]["shafts"].append({
             "name": names[sid], "x": sh["x"], "z": sh["z"], "y0": sh["y0"], "master_count": 20,
             "modal_damping": 0.01, "material": sh["material"], "sections": secs})
         comments[("shafts", k)] = f"REXS shaft {sid} ({sh['comp'].name})"
         report.mapped.append(f"shaft {sid} ({sh['comp'].name}) -> gearbox.shafts[{k}] "
                              f"{names[sid]!r}: {len(sh['sections'])} sections, meshed into "
-                             f"{sum(s['elements'] for s in secs)} elements (nodes at every "
-                             "gear, bearing, load and section change)")
+                             f"{n_el} elements when the scene loads (nodes at every gear, "
+                             "bearing, load and section change, elements <= 20 mm)")
     report.assumed.append("every shaft: 20 master modes, modal damping ratio 0.01")
     data["gearbox"]["gears"] = []
     for k, (gid, d) in enumerate(sorted(gears.items(), key=lambda kv: order.index(kv[1]["shaft"]))):
