@@ -83,7 +83,8 @@ from .base import ConfigError, ErrorList, spec
 from .options import RPM, Parameter
 from .gearbox_supports import BEARING_EXPONENTS, ExternalCouplingConfig, GearboxBearingConfig
 from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections
-from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
+from .rotor import (POSITION_TOL, DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at,
+                    node_positions)
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
            "ExternalCouplingConfig", "BEARING_EXPONENTS"]
@@ -104,6 +105,27 @@ class ShaftConfig:
 
     def node(self, position: float, path: str) -> int:
         return _node_at(node_positions(self.sections), position, path)
+
+
+def _with_nodes_at(sections, features) -> tuple:
+    """Sections with element counts given, split where a feature lies between nodes: each
+    piece keeps its share of the section's elements (at least 1), so a scene whose
+    features all sit on nodes is unchanged."""
+    nodes = node_positions(sections)
+    length = nodes[-1]
+    off = sorted({x for x in features if x is not None and 0.0 < x < length
+                  and min(abs(n - x) for n in nodes) > POSITION_TOL * length})
+    if not off:
+        return tuple(sections)
+    out, start = [], 0.0
+    for sec in sections:
+        end = start + sec.length
+        cuts = [start, *(x for x in off if start < x < end), end]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            n = max(1, round(sec.elements * (b - a) / sec.length))
+            out.append(dataclasses.replace(sec, length=b - a, elements=n))
+        start = end
+    return tuple(out)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -236,9 +258,7 @@ class GearboxConfig:
         shafts = list(self.shafts)
         for k, sh in enumerate(shafts):
             given = [sec.elements is not None for sec in sh.sections]
-            if all(given):
-                continue
-            if any(given):
+            if any(given) and not all(given):
                 raise ConfigError(f"shafts[{k}].sections[{given.index(True)}].elements",
                                   "give elements in every section of a shaft or in none "
                                   "(none: the shaft is meshed for you)")
@@ -246,6 +266,9 @@ class GearboxConfig:
                      for x in grp if x.shaft == sh.name]
             feats += [b.outer_position for b in self.bearings if b.outer_shaft == sh.name]
             feats += [d.position for d in sh.discs]
+            if all(given):      # counted by hand: a feature between nodes gets its own node
+                shafts[k] = dataclasses.replace(sh, sections=_with_nodes_at(sh.sections, feats))
+                continue
             rows = [dict(length=s.length, outer_diameter=s.outer_diameter,
                          inner_diameter=s.inner_diameter, material=s.material)
                     for s in sh.sections]

@@ -13,7 +13,7 @@ import math
 
 from .base import ConfigError, ErrorList
 
-__all__ = ["check_layout", "bore_spans", "gear_tip_radius", "time_response_bytes",
+__all__ = ["check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
            "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
 
 #: a bearing may sit this many wall thicknesses outside its bore's span (and no further)
@@ -40,10 +40,13 @@ def check_layout(scene) -> None:
     if scene.housing is not None:
         with errs.catch():
             _check_bore_names(scene.housing)
+    moved: dict[str, tuple[float, float]] = {}
     if scene.gearbox is not None:
+        moved, centre_errs = check_centre_distances(scene.gearbox, scene.housing)
+        errs.errors += centre_errs.errors
         with errs.catch():
             if scene.housing is not None:
-                _check_gearbox_in_housing(scene.gearbox, scene.housing)
+                _check_gearbox_in_housing(scene.gearbox, scene.housing, moved)
             else:
                 _check_free_bearings(scene.gearbox)
         # the gear-mesh geometry needs the model layer: vibrogear.pipeline.validate
@@ -69,7 +72,7 @@ def _check_free_bearings(cfg) -> None:
                               "a housing needs its number of rolling elements (an integer 3..200)")
 
 
-def _check_gearbox_in_housing(cfg, housing) -> None:
+def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
     bores = {b.name: b for b in housing.bores}
     names = ", ".join(repr(n) for n in bores)
     for i, sh in enumerate(cfg.shafts):
@@ -127,9 +130,16 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
         s = cfg.shaft_index(g.shaft, f"{p}.shaft")
         bore = bores[cfg.shafts[s].bore]
         ra, y = gear_tip_radius(g), cfg.shafts[s].y0 + g.position
-        for axis, centre, top, size in (("x", bore.x, L, "length"), ("z", bore.z, H, "height")):
-            low, high = ra + t, top - t - ra       # where the axis may lie
-            if centre < low or centre > high:
+        planned = (moved or {}).get(bore.name, (bore.x, bore.z))
+        for axis, centre, top, size, goal in (("x", bore.x, L, "length", planned[0]),
+                                              ("z", bore.z, H, "height", planned[1])):
+            low, high = ra + t - 1e-9, top - t - ra + 1e-9     # where the axis may lie [m]
+            if goal != centre and not low <= goal <= high:
+                errs.add(ConfigError(f"{p}.teeth", f"with bore {bore.name!r} moved to {axis} = "
+                                     f"{goal:.6g} m (the centre distance), the gear tip (radius "
+                                     f"{ra:.6g} m) needs housing.{size} >= "
+                                     f"{max(goal + ra + t, 2 * (ra + t)):.6g} m"))
+            elif centre < low or centre > high:
                 into = low - centre if centre < low else centre - high
                 where = ("the wall at x = 0" if axis == "x" else "the housing floor") \
                     if centre < low else (f"the wall at x = {L!r}" if axis == "x"
@@ -139,7 +149,8 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
                        f"{high:.6g} m or less, or make housing.{size} >= "
                        f"{centre + ra + t:.6g} m")
                 if low > high:
-                    fix = f"make housing.{size} >= {2 * (ra + t):.6g} m (the gear is wider)"
+                    fix = (f"make housing.{size} >= {2 * (ra + t):.6g} m (tip diameter + two "
+                           f"walls) and move bore {bore.name!r} to {axis} >= {ra + t:.6g} m")
                 errs.add(ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch "
                                      f"radius + module, axis at {axis} = {centre!r} m) reaches "
                                      f"{into:.3g} m into {where} (cavity {axis} = {t!r}.."
@@ -153,6 +164,68 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
                                  f"{W - t - half - cfg.shafts[s].y0:.6g} m or move the shaft's "
                                  "y0"))
     errs.raise_if()
+
+
+def _inverse_involute(inv: float) -> float:
+    a = (3.0 * inv) ** (1.0 / 3.0)
+    for _ in range(50):
+        a -= (math.tan(a) - a - inv) / math.tan(a) ** 2
+    return a
+
+
+def working_centre_distance(ga, gb, mesh) -> float:
+    """a_w of an external pair [m]: m_n (z_a + z_b) / (2 cos beta), scaled by cos(alpha_t) /
+    cos(alpha_wt) when the pair is profile-shifted (ISO 21771)."""
+    beta = math.radians(ga.helix_angle)
+    a = ga.module * (ga.teeth + gb.teeth) / (2.0 * math.cos(beta))
+    shift = mesh.profile_shift_a + mesh.profile_shift_b
+    if shift:
+        an = math.radians(mesh.pressure_angle)
+        at = math.atan(math.tan(an) / math.cos(beta))
+        inv = math.tan(at) - at + 2.0 * math.tan(an) * shift / (ga.teeth + gb.teeth)
+        a *= math.cos(at) / math.cos(_inverse_involute(inv))
+    return a
+
+
+def check_centre_distances(cfg, housing) -> tuple[dict, ErrorList]:
+    """Each mesh's shaft axes must lie its centre distance apart.  The fix moves the axis of
+    gear_b's shaft along the line between the axes.  Returns ({bore name: (x, z)} of the
+    bores the fixes move, for the fixes of the checks that follow; the errors)."""
+    bores = {b.name: b for b in housing.bores} if housing is not None else {}
+    errs, moved = ErrorList(), {}
+    for i, m in enumerate(cfg.meshes):
+        try:
+            ga = cfg.gears[cfg.gear_index(m.gear_a, "")]
+            gb = cfg.gears[cfg.gear_index(m.gear_b, "")]
+            sa = cfg.shafts[cfg.shaft_index(ga.shaft, "")]
+            sb = cfg.shafts[cfg.shaft_index(gb.shaft, "")]
+        except ConfigError:
+            continue                      # reported by [gearbox]'s own checks
+        if housing is not None:
+            if sa.bore not in bores or sb.bore not in bores or bores[sa.bore].x is None \
+                    or bores[sb.bore].x is None:
+                continue
+            A, B = (bores[sa.bore].x, bores[sa.bore].z), (bores[sb.bore].x, bores[sb.bore].z)
+        else:
+            if None in (sa.x, sa.z, sb.x, sb.z):
+                continue
+            A, B = (sa.x, sa.z), (sb.x, sb.z)
+        a = working_centre_distance(ga, gb, m)
+        d = math.hypot(B[0] - A[0], B[1] - A[1])
+        if d == 0.0 or abs(d - a) <= 1e-3 * a:
+            continue
+        new = (A[0] + (B[0] - A[0]) * a / d, A[1] + (B[1] - A[1]) * a / d)
+        what = (f"move bore {sb.bore!r} to x = {new[0]:.6g} m, z = {new[1]:.6g} m"
+                if housing is not None else f"set the x, z of shaft {sb.name!r} to "
+                f"{new[0]:.6g}, {new[1]:.6g} m")
+        if housing is not None:
+            moved[sb.bore] = new
+        errs.add(ConfigError(f"gearbox.meshes[{i}]", f"{ga.name!r} ({ga.teeth} teeth) and "
+                             f"{gb.name!r} ({gb.teeth} teeth) at module {ga.module!r} need "
+                             f"their axes {a:.6g} m apart (centre distance m_n (z_a + z_b) / "
+                             f"(2 cos beta){', profile-shifted' if m.profile_shift_a or m.profile_shift_b else ''}), "
+                             f"they are {d:.6g} m apart: {what}"))
+    return moved, errs
 
 
 def _outside(y: float, span: tuple[float, float]) -> float:
