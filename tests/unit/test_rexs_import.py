@@ -161,3 +161,43 @@ def test_json_missing_attribute(tmp_path, capsys):
     assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert "component 24" in err and "'outer_diameter_begin'" in err
+
+
+def test_import_to_stdout(capsys):
+    assert main(["import", str(XML)]) == 0
+    cap = capsys.readouterr()
+    assert tomllib.loads(cap.out)["scene"]["name"] == "FVA-Industriegetriebe_2stufig_1-4"
+    assert "mapped (" in cap.err
+
+
+def test_unsupported_version_named(tmp_path, capsys):
+    root = _xml_root()
+    root.set("version", "0.9")
+    bad = _write_xml(root, tmp_path / "old.rexs")
+    assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
+    assert "REXS version '0.9'" in capsys.readouterr().err
+
+
+def test_unknown_designation_falls_back_to_boundary_dimensions(tmp_path):
+    """A designation outside the ISO table with inner_diameter / outer_diameter / width in
+    the file: the boundary dimensions are used (and the fallback reported)."""
+    root = _xml_root()
+    b = _component(root, "33")
+    next(a for a in b if a.get("id") == "catalogue_designation").text = "XYZ-123"
+    for aid, val in (("inner_diameter", "50"), ("outer_diameter", "90"), ("width", "20")):
+        ET.SubElement(b, "attribute", id=aid, unit="mm").text = val
+    imp = import_rexs(_write_xml(root, tmp_path / "dims.rexs"))
+    bearing = next(x for x in imp.data["gearbox"]["bearings"] if x["name"] == "bearing33")
+    assert (bearing["bore_diameter"], bearing["outer_diameter"], bearing["width"]) == \
+        (0.05, 0.09, 0.02)
+    assert any("'XYZ-123' is not in the ISO table" in a for a in imp.report.assumed)
+
+
+def test_unknown_designation_without_dimensions_exits_2(tmp_path, capsys):
+    root = _xml_root()
+    b = _component(root, "34")
+    next(a for a in b if a.get("id") == "catalogue_designation").text = "XYZ-123"
+    bad = _write_xml(root, tmp_path / "bad.rexs")
+    assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "component 34" in err and "'catalogue_designation'" in err
