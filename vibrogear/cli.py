@@ -43,6 +43,9 @@ def _parser() -> argparse.ArgumentParser:
     imp.add_argument("model", help="REXS file (.rexs or .rexsj)")
     imp.add_argument("-o", "--output", default=None, metavar="SCENE.toml",
                      help="scene file to write (default: the scene on stdout)")
+    imp.add_argument("--housing", choices=["box"], default=None,
+                     help="generate a parametric box housing around the shafts (default: "
+                     "the casing is rigid ground)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -115,7 +118,7 @@ def _main(argv: list[str] | None) -> int:
         return _cache(args.action)
     if args.command == "import":
         from .pipeline.rexs_import import import_command
-        return import_command(args.model, args.output, argv)
+        return import_command(args.model, args.output, argv, housing=args.housing)
     from .config import ConfigError, load_scene
     from .pipeline.files import check_output_dir
 

@@ -2,6 +2,7 @@
 tests/data/rexs/, Apache-2.0) and of broken copies of it: every bad file exits 2 naming the
 component, and writes nothing."""
 import json
+import math
 import re
 import tomllib
 import xml.etree.ElementTree as ET
@@ -201,3 +202,35 @@ def test_unknown_designation_without_dimensions_exits_2(tmp_path, capsys):
     assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
     assert "component 34" in err and "'catalogue_designation'" in err
+
+
+def test_box_housing_refuses_a_middle_bearing(tmp_path, capsys):
+    """The FVA output shaft's 33014 (component 34) sits 108 mm behind the front wall plane:
+    a two-wall box cannot hold it."""
+    out = tmp_path / "s.toml"
+    assert main(["import", str(XML), "--housing", "box", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "bearing component 34" in err and not out.exists()
+
+
+def test_box_housing_encloses_the_shafts(tmp_path, capsys):
+    """Without bearing 34 every casing bearing sits in the front or back plane: the box is
+    generated, coaxial shafts 12 and 14 share one bore pair, and the scene checks (every gear
+    tip inside the cavity, every bearing at a bore: config/layout.py)."""
+    root = _xml_root()
+    comps, rels = root.find("components"), root.find("relations")
+    comps.remove(_component(root, "34"))
+    for r in [r for r in rels if any(x.get("id") == "34" for x in r)]:
+        rels.remove(r)
+    src = _write_xml(root, tmp_path / "no34.rexs")
+    out = tmp_path / "box.toml"
+    assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 0
+    data = tomllib.loads(out.read_text())
+    bores = {s["name"]: s["bore"] for s in data["gearbox"]["shafts"]}
+    assert bores["shaft12"] == bores["shaft14"] != bores["shaft13"]
+    h = data["housing"]
+    assert len(h["bores"]) == 2
+    # the two axes 190 mm apart in the box
+    (a, b) = h["bores"]
+    assert math.hypot(a["x"] - b["x"], a["z"] - b["z"]) == pytest.approx(0.19, abs=1e-9)
+    assert main(["check", str(out)]) == 0

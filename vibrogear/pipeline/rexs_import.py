@@ -13,7 +13,7 @@ from pathlib import Path
 __all__ = ["import_command"]
 
 
-def import_command(model: str, output: str | None, argv=None) -> int:
+def import_command(model: str, output: str | None, argv=None, housing: str | None = None) -> int:
     from ..config import ConfigError, scene_from_dict
     from ..config.rexs import import_rexs, is_rexs_path
     from ..config.rexs.scene_toml import scene_toml
@@ -25,7 +25,7 @@ def import_command(model: str, output: str | None, argv=None) -> int:
             raise ConfigError(model, "expected a REXS file named *.rexs (XML) or *.rexsj (JSON)")
         if output is not None and Path(output).is_dir():
             raise ConfigError(output, "is a folder; give the scene file to write")
-        imp = import_rexs(model)
+        imp = import_rexs(model, housing=housing)
         scene = scene_from_dict(imp.data)
         validate_scene(scene)
         notes = derived_lines(scene)

@@ -35,8 +35,9 @@ UNSUPPORTED = ("planetary_stage", "planet_carrier", "planet_shaft", "planet_pin"
 KNOWN_IGNORED = {
     "gear_unit": "only its load_duration_fraction per load case is read (the load case "
                  "taken is the longest)",
-    "gear_casing": "the casing is rigid ground here: no FE housing is generated (see the "
-                   "mapping report's note); bearings to the casing are bearings to ground",
+    "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
+                   "(`vibrogear import --housing box` generates a box housing where the "
+                   "casing bearings sit in two walls)",
     "lubricant": "oil data do not enter the dynamic model",
     "cylindrical_stage_gear_data": "read through the stage's gears",
     "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
@@ -220,7 +221,7 @@ def _diameter_at(shaft, pos) -> float:
     return shaft["sections"][-1]["outer_diameter"]
 
 
-def import_rexs(path, *, name: str | None = None) -> RexsImport:
+def import_rexs(path, *, name: str | None = None, housing: str | None = None) -> RexsImport:
     """Read and map a REXS file; ConfigError naming the component and attribute on any
     problem (nothing is written by this function)."""
     from .mapping_supports import analysis_sections, bearings, loads
@@ -332,9 +333,17 @@ def import_rexs(path, *, name: str | None = None) -> RexsImport:
     data["gearbox"]["modes_rpm"] = data["time_response"]["rpm"]
     data["scene"] = {"name": _name(name or Path(src).stem), "analyses": ["modes", "sweep"],
                      "description": f"imported from {Path(src).name} (REXS {model.version})"}
+    skip = ("shaft_section", "material", "cylindrical_gear_flank")
+    if housing == "box":
+        from .mapping_housing import box_housing
+        box_housing(model, data, report)
+        skip += ("gear_casing",)
+        report.mapped += [f"gear_casing {c.id} -> [housing]: a generated box (see assumed)"
+                          for c in model.of_type("gear_casing")]
+    elif housing is not None:
+        raise ConfigError("--housing", f"expected 'box', got {housing!r}")
     for c in model.components.values():
-        if c.type in KNOWN_IGNORED and c.type not in ("shaft_section", "material",
-                                                      "cylindrical_gear_flank"):
+        if c.type in KNOWN_IGNORED and c.type not in skip:
             report.ignored.append(f"{c.type} {c.id}: {KNOWN_IGNORED[c.type]}")
         elif c.type not in KNOWN_IGNORED and c.type not in _MAPPED_TYPES:
             report.ignored.append(f"{c.type} {c.id}: a component type the importer does not "

@@ -58,7 +58,18 @@ def scene_toml(imp, command: str = "") -> str:
                     lines += ["[[gearbox.shafts.sections]]", *_scalars(s)]
             lines.append("")
     for name, table in data.items():
-        if name in ("scene", "gearbox"):
-            continue
-        lines += [f"[{name}]", *_scalars(table), ""]
+        if name not in ("scene", "gearbox"):
+            _table(name, table, lines, array=False)
     return "\n".join(lines)
+
+
+def _table(name: str, table: dict, lines: list, array: bool) -> None:
+    lines += [f"[[{name}]]" if array else f"[{name}]", *_scalars(table)]
+    for k, v in table.items():
+        if isinstance(v, dict):
+            _table(f"{name}.{k}", v, lines, array=False)
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                _table(f"{name}.{k}", item, lines, array=True)
+    if not array:
+        lines.append("")
