@@ -29,8 +29,17 @@ __all__ = ["import_rexs", "RexsImport", "MappingReport", "is_rexs_path", "UNSUPP
 #: component types that carry power in a way the scene cannot express: refused by name
 UNSUPPORTED = ("planetary_stage", "planet_carrier", "planet_shaft", "planet_pin",
                "bevel_gear", "bevel_stage", "worm_gear", "worm_wheel", "worm_stage",
-               "ring_gear", "coupling", "clutch", "spline", "crossed_helical_stage",
-               "hypoid_stage", "spur_gear_planetary_stage")
+               "ring_gear", "coupling", "fixed_coupling", "switchable_coupling",
+               "slide_bearing", "general_gear", "general_stage", "crossed_helical_stage",
+               "hypoid_stage")
+#: shaft-hub connections and shaft details: the hub is taken as rigidly fixed to its shaft
+_RIGID_CONNECTIONS = ("cylindrical_interference_fit", "tapered_interference_fit",
+                      "feather_key_connection", "involute_spline_connection",
+                      "involute_spline_gear_hub", "involute_spline_gear_shaft",
+                      "involute_spline_gear_flank", "involute_spline_stage_gear_data",
+                      "shaft_shoulder", "shaft_shoulder_with_undercut", "rectangular_groove",
+                      "round_groove", "v_notch", "transverse_bore", "notch_effect_shaft_hub_connection",
+                      "fkm_evaluation_point")
 #: read only as data of other components, or known and deliberately left out
 KNOWN_IGNORED = {
     "gear_unit": "only its load_duration_fraction per load case is read (the load case "
@@ -43,6 +52,10 @@ KNOWN_IGNORED = {
     "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
     "shaft_section": "read as the shaft's sections",
     "material": "read through the shafts that reference it",
+    "rolling_bearing_row": "read as its bearing's element set",
+    "rolling_element": "read as its bearing's element set",
+    **{t: "a shaft-hub connection or shaft detail: the hub is taken as rigidly fixed, the "
+          "shaft as its sections" for t in _RIGID_CONNECTIONS},
 }
 #: the material assumed where a shaft references none [Pa, -, kg/m^3]
 STEEL = {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}
@@ -333,7 +346,8 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
     data["gearbox"]["modes_rpm"] = data["time_response"]["rpm"]
     data["scene"] = {"name": _name(name or Path(src).stem), "analyses": ["modes", "sweep"],
                      "description": f"imported from {Path(src).name} (REXS {model.version})"}
-    skip = ("shaft_section", "material", "cylindrical_gear_flank")
+    skip = ("shaft_section", "material", "cylindrical_gear_flank", "rolling_bearing_row",
+            "rolling_element")
     if housing == "box":
         from .mapping_housing import box_housing
         box_housing(model, data, report)

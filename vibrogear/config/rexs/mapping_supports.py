@@ -109,9 +109,17 @@ def bearings(model, shafts, report) -> list[dict]:
                                   f"{' = ' + repr(desig) if desig else ''}: the designation is "
                                   "not in the built-in ISO 15 / ISO 355 table and the file "
                                   "gives no inner_diameter, outer_diameter and width")
+            if c.type == "rolling_bearing_with_detailed_geometry":
+                what = _detailed(model, c, b, kind, report) or what
             b["damping"] = 200.0
-            if c.has("radial_clearance"):
-                b["clearance"] = c.number("radial_clearance", src)
+            attr = next((a for a in ("operating_radial_bearing_clearance",
+                                     "mounted_radial_bearing_clearance",
+                                     "radial_bearing_clearance") if c.has(a)), None)
+            if attr is not None:        # the bearing's radial play; the gap per side is half
+                b["clearance"] = 0.5 * c.number(attr, src)
+                report.mapped.append(f"{c.type} {c.id}: {attr} "
+                                     f"{c.number(attr, src) * 1e6:g} um -> clearance (gap per "
+                                     f"side) {b['clearance'] * 1e6:g} um")
             else:
                 report.assumed.append(f"{c.type} {c.id}: radial clearance 0")
         if c.text("axial_force_absorption", src, "no_direction") != "no_direction":
@@ -125,6 +133,34 @@ def bearings(model, shafts, report) -> list[dict]:
                              f"{what}")
         out.append(b)
     return out
+
+
+def _detailed(model, c, b, kind, report) -> str | None:
+    """The element set of a bearing with detailed geometry: its first rolling_bearing_row
+    (number_of_rolling_elements, reference diameter, pressure_angle) and that row's
+    rolling_element (diameter, length); None where the file has no row."""
+    src = model.source
+    rows = [model.components[r.ref("part")] for r in model.relations_of("assembly")
+            if r.ref("assembly") == c.id and r.ref("part") is not None
+            and model.components[r.ref("part")].type == "rolling_bearing_row"]
+    if not rows:
+        return None
+    row = rows[0]
+    elems = [model.components[r.ref("part")] for r in model.relations_of("assembly")
+             if r.ref("assembly") in (row.id, c.id) and r.ref("part") is not None
+             and model.components[r.ref("part")].type == "rolling_element"]
+    dm_attr = next((a for a in ("reference_diameter", "reference_diameter_rolling_bearing")
+                    if row.has(a)), "reference_diameter")
+    b["elements"] = int(round(row.number("number_of_rolling_elements", src)))
+    b["pitch_diameter"] = row.number(dm_attr, src)
+    if row.has("pressure_angle") and row.number("pressure_angle", src):
+        b["contact_angle"] = row.number("pressure_angle", src)
+    if elems:
+        b["element_diameter"] = elems[0].number("diameter_of_rolling_element", src)
+        if kind != "ball" and elems[0].has("length_of_rolling_element"):
+            b["element_length"] = elems[0].number("length_of_rolling_element", src)
+    report.mapped.append(f"rolling_bearing_row {row.id} -> the element set of {c.type} {c.id}")
+    return "the detailed element set (rolling_bearing_row, rolling_element)"
 
 
 def _case_value(case, cid, attr):
