@@ -234,3 +234,36 @@ def test_box_housing_encloses_the_shafts(tmp_path, capsys):
     (a, b) = h["bores"]
     assert math.hypot(a["x"] - b["x"], a["z"] - b["z"]) == pytest.approx(0.19, abs=1e-9)
     assert main(["check", str(out)]) == 0
+
+
+def test_detailed_geometry_bearing(tmp_path):
+    """A rolling_bearing_with_detailed_geometry with a rolling_bearing_row (REXS 1.2+:
+    number_of_rolling_elements, reference_diameter, pressure_angle) and its rolling_element
+    (diameter_of_rolling_element): the element set is the file's, nothing assumed by the
+    rule."""
+    root = _xml_root()
+    b = _component(root, "33")
+    b.set("type", "rolling_bearing_with_detailed_geometry")
+    comps, rels = root.find("components"), root.find("relations")
+    row = ET.SubElement(comps, "component", id="901", type="rolling_bearing_row", name="row")
+    for aid, unit, val in (("number_of_rolling_elements", "", "10"),
+                           ("reference_diameter", "mm", "70"), ("pressure_angle", "deg", "0")):
+        ET.SubElement(row, "attribute", id=aid, unit=unit).text = val
+    el = ET.SubElement(comps, "component", id="902", type="rolling_element", name="ball")
+    ET.SubElement(el, "attribute", id="diameter_of_rolling_element", unit="mm").text = "12.7"
+    for rid, a, part in (("951", "33", "901"), ("952", "901", "902")):
+        r = ET.SubElement(rels, "relation", id=rid, type="assembly")
+        ET.SubElement(r, "ref", hint="", id=a, role="assembly")
+        ET.SubElement(r, "ref", hint="", id=part, role="part")
+    for x in list(rels):
+        for ref in x:
+            if ref.get("hint") == "rolling_bearing_with_catalog_geometry":
+                ref.set("hint", "rolling_bearing_with_detailed_geometry")
+    next(a for a in b if a.get("id") == "catalogue_designation").text = "unknown"
+    imp = import_rexs(_write_xml(root, tmp_path / "detailed.rexs"))
+    bearing = next(x for x in imp.data["gearbox"]["bearings"] if x["name"] == "bearing33")
+    assert (bearing["elements"], bearing["pitch_diameter"], bearing["element_diameter"]) == \
+        (10, 0.07, 0.0127)
+    sc = load_scene(_write_xml(root, tmp_path / "detailed.rexs"))
+    es = next(x for x in sc.gearbox.bearings if x.name == "bearing33").element_set("b")
+    assert es.count == 10 and "elements" not in es.assumed and "element_diameter" not in es.assumed

@@ -91,6 +91,10 @@ def bearings(model, shafts, report) -> list[dict]:
             if known:
                 b["designation"] = desig
                 what = f"designation {desig!r} (ISO boundary dimensions, element-set rule)"
+            elif c.type == "rolling_bearing_with_detailed_geometry" and \
+                    _detailed(model, c, b, kind, report):
+                b["type"] = "ball" if kind == "ball" else "roller"
+                what = "the detailed element set (rolling_bearing_row, rolling_element)"
             elif all(c.has(k) for k in ("inner_diameter", "outer_diameter", "width")):
                 b.update(bore_diameter=c.number("inner_diameter", src),
                          outer_diameter=c.number("outer_diameter", src),
@@ -109,8 +113,6 @@ def bearings(model, shafts, report) -> list[dict]:
                                   f"{' = ' + repr(desig) if desig else ''}: the designation is "
                                   "not in the built-in ISO 15 / ISO 355 table and the file "
                                   "gives no inner_diameter, outer_diameter and width")
-            if c.type == "rolling_bearing_with_detailed_geometry":
-                what = _detailed(model, c, b, kind, report) or what
             b["damping"] = 200.0
             attr = next((a for a in ("operating_radial_bearing_clearance",
                                      "mounted_radial_bearing_clearance",
