@@ -82,9 +82,8 @@ from typing import ClassVar
 from .base import ConfigError, ErrorList, spec
 from .options import RPM, Parameter
 from .gearbox_supports import BEARING_EXPONENTS, ExternalCouplingConfig, GearboxBearingConfig
-from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections
-from .rotor import (POSITION_TOL, DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at,
-                    node_positions)
+from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections, with_nodes_at
+from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
            "ExternalCouplingConfig", "BEARING_EXPONENTS"]
@@ -105,27 +104,6 @@ class ShaftConfig:
 
     def node(self, position: float, path: str) -> int:
         return _node_at(node_positions(self.sections), position, path)
-
-
-def _with_nodes_at(sections, features) -> tuple:
-    """Sections with element counts given, split where a feature lies between nodes: each
-    piece keeps its share of the section's elements (at least 1), so a scene whose
-    features all sit on nodes is unchanged."""
-    nodes = node_positions(sections)
-    length = nodes[-1]
-    off = sorted({x for x in features if x is not None and 0.0 < x < length
-                  and min(abs(n - x) for n in nodes) > POSITION_TOL * length})
-    if not off:
-        return tuple(sections)
-    out, start = [], 0.0
-    for sec in sections:
-        end = start + sec.length
-        cuts = [start, *(x for x in off if start < x < end), end]
-        for a, b in zip(cuts[:-1], cuts[1:]):
-            n = max(1, round(sec.elements * (b - a) / sec.length))
-            out.append(dataclasses.replace(sec, length=b - a, elements=n))
-        start = end
-    return tuple(out)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -267,7 +245,7 @@ class GearboxConfig:
             feats += [b.outer_position for b in self.bearings if b.outer_shaft == sh.name]
             feats += [d.position for d in sh.discs]
             if all(given):      # counted by hand: a feature between nodes gets its own node
-                shafts[k] = dataclasses.replace(sh, sections=_with_nodes_at(sh.sections, feats))
+                shafts[k] = dataclasses.replace(sh, sections=with_nodes_at(sh.sections, feats))
                 continue
             rows = [dict(length=s.length, outer_diameter=s.outer_diameter,
                          inner_diameter=s.inner_diameter, material=s.material)

@@ -5,13 +5,18 @@ features (gears, bearings, couplings, discs).  :func:`mesh_sections` returns the
 split at every feature position, each piece cut into the fewest elements no longer than
 ``max_element`` (default :data:`MAX_ELEMENT_LENGTH`): so a node lies at every section change
 and every feature, and no Timoshenko element is longer than the limit.  Positions closer
-than :data:`MERGE_TOL` to an existing node are taken as that node.
+than :data:`MERGE_TOL` to an existing node are taken as that node.  A shaft whose sections
+give element counts keeps them; :func:`with_nodes_at` only splits a section where a feature
+falls between its nodes.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
-__all__ = ["mesh_sections", "MAX_ELEMENT_LENGTH", "MERGE_TOL"]
+from .rotor import POSITION_TOL, node_positions
+
+__all__ = ["mesh_sections", "with_nodes_at", "MAX_ELEMENT_LENGTH", "MERGE_TOL"]
 
 #: longest element a meshed shaft gets [m]
 MAX_ELEMENT_LENGTH = 0.02
@@ -40,3 +45,24 @@ def mesh_sections(sections: list[dict], features, *, max_element: float = MAX_EL
             out.append(piece)
         start = end
     return out
+
+
+def with_nodes_at(sections, features) -> tuple:
+    """Sections with element counts given, split where a feature lies between nodes: each
+    piece keeps its share of the section's elements (at least 1), so a scene whose
+    features all sit on nodes is unchanged."""
+    nodes = node_positions(sections)
+    length = nodes[-1]
+    off = sorted({x for x in features if x is not None and 0.0 < x < length
+                  and min(abs(n - x) for n in nodes) > POSITION_TOL * length})
+    if not off:
+        return tuple(sections)
+    out, start = [], 0.0
+    for sec in sections:
+        end = start + sec.length
+        cuts = [start, *(x for x in off if start < x < end), end]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            n = max(1, round(sec.elements * (b - a) / sec.length))
+            out.append(dataclasses.replace(sec, length=b - a, elements=n))
+        start = end
+    return tuple(out)
