@@ -267,3 +267,22 @@ def test_detailed_geometry_bearing(tmp_path):
     sc = load_scene(_write_xml(root, tmp_path / "detailed.rexs"))
     es = next(x for x in sc.gearbox.bearings if x.name == "bearing33").element_set("b")
     assert es.count == 10 and "elements" not in es.assumed and "element_diameter" not in es.assumed
+
+
+def test_coded_arrays_read_as_plain_ones(tmp_path):
+    """REXS allows arrays as base64 of little-endian float64 (``<array code="float64">``);
+    the FVA model with its shaft vectors coded imports to the same scene."""
+    import base64
+    import struct
+    root = _xml_root()
+    for c in root.iter("component"):
+        for a in c:
+            arr = a.find("array")
+            if arr is not None:
+                vals = [float(x.text) for x in arr.findall("c")]
+                for x in list(arr):
+                    arr.remove(x)
+                arr.set("code", "float64")
+                arr.text = base64.b64encode(struct.pack(f"<{len(vals)}d", *vals)).decode()
+    coded = import_rexs(_write_xml(root, tmp_path / "FVA-Industriegetriebe_2stufig_1-4.rexs"))
+    assert coded.data == import_rexs(XML).data

@@ -152,9 +152,23 @@ class RexsModel:
         return None
 
 
+def _decode(code: str, text: str) -> list:
+    """A coded array (REXS: base64 of little-endian float32 / float64 / int32)."""
+    import base64
+    import struct
+    fmt = {"float32": "f", "float64": "d", "int32": "i"}.get(code)
+    if fmt is None:
+        return []
+    raw = base64.b64decode((text or "").strip() + "==", validate=False)
+    n = len(raw) // struct.calcsize(fmt)
+    return list(struct.unpack(f"<{n}{fmt}", raw[:n * struct.calcsize(fmt)]))
+
+
 def _xml_value(attr):
     arr = attr.find("array")
     if arr is not None:
+        if arr.get("code"):
+            return _decode(arr.get("code"), arr.text)
         return [c.text for c in arr.findall("c")]
     mat = attr.find("matrix")
     if mat is not None:
@@ -209,7 +223,10 @@ def _json_components(items, source) -> dict:
         attrs = {}
         for a in c.get("attributes", []) or []:
             kind = next((k for k in _JSON_KINDS if k in a), None)
-            attrs[a.get("id")] = (a.get(kind) if kind else None, a.get("unit", "") or "")
+            value = a.get(kind) if kind else None
+            if kind and kind.endswith("_coded") and isinstance(value, dict):
+                value = _decode(value.get("code", ""), value.get("value", ""))
+            attrs[a.get("id")] = (value, a.get("unit", "") or "")
         out[str(c["id"])] = (c.get("type", ""), c.get("name", "") or "", attrs)
     return out
 
