@@ -184,7 +184,7 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
     report.assumed.append("every shaft: 20 master modes, modal damping ratio 0.01")
     data["gearbox"]["gears"] = []
     for k, (gid, d) in enumerate(sorted(gears.items(), key=lambda kv: order.index(kv[1]["shaft"]))):
-        inner = diameter_at(shafts[d["shaft"]], d["pos"])
+        inner = d["bore"] if d["bore"] else diameter_at(shafts[d["shaft"]], d["pos"])
         data["gearbox"]["gears"].append({
             "name": f"gear{gid}", "shaft": names[d["shaft"]], "position": round(d["pos"], 12),
             "teeth": d["teeth"], "module": d["module"], "helix_angle": abs(d["beta"]),
@@ -193,8 +193,11 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
         report.mapped.append(f"cylindrical_gear {gid} -> gearbox.gears[{k}] 'gear{gid}': "
                              f"z = {d['teeth']}, m_n = {d['module'] * 1e3:g} mm, beta = "
                              f"{d['beta']:g} deg, b = {d['width'] * 1e3:g} mm, x = {d['shift']:g}")
-        report.assumed.append(f"cylindrical_gear {gid}: bore = the shaft's diameter there "
-                              f"({inner * 1e3:g} mm); inertia of the pitch-diameter disc")
+        report.assumed.append(f"cylindrical_gear {gid}: "
+                              + ("" if d["bore"] else f"bore = the shaft's diameter there "
+                                 f"({inner * 1e3:g} mm); ")
+                              + "inertia of the pitch-diameter disc (face width x pitch "
+                              "circle, the shaft's density)")
     data["gearbox"]["meshes"] = []
     for k, (st, ga, gb) in enumerate(_stages_in_flow(stages, gears, order)):
         a, b = gears[ga], gears[gb]

@@ -119,7 +119,9 @@ def gear_data(model, g, src, report):
     shift = holder.number(shift_attr, src) if shift_attr else 0.0
     if shift_attr is None:
         report.assumed.append(f"cylindrical_gear {g.id}: profile shift 0")
+    bore = g.number("inner_diameter", src) if g.has("inner_diameter") else None
     return {"teeth": teeth, "module": mn, "beta": beta, "alpha": alpha, "shift": shift,
+            "bore": bore,
             "width": g.number("face_width", src), "u": g.number("u_coordinate_on_shaft", src)}
 
 
