@@ -9,6 +9,7 @@ from typing import Any
 from .base import ConfigError, ErrorList, build, parse_override, read_toml_file, set_path, spec
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
+from .housing_sizing import fill_housing
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
 from .map_section import MapConfig
 from .nvh_section import NvhConfig
@@ -143,6 +144,7 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
         set_path(data, keys, value)
     if base_dir is not None:
         resolve_file(data, base_dir)
+    fill_housing(data)              # a parametric housing's missing sizes, from the gearbox
     # the sections that take the parameter read it under the model's keys
     return build(GearboxScene if "gearbox" in data else Scene, data)
 
