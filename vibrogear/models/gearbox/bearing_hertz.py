@@ -39,7 +39,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import numpy as np
 from scipy.optimize import brentq
 from scipy.special import ellipe, ellipk
 
@@ -121,7 +120,3 @@ def contact_constant(es, E_mod: float = STEEL_E, nu: float = STEEL_NU) -> HertzC
                          method + (f", contact angle {es.contact_angle:g} deg"
                                    if es.contact_angle else ""))
 
-
-def _check_finite(*values) -> None:
-    if not np.all(np.isfinite(values)):
-        raise ValueError(f"non-finite bearing geometry {values}")
