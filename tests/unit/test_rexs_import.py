@@ -286,3 +286,23 @@ def test_coded_arrays_read_as_plain_ones(tmp_path):
                 arr.text = base64.b64encode(struct.pack(f"<{len(vals)}d", *vals)).decode()
     coded = import_rexs(_write_xml(root, tmp_path / "FVA-Industriegetriebe_2stufig_1-4.rexs"))
     assert coded.data == import_rexs(XML).data
+
+
+def test_additional_mass_becomes_a_disc(tmp_path):
+    root = _xml_root()
+    comps, rels = root.find("components"), root.find("relations")
+    m = ET.SubElement(comps, "component", id="903", type="additional_mass", name="flywheel")
+    for aid, unit, val in (("u_coordinate_on_shaft", "mm", "30"), ("mass_of_component", "kg",
+                           "12.5"), ("moment_of_inertia_u_axis", "kg m^2", "0.08"),
+                           ("moment_of_inertia_v_axis", "kg m^2", "0.05"),
+                           ("moment_of_inertia_w_axis", "kg m^2", "0.05")):
+        ET.SubElement(m, "attribute", id=aid, unit=unit).text = val
+    r = ET.SubElement(rels, "relation", id="953", type="assembly")
+    ET.SubElement(r, "ref", hint="shaft", id="12", role="assembly")
+    ET.SubElement(r, "ref", hint="additional_mass", id="903", role="part")
+    src = _write_xml(root, tmp_path / "mass.rexs")
+    imp = import_rexs(src)
+    assert tomllib.loads(scene_toml(imp)) == imp.data
+    sc = load_scene(src)
+    d = sc.gearbox.shafts[0].discs[0]
+    assert (d.position, d.mass, d.Ip, d.Id) == (0.03, 12.5, 0.08, 0.05)

@@ -134,6 +134,7 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
         d["pos"] = d["u"] - shafts[owner.id]["u0"]
         shafts[owner.id]["features"].add(round(d["pos"], 12))
         gears[g.id] = d
+    discs = _additional_masses(model, shafts, report)
     stages = []
     for st in model.of_type("cylindrical_stage"):
         rel = next((r for r in model.relations_of("stage") if r.ref("stage") == st.id), None)
@@ -175,7 +176,8 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
         n_el = sum(s["elements"] for s in mesh_sections(secs, sh["features"]))
         data["gearbox"]["shafts"].append({
             "name": names[sid], "x": sh["x"], "z": sh["z"], "y0": sh["y0"], "master_count": 20,
-            "modal_damping": 0.01, "material": sh["material"], "sections": secs})
+            "modal_damping": 0.01, "material": sh["material"], "sections": secs,
+            **({"discs": discs[sid]} if discs.get(sid) else {})})
         comments[("shafts", k)] = f"REXS shaft {sid} ({sh['comp'].name})"
         report.mapped.append(f"shaft {sid} ({sh['comp'].name}) -> gearbox.shafts[{k}] "
                              f"{names[sid]!r}: {len(sh['sections'])} sections, meshed into "
@@ -248,7 +250,32 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
     return RexsImport(data, comments, report, model)
 
 
-_MAPPED_TYPES = ("shaft", "cylindrical_gear", "cylindrical_stage", "external_load",
+def _additional_masses(model, shafts, report) -> dict:
+    """REXS ``additional_mass`` parts of a shaft -> rigid discs (mass, polar inertia about u,
+    diametral inertia the mean about v and w); eccentricity is not mapped."""
+    src, out = model.source, {}
+    for c in model.of_type("additional_mass"):
+        owner = model.owner(c.id, "shaft")
+        if owner is None:
+            raise ConfigError(src, f"component {c.id} (additional_mass) is not part of a shaft")
+        sh = shafts[owner.id]
+        pos = round(c.number("u_coordinate_on_shaft", src) - sh["u0"], 12)
+        m = c.number("mass_of_component", src)
+        ip = c.number("moment_of_inertia_u_axis", src, 0.0)
+        idv = [c.number(a, src, 0.0) for a in ("moment_of_inertia_v_axis",
+                                              "moment_of_inertia_w_axis")]
+        disc = {"name": f"mass{c.id}", "position": pos, "mass": m, "Ip": ip,
+                "Id": 0.5 * sum(idv)}
+        out.setdefault(owner.id, []).append(disc)
+        sh["features"].add(pos)
+        report.mapped.append(f"additional_mass {c.id} -> a disc on shaft {owner.id}: {m:g} kg, "
+                             f"Ip = {ip:g} kg m^2, Id = {0.5 * sum(idv):g} kg m^2"
+                             + (" (eccentricity not mapped)" if c.has("eccentricity_vector")
+                                else ""))
+    return out
+
+
+_MAPPED_TYPES = ("additional_mass", "shaft", "cylindrical_gear", "cylindrical_stage", "external_load",
                  "rolling_bearing_with_catalog_geometry", "rolling_bearing_with_detailed_geometry",
                  "concept_bearing")
 

@@ -56,6 +56,8 @@ def scene_toml(imp, command: str = "") -> str:
                 lines += ["[gearbox.shafts.material]", *_scalars(item["material"])]
                 for s in item["sections"]:
                     lines += ["[[gearbox.shafts.sections]]", *_scalars(s)]
+                for d in item.get("discs", []):
+                    lines += ["[[gearbox.shafts.discs]]", *_scalars(d)]
             lines.append("")
     for name, table in data.items():
         if name not in ("scene", "gearbox"):
