@@ -1,4 +1,5 @@
-"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time|map|nvh|runup SCENE``.
+"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time|map|nvh|runup SCENE``,
+``vibrogear import MODEL.rexs [-o SCENE.toml]``.
 
 Exit codes: 0 done; 1 a numerical failure (the message says where and why) or an analysis
 that produced nothing; 2 invalid input (a scene, an option, an output folder, the cache
@@ -29,7 +30,7 @@ def _parser() -> argparse.ArgumentParser:
                             "(and the output folder) only"),
                            *[(k, f"run only the {v} analysis: {VERBS[v].help}") for k, v in SINGLE.items()]]:
         sp = sub.add_parser(name, help=helptext)
-        sp.add_argument("scene", help="scene TOML file")
+        sp.add_argument("scene", help="scene TOML file (or a REXS model, .rexs / .rexsj)")
         sp.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="SECTION.KEY=VALUE", help="override a config value (repeatable); "
                         "list entries as printed, e.g. gearbox.gears[0].teeth=30")
@@ -37,6 +38,14 @@ def _parser() -> argparse.ArgumentParser:
         sp.add_argument("--quiet", action="store_true", help="no progress bars")
         sp.add_argument("--wait", action="store_true", help="if another run holds the output "
                         "folder, wait for it to end (default: exit 2 naming it)")
+    imp = sub.add_parser("import", help="a REXS gearbox model (.rexs XML, .rexsj JSON) as "
+                         "an editable scene TOML, with its mapping report")
+    imp.add_argument("model", help="REXS file (.rexs or .rexsj)")
+    imp.add_argument("-o", "--output", default=None, metavar="SCENE.toml",
+                     help="scene file to write (default: the scene on stdout)")
+    imp.add_argument("--housing", choices=["box"], default=None,
+                     help="generate a parametric box housing around the shafts (default: "
+                     "the casing is rigid ground)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -107,6 +116,9 @@ def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "cache":
         return _cache(args.action)
+    if args.command == "import":
+        from .pipeline.rexs_import import import_command
+        return import_command(args.model, args.output, argv, housing=args.housing)
     from .config import ConfigError, load_scene
     from .pipeline.files import check_output_dir
 
@@ -127,6 +139,9 @@ def _main(argv: list[str] | None) -> int:
         _error("invalid input", exc)
         return EXIT_INPUT
     if args.command == "check":
+        from .pipeline.scene_notes import derived_lines
+        for line in derived_lines(scene):
+            print(f"  {line}")
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
               f" output folder {out}/)")
         return EXIT_OK

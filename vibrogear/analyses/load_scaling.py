@@ -40,7 +40,7 @@ def motor_couplings(gearbox_cfg) -> list[int]:
 def input_torque(gearbox_cfg, scale: float = 1.0) -> float:
     """Transmitted input torque [N m] with every twist scaled by ``scale``: sum over the
     motor couplings of stiffness x twist."""
-    return float(scale * sum(gearbox_cfg.couplings[i].stiffness * gearbox_cfg.couplings[i].twist
+    return float(scale * sum(gearbox_cfg.couplings[i].stiffness * gearbox_cfg.couplings[i].static_twist
                              for i in motor_couplings(gearbox_cfg)))
 
 
@@ -88,13 +88,13 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
                           "coupling: the scene needs a coupling with role = \"motor\"")
     first = gearbox_cfg.couplings[motors[0]]
     torque = input_torque(gearbox_cfg)
-    if not (first.twist > 0 and torque > 0):
+    if not (first.static_twist > 0 and torque > 0):
         raise ConfigError(f"gearbox.couplings[{motors[0]}].twist", f"[{path}] scales the "
                           "scene's twists: the motor coupling needs twist > 0 and stiffness > "
-                          f"0, got twist = {first.twist:g} rad, stiffness = {first.stiffness:g}")
+                          f"0, got twist = {first.static_twist:g} rad, stiffness = {first.stiffness:g}")
     gm = gearbox_model
     _, forces = external_couplings(gearbox_cfg, gm.rotors, gm.shaft_ratios)
     f0_c = modal_vector(PhysicalVector.of(*forces), gm.subsystems) / gm.omega_ref ** 2
     f0 = np.asarray(gm.reduced.forcing.F0, dtype=float)
     return LoadScaling(f0_rest=f0 - f0_c, f0_couplings=f0_c, torque_nominal=torque,
-                       twist_nominal=float(first.twist), motor=first.name)
+                       twist_nominal=float(first.static_twist), motor=first.name)

@@ -20,7 +20,9 @@ import typing
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ConfigError", "spec", "build", "check", "set_path", "parse_override", "as_data",
+from .errors import ConfigError, ErrorList
+
+__all__ = ["ConfigError", "ErrorList", "spec", "build", "check", "set_path", "parse_override", "as_data",
            "check_name", "read_toml_file", "expected_text", "NAME_MAX_LEN"]
 
 #: longest name used as a file or folder name (scene.name)
@@ -28,14 +30,6 @@ NAME_MAX_LEN = 100
 _NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]*")
 #: largest scene file read (a scene is a few kB)
 MAX_SCENE_BYTES = 10 * 2**20
-
-
-class ConfigError(ValueError):
-    """Invalid input: names the field path and the allowed range."""
-
-    def __init__(self, path: str, message: str):
-        self.path = path
-        super().__init__(f"{path}: {message}" if path else message)
 
 
 _MISSING = dataclasses.MISSING
@@ -67,7 +61,7 @@ def _range_text(meta: dict) -> str:
     return " and ".join(parts)
 
 
-def check(value: float, meta: dict, path: str) -> None:
+def check(value: float, meta: dict, path: str, shown: Any = None) -> None:
     """Raise ConfigError if a number lies outside the range in ``meta``."""
     ok = True
     if meta.get("gt") is not None and not value > meta["gt"]:
@@ -79,7 +73,8 @@ def check(value: float, meta: dict, path: str) -> None:
     if meta.get("le") is not None and not value <= meta["le"]:
         ok = False
     if not ok:
-        raise ConfigError(path, f"value {value!r} out of range: must be {_range_text(meta)}")
+        raise ConfigError(path, f"value {value if shown is None else shown!r} out of range: "
+                          f"must be {_range_text(meta)}")
 
 
 def _type_name(tp: Any) -> str:
@@ -147,7 +142,12 @@ def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
         item_tp = args[0] if args else Any
         if len(args) == 2 and args[1] is Ellipsis or len(args) == 1:
             item_meta = {k: meta.get(k) for k in ("gt", "ge", "lt", "le", "choices")}
-            return tuple(_convert(v, item_tp, item_meta, f"{path}[{i}]") for i, v in enumerate(value))
+            errs, items = ErrorList(), []
+            for i, v in enumerate(value):
+                with errs.catch():
+                    items.append(_convert(v, item_tp, item_meta, f"{path}[{i}]"))
+            errs.raise_if()
+            return tuple(items)
         if len(args) != n:
             raise ConfigError(path, f"expected exactly {len(args)} entries, got {n}")
         return tuple(_convert(v, a, {}, f"{path}[{i}]") for i, (v, a) in enumerate(zip(value, args)))
@@ -167,10 +167,10 @@ def _convert(value: Any, tp: Any, meta: dict, path: str) -> Any:
     if tp is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise _type_error(path, tp, meta, value)
-        value = float(value)
+        written, value = value, float(value)
         if not math.isfinite(value):
             raise ConfigError(path, f"must be a finite number, got {value!r}")
-        check(value, meta, path)
+        check(value, meta, path, written)
         return value
     if tp is str:
         if not isinstance(value, str):
@@ -190,11 +190,11 @@ def build(cls: type, data: dict, path: str = "") -> Any:
         raise ConfigError(path, f"expected a table, got {type(data).__name__}")
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
-    unknown = sorted(set(data) - set(fields))
-    if unknown:
-        raise ConfigError(f"{path}.{unknown[0]}" if path else unknown[0],
-                          f"unknown key{_did_you_mean(unknown[0], fields)}; allowed keys: "
-                          f"{', '.join(sorted(fields))}")
+    errs = ErrorList()              # every field's problem, reported together
+    for key in sorted(set(data) - set(fields)):
+        errs.add(ConfigError(f"{path}.{key}" if path else key,
+                             f"unknown key{_did_you_mean(key, fields)}; allowed keys: "
+                             f"{', '.join(sorted(fields))}"))
     kwargs = {}
     for name, f in fields.items():
         fpath = f"{path}.{name}" if path else name
@@ -203,17 +203,19 @@ def build(cls: type, data: dict, path: str = "") -> Any:
                 required = [n for n, g in fields.items() if g.default is _MISSING
                             and g.default_factory is _MISSING]
                 doc = f.metadata.get("doc")
-                raise ConfigError(fpath, f"missing required key: expected "
-                                  f"{expected_text(hints[name], dict(f.metadata))}"
-                                  f"{f' ({doc})' if doc else ''}; required keys here: "
-                                  f"{', '.join(required)}")
+                errs.add(ConfigError(fpath, f"missing required key: expected "
+                                     f"{expected_text(hints[name], dict(f.metadata))}"
+                                     f"{f' ({doc})' if doc else ''}; required keys here: "
+                                     f"{', '.join(required)}"))
             continue
-        kwargs[name] = _convert(data[name], hints[name], dict(f.metadata), fpath)
+        with errs.catch():
+            kwargs[name] = _convert(data[name], hints[name], dict(f.metadata), fpath)
+    errs.raise_if()
     try:
         obj = cls(**kwargs)
     except ConfigError as exc:   # a check in __post_init__ names a field of this section
         raise ConfigError(f"{path}.{exc.path}" if path and exc.path else path or exc.path,
-                          str(exc)[len(exc.path) + 2:] if exc.path else str(exc)) from None
+                          exc.message) from None
     validate = getattr(obj, "validate", None)
     if validate is not None:
         validate(path)

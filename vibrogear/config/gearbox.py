@@ -74,13 +74,15 @@ twist = 0.025               # static twist angle delta phi [rad]
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from .base import ConfigError, spec
+from .base import ConfigError, ErrorList, spec
 from .options import RPM, Parameter
 from .gearbox_supports import BEARING_EXPONENTS, ExternalCouplingConfig, GearboxBearingConfig
+from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections, with_nodes_at
 from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
@@ -223,6 +225,41 @@ class GearboxConfig:
                                           "flexibility; default: on with master_modes = "
                                           "\"frequency\", off with \"count\")")
 
+    max_element_length: float = spec(MAX_ELEMENT_LENGTH, gt=0.0, le=10.0, doc="longest "
+                                     "shaft element [m] where a shaft's sections give no "
+                                     "element counts (meshed for you: nodes at every gear, "
+                                     "bearing, coupling, disc and section change)")
+
+    def __post_init__(self):
+        """Shafts whose sections give no element counts are meshed here: split at every
+        feature, elements no longer than ``max_element_length`` (:mod:`.shaft_mesh`)."""
+        shafts = list(self.shafts)
+        for k, sh in enumerate(shafts):
+            given = [sec.elements is not None for sec in sh.sections]
+            if any(given) and not all(given):
+                raise ConfigError(f"shafts[{k}].sections[{given.index(True)}].elements",
+                                  "give elements in every section of a shaft or in none "
+                                  "(none: the shaft is meshed for you)")
+            feats = [x.position for grp in (self.gears, self.bearings, self.couplings)
+                     for x in grp if x.shaft == sh.name]
+            feats += [b.outer_position for b in self.bearings if b.outer_shaft == sh.name]
+            feats += [d.position for d in sh.discs]
+            if all(given):      # counted by hand: a feature between nodes gets its own node
+                shafts[k] = dataclasses.replace(sh, sections=with_nodes_at(sh.sections, feats))
+                continue
+            rows = [dict(length=s.length, outer_diameter=s.outer_diameter,
+                         inner_diameter=s.inner_diameter, material=s.material)
+                    for s in sh.sections]
+            split = mesh_sections(rows, feats, max_element=self.max_element_length,
+                                  path=f"shafts[{k}].sections")
+            secs = tuple(ShaftSectionConfig(length=r["length"], outer_diameter=r["outer_diameter"],
+                                            inner_diameter=r["inner_diameter"],
+                                            material=r["material"],
+                                            elements=r["elements"])
+                         for r in split)
+            shafts[k] = dataclasses.replace(sh, sections=secs)
+        object.__setattr__(self, "shafts", tuple(shafts))
+
     def shaft_index(self, name: str, path: str) -> int:
         for i, s in enumerate(self.shafts):
             if s.name == name:
@@ -249,16 +286,27 @@ class GearboxConfig:
                     raise ConfigError(f"{path}.{group}[{i}].name", f"{item.name!r} used twice")
                 seen.add(item.name)
         occupied: dict[tuple[int, int], str] = {}
+        errs = ErrorList()            # every misplaced part, reported together
         for group in ("gears", "bearings", "couplings"):
             for i, item in enumerate(getattr(self, group)):
                 p = f"{path}.{group}[{i}]"
-                s = self.shaft_index(item.shaft, f"{p}.shaft")
-                node = self.shafts[s].node(item.position, f"{p}.position")
-                if group == "gears":
-                    if (s, node) in occupied:
-                        raise ConfigError(f"{p}.position", f"node already carries gear "
-                                          f"{occupied[(s, node)]!r}")
-                    occupied[(s, node)] = item.name
+                with errs.catch():
+                    s = self.shaft_index(item.shaft, f"{p}.shaft")
+                    node = self.shafts[s].node(item.position, f"{p}.position")
+                    if group == "gears":
+                        if (s, node) in occupied:
+                            raise ConfigError(f"{p}.position", f"node already carries gear "
+                                              f"{occupied[(s, node)]!r}")
+                        occupied[(s, node)] = item.name
+        errs.raise_if()
+        for i, b in enumerate(self.bearings):
+            if b.outer_shaft:
+                p = f"{path}.bearings[{i}]"
+                so = self.shaft_index(b.outer_shaft, f"{p}.outer_shaft")
+                if b.outer_shaft == b.shaft:
+                    raise ConfigError(f"{p}.outer_shaft", "must differ from shaft (the shaft "
+                                      "the outer ring sits in)")
+                self.shafts[so].node(b.outer_position, f"{p}.outer_position")
         bearing_nodes: dict[tuple[int, int], int] = {}
         for i, b in enumerate(self.bearings):
             s = self.shaft_index(b.shaft, "")

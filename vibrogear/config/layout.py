@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import math
 
-from .base import ConfigError
+from .base import ConfigError, ErrorList
 
-__all__ = ["check_layout", "bore_spans", "gear_tip_radius", "time_response_bytes",
+__all__ = ["check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
            "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
 
 #: a bearing may sit this many wall thicknesses outside its bore's span (and no further)
@@ -36,16 +36,24 @@ def gear_tip_radius(gear) -> float:
 def check_layout(scene) -> None:
     """Every cross-section check that needs no model: bores, bearings, gears in the cavity,
     rolling elements, and the size of a time response."""
+    errs = ErrorList()
     if scene.housing is not None:
-        _check_bore_names(scene.housing)
+        with errs.catch():
+            _check_bore_names(scene.housing)
+    moved: dict[str, tuple[float, float]] = {}
     if scene.gearbox is not None:
-        if scene.housing is not None:
-            _check_gearbox_in_housing(scene.gearbox, scene.housing)
-        else:
-            _check_free_bearings(scene.gearbox)
+        moved, centre_errs = check_centre_distances(scene.gearbox, scene.housing)
+        errs.errors += centre_errs.errors
+        with errs.catch():
+            if scene.housing is not None:
+                _check_gearbox_in_housing(scene.gearbox, scene.housing, moved)
+            else:
+                _check_free_bearings(scene.gearbox)
         # the gear-mesh geometry needs the model layer: vibrogear.pipeline.validate
     if scene.time_response is not None and "time_response" in scene.scene.analyses:
-        _check_time_response_size(scene)
+        with errs.catch():
+            _check_time_response_size(scene)
+    errs.raise_if()
 
 
 def _check_bore_names(housing) -> None:
@@ -59,12 +67,12 @@ def _check_bore_names(housing) -> None:
 
 def _check_free_bearings(cfg) -> None:
     for i, b in enumerate(cfg.bearings):
-        if b.type != "spring" and b.elements is None:
+        if b.type != "spring" and b.elements is None and b.element_set() is None:
             raise ConfigError(f"gearbox.bearings[{i}].elements", f"a {b.type!r} bearing without "
                               "a housing needs its number of rolling elements (an integer 3..200)")
 
 
-def _check_gearbox_in_housing(cfg, housing) -> None:
+def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
     bores = {b.name: b for b in housing.bores}
     names = ", ".join(repr(n) for n in bores)
     for i, sh in enumerate(cfg.shafts):
@@ -83,9 +91,12 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
                                   "y axis (shafts run along y)")
         return
     t = housing.wall_thickness
+    errs = ErrorList()
     used: dict[tuple[str, str], int] = {}
     for i, b in enumerate(cfg.bearings):
         p = f"gearbox.bearings[{i}]"
+        if b.outer_shaft:                 # between two shafts: no bore
+            continue
         sh = cfg.shafts[cfg.shaft_index(b.shaft, f"{p}.shaft")]
         bore = bores[sh.bore]
         y = sh.y0 + b.position
@@ -93,41 +104,128 @@ def _check_gearbox_in_housing(cfg, housing) -> None:
         side = min(spans, key=lambda s: _outside(y, spans[s]))
         lo, hi = spans[side]
         if _outside(y, spans[side]) > BEARING_SLACK_WALLS * t:
-            raise ConfigError(f"{p}.position", f"bearing at housing y = {y:.6g} m (shaft y0 + "
-                              f"position) is {_outside(y, spans[side]):.3g} m from the nearest "
-                              f"bore of {sh.bore!r} ({side}, y = {lo:.6g}..{hi:.6g} m); it must lie "
-                              f"within one wall thickness ({t:g} m) of a bore: check the shaft's "
-                              "y0 and the bearing position")
+            centre = 0.5 * (lo + hi)
+            errs.add(ConfigError(f"{p}.position", f"bearing at housing y = {y:.6g} m (shaft y0 "
+                                 f"{sh.y0!r} + position {b.position!r}) is "
+                                 f"{_outside(y, spans[side]):.3g} m from the nearest bore of "
+                                 f"{sh.bore!r} ({side}, y = {lo:.6g}..{hi:.6g} m); it must lie "
+                                 f"within one wall thickness ({t!r} m) of a bore: set position = "
+                                 f"{centre - sh.y0:.6g} (the {side} bore's middle) or move the "
+                                 "shaft's y0"))
+            continue
         if (sh.bore, side) in used:
-            raise ConfigError(f"{p}.position", f"the {side} bore of {sh.bore!r} already carries "
-                              f"gearbox.bearings[{used[(sh.bore, side)]}]: one bearing per bore")
+            errs.add(ConfigError(f"{p}.position", f"the {side} bore of {sh.bore!r} already "
+                                 f"carries gearbox.bearings[{used[(sh.bore, side)]}]: one "
+                                 "bearing per bore"))
+            continue
         used[(sh.bore, side)] = i
         if b.elements is not None and b.elements != bore.rolling_elements:
-            raise ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
-                              f"{bore.rolling_elements} coupling points (housing.bores "
-                              f"rolling_elements); give {bore.rolling_elements} or leave "
-                              f"elements out, got {b.elements}")
+            errs.add(ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
+                                 f"{bore.rolling_elements} coupling points (housing.bores "
+                                 f"rolling_elements); give {bore.rolling_elements} or leave "
+                                 f"elements out, got {b.elements}"))
     L, W, H = housing.length, housing.width, housing.height
     for k, g in enumerate(cfg.gears):
         p = f"gearbox.gears[{k}]"
         s = cfg.shaft_index(g.shaft, f"{p}.shaft")
         bore = bores[cfg.shafts[s].bore]
         ra, y = gear_tip_radius(g), cfg.shafts[s].y0 + g.position
-        for axis, centre, top, low_name, high_name in (
-                ("x", bore.x, L, "the wall at x = 0", f"the wall at x = {L:g}"),
-                ("z", bore.z, H, "the housing floor", "the housing top")):
-            for gap, where in ((centre - ra - t, low_name), (top - t - centre - ra, high_name)):
-                if gap < 0:
-                    raise ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch radius "
-                                      f"+ module, axis at {axis} = {centre:.6g} m) reaches "
-                                      f"{-gap:.3g} m into {where} (cavity {axis} = {t:g}.."
-                                      f"{top - t:g} m): use a smaller gear or move the bore "
-                                      f"{bore.name!r}")
+        planned = (moved or {}).get(bore.name, (bore.x, bore.z))
+        for axis, centre, top, size, goal in (("x", bore.x, L, "length", planned[0]),
+                                              ("z", bore.z, H, "height", planned[1])):
+            low, high = ra + t - 1e-9, top - t - ra + 1e-9     # where the axis may lie [m]
+            if goal != centre and not low <= goal <= high:
+                errs.add(ConfigError(f"{p}.teeth", f"with bore {bore.name!r} moved to {axis} = "
+                                     f"{goal:.6g} m (the centre distance), the gear tip (radius "
+                                     f"{ra:.6g} m) needs housing.{size} >= "
+                                     f"{max(goal + ra + t, 2 * (ra + t)):.6g} m"))
+            elif centre < low or centre > high:
+                into = low - centre if centre < low else centre - high
+                where = ("the wall at x = 0" if axis == "x" else "the housing floor") \
+                    if centre < low else (f"the wall at x = {L!r}" if axis == "x"
+                                          else "the housing top")
+                fix = (f"move bore {bore.name!r} to {axis} = {low:.6g} m or more"
+                       if centre < low else f"move bore {bore.name!r} to {axis} = "
+                       f"{high:.6g} m or less, or make housing.{size} >= "
+                       f"{centre + ra + t:.6g} m")
+                if low > high:
+                    fix = (f"make housing.{size} >= {2 * (ra + t):.6g} m (tip diameter + two "
+                           f"walls) and move bore {bore.name!r} to {axis} >= {ra + t:.6g} m")
+                errs.add(ConfigError(f"{p}.teeth", f"gear tip (radius {ra:.6g} m = pitch "
+                                     f"radius + module, axis at {axis} = {centre!r} m) reaches "
+                                     f"{into:.3g} m into {where} (cavity {axis} = {t!r}.."
+                                     f"{top - t:.6g} m): {fix}"))
         half = 0.5 * g.width
         if y - half < t or y + half > W - t:
-            raise ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
-                              f"{y + half:.6g} m) is not inside the cavity (y = {t:g}.."
-                              f"{W - t:g} m): check the shaft's y0 and the gear position")
+            errs.add(ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
+                                 f"{y + half:.6g} m) is not inside the cavity (y = {t!r}.."
+                                 f"{W - t:.6g} m): set position between "
+                                 f"{t + half - cfg.shafts[s].y0:.6g} and "
+                                 f"{W - t - half - cfg.shafts[s].y0:.6g} m or move the shaft's "
+                                 "y0"))
+    errs.raise_if()
+
+
+def _inverse_involute(inv: float) -> float:
+    a = (3.0 * inv) ** (1.0 / 3.0)
+    for _ in range(50):
+        a -= (math.tan(a) - a - inv) / math.tan(a) ** 2
+    return a
+
+
+def working_centre_distance(ga, gb, mesh) -> float:
+    """a_w of an external pair [m]: m_n (z_a + z_b) / (2 cos beta), scaled by cos(alpha_t) /
+    cos(alpha_wt) when the pair is profile-shifted (ISO 21771)."""
+    beta = math.radians(ga.helix_angle)
+    a = ga.module * (ga.teeth + gb.teeth) / (2.0 * math.cos(beta))
+    shift = mesh.profile_shift_a + mesh.profile_shift_b
+    if shift:
+        an = math.radians(mesh.pressure_angle)
+        at = math.atan(math.tan(an) / math.cos(beta))
+        inv = math.tan(at) - at + 2.0 * math.tan(an) * shift / (ga.teeth + gb.teeth)
+        a *= math.cos(at) / math.cos(_inverse_involute(inv))
+    return a
+
+
+def check_centre_distances(cfg, housing) -> tuple[dict, ErrorList]:
+    """Each mesh's shaft axes must lie its centre distance apart.  The fix moves the axis of
+    gear_b's shaft along the line between the axes.  Returns ({bore name: (x, z)} of the
+    bores the fixes move, for the fixes of the checks that follow; the errors)."""
+    bores = {b.name: b for b in housing.bores} if housing is not None else {}
+    errs, moved = ErrorList(), {}
+    for i, m in enumerate(cfg.meshes):
+        try:
+            ga = cfg.gears[cfg.gear_index(m.gear_a, "")]
+            gb = cfg.gears[cfg.gear_index(m.gear_b, "")]
+            sa = cfg.shafts[cfg.shaft_index(ga.shaft, "")]
+            sb = cfg.shafts[cfg.shaft_index(gb.shaft, "")]
+        except ConfigError:
+            continue                      # reported by [gearbox]'s own checks
+        if housing is not None:
+            if sa.bore not in bores or sb.bore not in bores or bores[sa.bore].x is None \
+                    or bores[sb.bore].x is None:
+                continue
+            A, B = (bores[sa.bore].x, bores[sa.bore].z), (bores[sb.bore].x, bores[sb.bore].z)
+        else:
+            if None in (sa.x, sa.z, sb.x, sb.z):
+                continue
+            A, B = (sa.x, sa.z), (sb.x, sb.z)
+        a = working_centre_distance(ga, gb, m)
+        d = math.hypot(B[0] - A[0], B[1] - A[1])
+        if d == 0.0 or abs(d - a) <= 1e-3 * a:
+            continue
+        new = (A[0] + (B[0] - A[0]) * a / d, A[1] + (B[1] - A[1]) * a / d)
+        what = (f"move bore {sb.bore!r} to x = {new[0]:.6g} m, z = {new[1]:.6g} m"
+                if housing is not None else f"set the x, z of shaft {sb.name!r} to "
+                f"{new[0]:.6g}, {new[1]:.6g} m")
+        if housing is not None:
+            moved[sb.bore] = new
+        errs.add(ConfigError(f"gearbox.meshes[{i}]", f"{ga.name!r} ({ga.teeth} teeth) and "
+                             f"{gb.name!r} ({gb.teeth} teeth) at module {ga.module!r} need "
+                             f"their axes {a:.6g} m apart (centre distance m_n (z_a + z_b) / "
+                             f"(2 cos beta){', profile-shifted' if m.profile_shift_a or m.profile_shift_b else ''}), "
+                             f"they are {d:.6g} m apart: {what}"))
+    return moved, errs
 
 
 def _outside(y: float, span: tuple[float, float]) -> float:

@@ -86,7 +86,7 @@ class MapConfig(SweepOptions):
         if not motors:
             raise ConfigError("gearbox.couplings", f"[{path}] scales the load of the motor "
                               "coupling: the scene needs a coupling with role = \"motor\"")
-        if not gearbox.couplings[motors[0]].twist > 0:
+        if not gearbox.couplings[motors[0]].static_twist > 0:
             raise ConfigError(f"gearbox.couplings[{motors[0]}].twist", f"[{path}] scales the "
                               "scene's twists: the motor coupling needs twist > 0 (any value "
                               "sets the load pattern; the map's range sets the load), got 0")

@@ -121,7 +121,7 @@ class NnmConfig:
                     raise ConfigError(f"{path}.{key}", f"expected an elastic-mode index 0 .. 0 "
                                       f"(the impact pair has one mode), got {j}")
         if gearbox is not None and self.energy_unit == "onset" and self.amplitude_min is None:
-            loaded = (any(c.twist for c in gearbox.couplings) or any(gearbox.gravity)
+            loaded = (any(c.static_twist for c in gearbox.couplings) or any(gearbox.gravity)
                       or any(g.free and g.drag_torque for g in gearbox.gears))
             # a contact bearing with a clearance is off its switch at x = 0: the analysis
             # decides from the model

@@ -93,7 +93,10 @@ class ShaftSectionConfig:
     length: float = spec(gt=0.0, doc="[m]")
     outer_diameter: float = spec(gt=0.0, doc="[m]")
     inner_diameter: float = spec(0.0, ge=0.0, doc="[m], 0 for a solid shaft")
-    elements: int = spec(1, ge=1, le=100_000, doc="Timoshenko elements in the section")
+    elements: int | None = spec(None, ge=1, le=100_000, doc="Timoshenko elements in the "
+                                "section; default: meshed for you (a gearbox shaft: nodes at "
+                                "every gear, bearing, coupling and disc, elements no longer "
+                                "than [gearbox] max_element_length; a [rotor] section: 1)")
     material: MaterialConfig | None = spec(None, doc="overrides [rotor.material]")
 
     def validate(self, path: str) -> None:
@@ -204,7 +207,8 @@ def node_positions(sections: tuple[ShaftSectionConfig, ...]) -> list[float]:
     nodes = [0.0]
     for s in sections:
         z0 = nodes[-1]
-        nodes.extend(z0 + s.length * (k + 1) / s.elements for k in range(s.elements))
+        n = s.elements or 1
+        nodes.extend(z0 + s.length * (k + 1) / n for k in range(n))
     return nodes
 
 

@@ -6,10 +6,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import ConfigError, build, parse_override, read_toml_file, set_path, spec
+from .base import ConfigError, ErrorList, build, parse_override, read_toml_file, set_path, spec
 from .findings_section import FindingsConfig
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
+from .housing_sizing import fill_housing
 from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
 from .map_section import MapConfig
 from .nvh_section import NvhConfig
@@ -84,31 +85,42 @@ class Scene:
         if self.gearbox is not None and self.rotor is not None:
             raise ConfigError("rotor", "a gearbox scene defines its shafts in [[gearbox.shafts]]; "
                               "[rotor] is for single-rotor scenes")
+        errs = ErrorList()          # every problem found, reported together
         for i, analysis in enumerate(self.scene.analyses):
-            allowed = ANALYSIS_MODELS[analysis]
-            if not any(getattr(self, s) is not None for s in allowed):
-                raise ConfigError(f"scene.analyses[{i}]", f"{analysis!r} needs a model section "
-                                  f"[{'] or ['.join(allowed)}]")
-            section = ANALYSIS_SECTION[analysis]
-            if section is not None and getattr(self, section) is None:
-                raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
-            if analysis == "campbell" and self.rotor is not None and self.rotor.campbell is None:
-                raise ConfigError("rotor.campbell", "missing section: analysis 'campbell' needs "
-                                  "[rotor.campbell] (rpm_max, ...)")
+            with errs.catch():
+                self._check_analysis(i, analysis)
         if self.housing_sweep is not None and self.housing is not None:
-            self.housing_sweep.housing_points(self.housing, "housing_sweep")
+            with errs.catch():
+                self.housing_sweep.housing_points(self.housing, "housing_sweep")
         if self.map is not None and self.gearbox is not None and "map" in self.scene.analyses:
-            self.map.check_couplings(self.gearbox, "map")
+            with errs.catch():
+                self.map.check_couplings(self.gearbox, "map")
         # scene.analyses is the verb alone for `vibrogear runup` / `vibrogear nnm` (the CLI
         # rebuilds the scene with it), so these also run for a verb the scene does not list
         if self.runup is not None and self.gearbox is not None and "runup" in self.scene.analyses:
-            self.runup.check_gearbox(self.gearbox, "runup")
+            with errs.catch():
+                self.runup.check_gearbox(self.gearbox, "runup")
         if self.nnm is not None and "nnm" in self.scene.analyses:
-            self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
+            with errs.catch():
+                self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
         from .layout import check_layout        # checks across sections, in one place
-        check_layout(self)
+        with errs.catch():
+            check_layout(self)
+        errs.raise_if()
         if self.optimize is not None:           # the evaluated scene at the variables' bounds
             self.optimize.check_scene(self, scene_from_dict, "optimize")
+
+    def _check_analysis(self, i: int, analysis: str) -> None:
+        allowed = ANALYSIS_MODELS[analysis]
+        if not any(getattr(self, s) is not None for s in allowed):
+            raise ConfigError(f"scene.analyses[{i}]", f"{analysis!r} needs a model section "
+                              f"[{'] or ['.join(allowed)}]")
+        section = ANALYSIS_SECTION[analysis]
+        if section is not None and getattr(self, section) is None:
+            raise ConfigError(section, f"missing section: analysis {analysis!r} needs [{section}]")
+        if analysis == "campbell" and self.rotor is not None and self.rotor.campbell is None:
+            raise ConfigError("rotor.campbell", "missing section: analysis 'campbell' needs "
+                              "[rotor.campbell] (rpm_max, ...)")
 
 
 @dataclass(frozen=True)
@@ -134,13 +146,16 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
         set_path(data, keys, value)
     if base_dir is not None:
         resolve_file(data, base_dir)
+    fill_housing(data)              # a parametric housing's missing sizes, from the gearbox
     # the sections that take the parameter read it under the model's keys
     return build(GearboxScene if "gearbox" in data else Scene, data)
 
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
-    """Read, override (``section.key=value``) and validate a scene file."""
-    data = read_toml(path)
+    """Read, override (``section.key=value``) and validate a scene file; a REXS model
+    (``.rexs``, ``.rexsj``) is imported first (:mod:`.rexs`)."""
+    from .rexs import import_rexs, is_rexs_path
+    data = import_rexs(path).data if is_rexs_path(path) else read_toml(path)
     try:
         return scene_from_dict(data, overrides, base_dir=Path(path).parent)
     except RecursionError:

@@ -338,7 +338,7 @@ def external_couplings(cfg, rotors, shaft_p):
         s = cfg.shaft_index(c.shaft, "")
         dof = rotors[s].dof(rotors[s].node_at(c.position), "psi")
         sense = 1.0 if shaft_p[s] > 0 else -1.0
-        disc_angle = sense * c.twist * (1.0 if c.role == "motor" else -1.0)
+        disc_angle = sense * c.static_twist * (1.0 if c.role == "motor" else -1.0)
         links.append(LinearLink(c.name, PhysicalVector.of((s, [dof], [1.0])), c.stiffness,
                                 c.damping))
         forces.append((s, [dof], [c.stiffness * disc_angle]))

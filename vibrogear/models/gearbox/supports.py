@@ -15,10 +15,11 @@ import math
 import numpy as np
 
 from ...config.base import ConfigError
+from .bearing_hertz import contact_constant
 from .couplings import bearing_contact_parameters, bearing_geometry
 from .synthesis import ContactLaw, LinearBlock, LinearLink, PhysicalVector
 
-__all__ = ["housing_to_rotor", "bearings", "gravity_load"]
+__all__ = ["housing_to_rotor", "bearings", "gravity_load", "contact_stiffness"]
 
 
 def housing_to_rotor(v) -> np.ndarray:
@@ -76,6 +77,15 @@ def _spring_links(name, centre, K, C):
     return links, blocks
 
 
+def contact_stiffness(b, es) -> float:
+    """The contact constant of one element of bearing ``b`` [N/m^p]: its ``stiffness``
+    override, else the Hertz constant of its element set ``es``
+    (:mod:`~vibrogear.models.gearbox.bearing_hertz`)."""
+    if b.stiffness is not None or es is None:
+        return b.stiffness
+    return contact_constant(es).stiffness
+
+
 def bearings(scene, cfg, rotors, hm):
     """(contacts, links, blocks) of ``gearbox.bearings``: rolling elements (one-sided
     contacts journal -> bore point or ground), axial springs, radial damping, spring
@@ -87,8 +97,17 @@ def bearings(scene, cfg, rotors, hm):
         s = cfg.shaft_index(b.shaft, "")
         sh, rotor = cfg.shafts[s], rotors[s]
         jd = rotor.node_dofs(rotor.node_at(b.position))
-        ring = None
-        if hm is not None:
+        ring = outer = None
+        es = b.element_set(path)
+        if b.outer_shaft:                       # a shaft running in another
+            so = cfg.shaft_index(b.outer_shaft, f"{path}.outer_shaft")
+            outer = (so, rotors[so].node_dofs(rotors[so].node_at(b.outer_position)))
+            n = b.elements or (es.count if es is not None else 0)
+            if not n and b.type != "spring":
+                raise ConfigError(f"{path}.elements", "a bearing between two shafts needs "
+                                  "its number of rolling elements (3..200) or its geometry")
+            angles = math.radians(b.angle_offset) + 2 * np.pi * np.arange(n) / max(n, 1)
+        elif hm is not None:
             names = {f"{sh.bore}/front", f"{sh.bore}/back"}
             bore = _bore_of(hm, names, sh.y0 + b.position)
             if bore in used:
@@ -104,15 +123,17 @@ def bearings(scene, cfg, rotors, hm):
             P = hm.bore_values.shape[1]
             ring = [(bore * P + k) * 3 for k in range(n)]          # first housing index
         else:
-            if b.elements is None and b.type != "spring":
+            n = b.elements or (es.count if es is not None else 0)
+            if not n and b.type != "spring":
                 raise ConfigError(f"{path}.elements", "without a housing give the number of "
-                                  "rolling elements (3..200)")
-            n = b.elements or 0
+                                  "rolling elements (3..200) or the bearing's geometry")
             angles = math.radians(b.angle_offset) + 2 * np.pi * np.arange(n) / max(n, 1)
 
         def centre(direction_rotor):
             """Journal minus bore-centre displacement along a rotor-frame unit vector."""
             parts = [(s, jd[:3], direction_rotor)]
+            if outer is not None:
+                parts.append((outer[0], outer[1][:3], -np.asarray(direction_rotor, float)))
             if ring is not None:
                 h = housing_to_rotor(direction_rotor)           # same map back
                 idx = [r0 + c for r0 in ring for c in range(3)]
@@ -131,9 +152,12 @@ def bearings(scene, cfg, rotors, hm):
             for lab, e in (("x", ex), ("y", ey)):
                 links.append(LinearLink(f"{b.name}:damping {lab}", centre(e), 0.0, b.damping))
         geom = bearing_geometry(angles)
-        law = bearing_contact_parameters(b.stiffness, b.clearance, b.exponent, b.contact_damping)
+        law = bearing_contact_parameters(contact_stiffness(b, es), b.clearance, b.exponent,
+                                         b.contact_damping)
         for k in range(n):
             parts = [(s, jd, geom.journal[k])]
+            if outer is not None:               # the outer ring moves with the outer shaft
+                parts.append((outer[0], outer[1], -geom.journal[k]))
             if ring is not None:
                 parts.append((len(rotors), [ring[k] + c for c in range(3)],
                               housing_to_rotor(geom.housing[k])))

@@ -164,7 +164,7 @@ def build_rotor_model(cfg: RotorConfig) -> RotorModel:
         for key, val in (("do", s.outer_diameter), ("di", s.inner_diameter), ("E", mat.E),
                          ("G", mat.shear_modulus), ("rho", mat.rho), ("nu", mat.poisson),
                          ("eta", mat.internal_damping)):
-            props[key].extend([val] * s.elements)
+            props[key].extend([val] * (s.elements or 1))
     rho0 = cfg.material.rho
     node = cfg.node_of
     discs = [(node(d.position), *_inertia(d, rho0)) for d in cfg.discs]

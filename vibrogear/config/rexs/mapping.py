@@ -1,0 +1,336 @@
+"""REXS components -> scene tables: shafts, cylindrical gears, cylindrical stages (meshes),
+and the analysis sections; bearings and loads in :mod:`.mapping_supports`.
+
+Frames.  A REXS model places every part by its ``support_vector`` and ``u_axis_vector`` in
+the gear unit's frame.  All shafts must be parallel with the same u direction a (else exit
+2).  The scene's housing frame takes y = a (along the shafts, y = 0 at the start of the
+shaft that starts first), x = the gear unit's z projected normal to a (its x where a is
+along z) and z = x cross y; a shaft's axis is its support point in (x, z).
+
+Power flow.  ``shafts[0]`` (the driving shaft of the scene) is the shaft with
+``defines_speed`` (else the one carrying the torque-defining load, else the first); the
+stages order the other shafts outwards from it, and each mesh's ``gear_a`` is the gear on
+the shaft nearer the driving shaft.
+"""
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..base import ConfigError, NAME_MAX_LEN
+from ..shaft_mesh import mesh_sections
+from .mapping_shafts import STEEL, diameter_at, gear_data, shafts_of
+from .reader import RexsModel, read_rexs
+
+__all__ = ["import_rexs", "RexsImport", "MappingReport", "is_rexs_path", "UNSUPPORTED",
+           "STEEL"]
+
+#: component types that carry power in a way the scene cannot express: refused by name
+UNSUPPORTED = ("planetary_stage", "planet_carrier", "planet_shaft", "planet_pin",
+               "bevel_gear", "bevel_stage", "worm_gear", "worm_wheel", "worm_stage",
+               "ring_gear", "coupling", "fixed_coupling", "switchable_coupling",
+               "slide_bearing", "general_gear", "general_stage", "crossed_helical_stage",
+               "hypoid_stage")
+#: shaft-hub connections and shaft details: the hub is taken as rigidly fixed to its shaft
+_RIGID_CONNECTIONS = ("cylindrical_interference_fit", "tapered_interference_fit",
+                      "feather_key_connection", "involute_spline_connection",
+                      "involute_spline_gear_hub", "involute_spline_gear_shaft",
+                      "involute_spline_gear_flank", "involute_spline_stage_gear_data",
+                      "shaft_shoulder", "shaft_shoulder_with_undercut", "rectangular_groove",
+                      "round_groove", "v_notch", "transverse_bore", "notch_effect_shaft_hub_connection",
+                      "fkm_evaluation_point")
+#: read only as data of other components, or known and deliberately left out
+KNOWN_IGNORED = {
+    "gear_unit": "only its load_duration_fraction per load case is read (the load case "
+                 "taken is the longest)",
+    "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
+                   "(`vibrogear import --housing box` generates a box housing where the "
+                   "casing bearings sit in two walls)",
+    "lubricant": "oil data do not enter the dynamic model",
+    "cylindrical_stage_gear_data": "read through the stage's gears",
+    "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
+    "shaft_section": "read as the shaft's sections",
+    "material": "read through the shafts that reference it",
+    "rolling_bearing_row": "read as its bearing's element set",
+    "rolling_element": "read as its bearing's element set",
+    **{t: "a shaft-hub connection or shaft detail: the hub is taken as rigidly fixed, the "
+          "shaft as its sections" for t in _RIGID_CONNECTIONS},
+}
+
+def is_rexs_path(path) -> bool:
+    return Path(str(path)).suffix.lower() in (".rexs", ".rexsj")
+
+
+@dataclass
+class MappingReport:
+    """What the import did: each line names the REXS component (type and id)."""
+    mapped: list = field(default_factory=list)
+    assumed: list = field(default_factory=list)
+    ignored: list = field(default_factory=list)
+
+    def lines(self) -> list[str]:
+        out = [f"mapped ({len(self.mapped)}):"] + [f"  {m}" for m in self.mapped]
+        out += [f"assumed ({len(self.assumed)}):"] + [f"  {a}" for a in self.assumed]
+        out += [f"ignored ({len(self.ignored)}):"] + [f"  {i}" for i in self.ignored]
+        return out
+
+
+@dataclass(frozen=True)
+class RexsImport:
+    data: dict              # the scene as TOML data
+    comments: dict          # (table, index) -> comment naming the REXS component
+    report: MappingReport
+    model: RexsModel
+
+
+def _name(text: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("._-") or "rexs_model"
+    return s[:NAME_MAX_LEN]
+
+
+def _parts(model, assembly_id: str, part_type: str) -> list:
+    return [model.components[r.ref("part")] for r in model.relations_of("assembly")
+            if r.ref("assembly") == assembly_id and r.ref("part") is not None
+            and model.components[r.ref("part")].type == part_type]
+
+
+def _owner(model, part_id: str, owner_type: str):
+    return model.owner(part_id, owner_type)
+
+
+def _refuse_unsupported(model) -> None:
+    for c in model.components.values():
+        if c.type in UNSUPPORTED:
+            raise ConfigError(model.source, f"component {c.id} is a {c.type!r}"
+                              f"{' (' + repr(c.name) + ')' if c.name else ''}: not supported "
+                              "(vibrogear maps shafts, cylindrical gears and stages, rolling "
+                              "and concept bearings, external loads); nothing was written")
+        if c.type == "cylindrical_gear" and c.has("number_of_teeth") and \
+                c.number("number_of_teeth", model.source) < 0:
+            raise ConfigError(model.source, f"component {c.id} is an internal "
+                              "'cylindrical_gear' (negative number_of_teeth): internal gears "
+                              "are not supported; nothing was written")
+
+
+def import_rexs(path, *, name: str | None = None, housing: str | None = None) -> RexsImport:
+    """Read and map a REXS file; ConfigError naming the component and attribute on any
+    problem (nothing is written by this function)."""
+    from .mapping_supports import analysis_sections, bearings, loads
+    model = read_rexs(path)
+    src = model.source
+    _refuse_unsupported(model)
+    report = MappingReport()
+    frame, shafts = shafts_of(model, report)
+    gears, comments = {}, {}
+    for g in model.of_type("cylindrical_gear"):
+        owner = _owner(model, g.id, "shaft")
+        if owner is None:
+            raise ConfigError(src, f"component {g.id} (cylindrical_gear) is not part of any "
+                              "shaft (no assembly relation with a shaft)")
+        d = gear_data(model, g, src, report)
+        d["shaft"] = owner.id
+        d["pos"] = d["u"] - shafts[owner.id]["u0"]
+        shafts[owner.id]["features"].add(round(d["pos"], 12))
+        gears[g.id] = d
+    discs = _additional_masses(model, shafts, report)
+    stages = []
+    for st in model.of_type("cylindrical_stage"):
+        rel = next((r for r in model.relations_of("stage") if r.ref("stage") == st.id), None)
+        g1 = rel.ref("gear_1") if rel else None
+        g2 = rel.ref("gear_2") if rel else None
+        if g1 not in gears or g2 not in gears:
+            raise ConfigError(src, f"component {st.id} (cylindrical_stage): its stage relation "
+                              "must name two cylindrical gears as gear_1 and gear_2")
+        if gears[g1]["shaft"] == gears[g2]["shaft"]:
+            raise ConfigError(src, f"component {st.id} (cylindrical_stage): gears {g1} and "
+                              f"{g2} are both on shaft {gears[g1]['shaft']}; a stage's gears "
+                              "must sit on two shafts")
+        a = st.number("center_distance", src)
+        s1, s2 = shafts[gears[g1]["shaft"]], shafts[gears[g2]["shaft"]]
+        dist = math.hypot(s1["x"] - s2["x"], s1["z"] - s2["z"])
+        if abs(dist - a) > 1e-4 * a:
+            raise ConfigError(src, f"component {st.id} (cylindrical_stage): attribute "
+                              f"'center_distance' = {a * 1e3:g} mm, but its gears' shafts "
+                              f"{gears[g1]['shaft']} and {gears[g2]['shaft']} are "
+                              f"{dist * 1e3:.6g} mm apart")
+        stages.append((st, g1, g2))
+    order = _power_flow(model, shafts, gears, stages)
+    data = {"scene": {}, "gearbox": {"name": model.application and
+                                     f"{Path(src).stem} ({model.application} export)"
+                                     or Path(src).stem}}
+    supports = bearings(model, shafts, report)
+    couplings, case = loads(model, shafts, gears, stages, order, report)
+    for sid in order:
+        sh = shafts[sid]
+        sh["features"].update(b["position"] for b in supports if b["shaft"] == sid)
+        sh["features"].update(b["outer_position"] for b in supports
+                              if b.get("outer_shaft") == sid)
+        sh["features"].update(c["position"] for c in couplings if c["shaft"] == sid)
+    names = {sid: f"shaft{sid}" for sid in order}
+    data["gearbox"]["shafts"] = []
+    for k, sid in enumerate(order):
+        sh = shafts[sid]
+        secs = sh["sections"]        # meshed when the scene loads (nodes at every feature)
+        n_el = sum(s["elements"] for s in mesh_sections(secs, sh["features"]))
+        data["gearbox"]["shafts"].append({
+            "name": names[sid], "x": sh["x"], "z": sh["z"], "y0": sh["y0"], "master_count": 20,
+            "modal_damping": 0.01, "material": sh["material"], "sections": secs,
+            **({"discs": discs[sid]} if discs.get(sid) else {})})
+        comments[("shafts", k)] = f"REXS shaft {sid} ({sh['comp'].name})"
+        report.mapped.append(f"shaft {sid} ({sh['comp'].name}) -> gearbox.shafts[{k}] "
+                             f"{names[sid]!r}: {len(sh['sections'])} sections, meshed into "
+                             f"{n_el} elements when the scene loads (nodes at every gear, "
+                             "bearing, load and section change, elements <= 20 mm)")
+    report.assumed.append("every shaft: 20 master modes, modal damping ratio 0.01")
+    data["gearbox"]["gears"] = []
+    for k, (gid, d) in enumerate(sorted(gears.items(), key=lambda kv: order.index(kv[1]["shaft"]))):
+        inner = d["bore"] if d["bore"] else diameter_at(shafts[d["shaft"]], d["pos"])
+        data["gearbox"]["gears"].append({
+            "name": f"gear{gid}", "shaft": names[d["shaft"]], "position": round(d["pos"], 12),
+            "teeth": d["teeth"], "module": d["module"], "helix_angle": abs(d["beta"]),
+            "width": d["width"], "inner_diameter": inner})
+        comments[("gears", k)] = f"REXS cylindrical_gear {gid}"
+        report.mapped.append(f"cylindrical_gear {gid} -> gearbox.gears[{k}] 'gear{gid}': "
+                             f"z = {d['teeth']}, m_n = {d['module'] * 1e3:g} mm, beta = "
+                             f"{d['beta']:g} deg, b = {d['width'] * 1e3:g} mm, x = {d['shift']:g}")
+        report.assumed.append(f"cylindrical_gear {gid}: "
+                              + ("" if d["bore"] else f"bore = the shaft's diameter there "
+                                 f"({inner * 1e3:g} mm); ")
+                              + "inertia of the pitch-diameter disc (face width x pitch "
+                              "circle, the shaft's density)")
+    data["gearbox"]["meshes"] = []
+    for k, (st, ga, gb) in enumerate(_stages_in_flow(stages, gears, order)):
+        a, b = gears[ga], gears[gb]
+        data["gearbox"]["meshes"].append({
+            "name": f"stage{st.id}", "gear_a": f"gear{ga}", "gear_b": f"gear{gb}",
+            "pressure_angle": a["alpha"], "hand": 1 if a["beta"] >= 0 else -1,
+            "stiffness": "iso6336", "profile_shift_a": a["shift"], "profile_shift_b": b["shift"],
+            "face_width": min(a["width"], b["width"]), "backlash": 1.0e-4,
+            "damping": _mesh_damping(a, b)})
+        comments[("meshes", k)] = f"REXS cylindrical_stage {st.id} ({st.name})"
+        report.mapped.append(f"cylindrical_stage {st.id} -> gearbox.meshes[{k}] 'stage{st.id}': "
+                             f"gear{ga} drives gear{gb}, centre distance "
+                             f"{st.number('center_distance', src) * 1e3:g} mm, mesh stiffness "
+                             "by ISO 6336-1 (method B) with its single/double contact harmonics")
+        report.assumed.append(f"cylindrical_stage {st.id}: backlash 0.1 mm, mesh damping "
+                              f"{_mesh_damping(a, b):.4g} N s/m (damping ratio 0.05 of the "
+                              "pair's mesh mode), hand +1 = positive REXS helix angle")
+    data["gearbox"]["bearings"] = supports
+    data["gearbox"]["couplings"] = couplings
+    for k, b in enumerate(supports):
+        comments[("bearings", k)] = b.pop("_comment")
+        b["shaft"] = names[b["shaft"]]
+        if b.get("outer_shaft"):
+            b["outer_shaft"] = names[b["outer_shaft"]]
+    for k, c in enumerate(couplings):
+        comments[("couplings", k)] = c.pop("_comment")
+        c["shaft"] = names[c["shaft"]]
+    data.update(analysis_sections(model, case, couplings))
+    data["gearbox"]["modes_rpm"] = data["time_response"]["rpm"]
+    data["scene"] = {"name": _name(name or Path(src).stem), "analyses": ["modes", "sweep"],
+                     "description": f"imported from {Path(src).name} (REXS {model.version})"}
+    skip = ("shaft_section", "material", "cylindrical_gear_flank", "rolling_bearing_row",
+            "rolling_element")
+    if housing == "box":
+        from .mapping_housing import box_housing
+        box_housing(model, data, report)
+        skip += ("gear_casing",)
+        report.mapped += [f"gear_casing {c.id} -> [housing]: a generated box (see assumed)"
+                          for c in model.of_type("gear_casing")]
+    elif housing is not None:
+        raise ConfigError("--housing", f"expected 'box', got {housing!r}")
+    for c in model.components.values():
+        if c.type in KNOWN_IGNORED and c.type not in skip:
+            report.ignored.append(f"{c.type} {c.id}: {KNOWN_IGNORED[c.type]}")
+        elif c.type not in KNOWN_IGNORED and c.type not in _MAPPED_TYPES:
+            report.ignored.append(f"{c.type} {c.id}: a component type the importer does not "
+                                  "map (it carries no power path of the scene)")
+    return RexsImport(data, comments, report, model)
+
+
+def _additional_masses(model, shafts, report) -> dict:
+    """REXS ``additional_mass`` parts of a shaft -> rigid discs (mass, polar inertia about u,
+    diametral inertia the mean about v and w); eccentricity is not mapped."""
+    src, out = model.source, {}
+    for c in model.of_type("additional_mass"):
+        owner = model.owner(c.id, "shaft")
+        if owner is None:
+            raise ConfigError(src, f"component {c.id} (additional_mass) is not part of a shaft")
+        sh = shafts[owner.id]
+        pos = round(c.number("u_coordinate_on_shaft", src) - sh["u0"], 12)
+        m = c.number("mass_of_component", src)
+        ip = c.number("moment_of_inertia_u_axis", src, 0.0)
+        idv = [c.number(a, src, 0.0) for a in ("moment_of_inertia_v_axis",
+                                              "moment_of_inertia_w_axis")]
+        disc = {"name": f"mass{c.id}", "position": pos, "mass": m, "Ip": ip,
+                "Id": 0.5 * sum(idv)}
+        out.setdefault(owner.id, []).append(disc)
+        sh["features"].add(pos)
+        report.mapped.append(f"additional_mass {c.id} -> a disc on shaft {owner.id}: {m:g} kg, "
+                             f"Ip = {ip:g} kg m^2, Id = {0.5 * sum(idv):g} kg m^2"
+                             + (" (eccentricity not mapped)" if c.has("eccentricity_vector")
+                                else ""))
+    return out
+
+
+_MAPPED_TYPES = ("additional_mass", "shaft", "cylindrical_gear", "cylindrical_stage", "external_load",
+                 "rolling_bearing_with_catalog_geometry", "rolling_bearing_with_detailed_geometry",
+                 "concept_bearing")
+
+
+def _mesh_damping(a, b) -> float:
+    """A viscous mesh damping of ratio 0.05 of the pair's mesh mode: c = 2 zeta sqrt(k m_e),
+    k = c_gamma b with the ISO 6336 typical c_gamma = 20 N/(mm um), m_e the pair's equivalent
+    mass on the line of action (solid steel pitch discs)."""
+    def inertia_radius(g):
+        r = 0.5 * g["module"] * g["teeth"] / math.cos(math.radians(g["beta"]))
+        J = 0.5 * math.pi * r ** 4 * g["width"] * 7850.0
+        return J, r
+    (Ja, ra), (Jb, rb) = inertia_radius(a), inertia_radius(b)
+    me = 1.0 / (ra ** 2 / Ja + rb ** 2 / Jb)
+    k = 2e10 * min(a["width"], b["width"])
+    return float(f"{2 * 0.05 * math.sqrt(k * me):.3g}")
+
+
+def _driving_shaft(model, shafts) -> str:
+    for sid, s in shafts.items():
+        if s["comp"].flag("defines_speed"):
+            return sid
+    for c in model.of_type("external_load"):
+        if c.flag("defines_torque"):
+            owner = _owner(model, c.id, "shaft")
+            if owner is not None:
+                return owner.id
+    return next(iter(shafts))
+
+
+def _power_flow(model, shafts, gears, stages) -> list:
+    first = _driving_shaft(model, shafts)
+    order, frontier = [first], [first]
+    while frontier:
+        nxt = []
+        for sid in frontier:
+            for _, g1, g2 in stages:
+                for here, there in ((g1, g2), (g2, g1)):
+                    t = gears[there]["shaft"]
+                    if gears[here]["shaft"] == sid and t not in order:
+                        order.append(t)
+                        nxt.append(t)
+        frontier = nxt
+    for sid in shafts:
+        if sid not in order:
+            raise ConfigError(model.source, f"component {sid} (shaft) is joined to the driving "
+                              f"shaft {first} by no cylindrical stage: every shaft must be "
+                              "driven through gears")
+    return order
+
+
+def _stages_in_flow(stages, gears, order):
+    out = []
+    for st, g1, g2 in stages:
+        a, b = (g1, g2) if order.index(gears[g1]["shaft"]) < order.index(gears[g2]["shaft"]) \
+            else (g2, g1)
+        out.append((st, a, b))
+    return sorted(out, key=lambda t: order.index(gears[t[1]]["shaft"]))
