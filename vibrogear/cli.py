@@ -117,7 +117,7 @@ def _main(argv: list[str] | None) -> int:
     if args.command == "cache":
         return _cache(args.action)
     if args.command == "import":
-        from .pipeline.rexs_import import import_command
+        from .cli_import import import_command
         return import_command(args.model, args.output, argv, housing=args.housing)
     from .config import ConfigError, load_scene
     from .pipeline.files import check_output_dir
@@ -131,7 +131,7 @@ def _main(argv: list[str] | None) -> int:
             scene = build(type(scene), data)
         out = (check_output_dir(args.out) if args.out is not None else
                check_output_dir(Path("out") / scene.scene.name, "scene.name"))
-        from .pipeline.validate import validate_scene
+        from .models.validate import validate_scene
         from .runner import resolve
         validate_scene(scene)
         resolve(scene)
@@ -139,7 +139,7 @@ def _main(argv: list[str] | None) -> int:
         _error("invalid input", exc)
         return EXIT_INPUT
     if args.command == "check":
-        from .pipeline.scene_notes import derived_lines
+        from .models.scene_notes import derived_lines
         for line in derived_lines(scene):
             print(f"  {line}")
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"

@@ -85,7 +85,7 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
     """Run every analysis of ``scene`` and its report writer; write ``summary.json``
     after each; return the summary.  The reduced-model study is built once, before the
     first analysis that takes it, and handed to each explicitly."""
-    from .pipeline.validate import validate_scene
+    from .models.validate import validate_scene
     validate_scene(scene)                    # before the output folder exists
     plan = resolve(scene)
     created = not ctx.out.exists()

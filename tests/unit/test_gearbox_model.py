@@ -16,7 +16,7 @@ import scipy.linalg as sla
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.pipeline.validate import validate_scene
+from vibrogear.models.validate import validate_scene
 from vibrogear.models.contact_law import evaluate, harmonic_series
 from vibrogear.models.gearbox.couplings import gear_mesh_geometry, mesh_contact_parameters
 from vibrogear.models.gearbox.model import RPM, build_gearbox, housing_to_rotor

@@ -19,7 +19,7 @@ from hypothesis import strategies as st  # noqa: E402
 
 from vibrogear.config.base import ConfigError  # noqa: E402
 from vibrogear.config.scene import read_toml, scene_from_dict  # noqa: E402
-from vibrogear.pipeline.validate import validate_scene  # noqa: E402
+from vibrogear.models.validate import validate_scene  # noqa: E402
 from vibrogear.runner import resolve  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -6,7 +6,7 @@ import math
 from vibrogear.config.base import read_toml_file
 from vibrogear.config.layout import gear_tip_radius
 from vibrogear.config.scene import Scene, scene_from_dict
-from vibrogear.pipeline.validate import validate_scene
+from vibrogear.models.validate import validate_scene
 
 SCENE = "configs/single_stage.toml"
 

@@ -13,7 +13,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError
 from vibrogear.config.scene import read_toml, scene_from_dict
-from vibrogear.pipeline.validate import validate_scene
+from vibrogear.models.validate import validate_scene
 from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.models.gearbox.iso6336 import (basic_rack_factor, blank_factor, contact_harmonics,
                                       inverse_involute, involute, mesh_stiffness,

@@ -35,6 +35,7 @@ LAYERS = {
     "report/": 8,
     "runner.py": 9,
     "cli.py": 10,
+    "cli_import.py": 10,    # the `vibrogear import` command (REXS -> checked scene TOML)
 }
 
 #: (importing module, imported module): why the import is allowed.  Empty: the 9 upward
@@ -233,3 +234,15 @@ def test_the_import_reader_sees_imports_inside_functions(tmp_path):
                  "import matplotlib.pyplot as plt\n")
     names = [t for t, _ in _all_imports("vibrogear.analyses.x", p) if _draws_or_writes(t)]
     assert "vibrogear.report.figure" in names and "matplotlib.pyplot" in names
+
+
+def test_pipeline_imports_only_config():
+    """pipeline/ (files, cache of runs, executors, progress, the outcome) imports config and
+    the ground floor only: the scene checks that need a model live in models/validate.py."""
+    allowed = ("vibrogear.config", "vibrogear.pipeline", "vibrogear.status", "vibrogear")
+    bad = [(name, imported, line) for name, path in _modules().items()
+           if name.startswith("vibrogear.pipeline")
+           for imported, line in _all_imports(name, path)
+           if imported.startswith("vibrogear") and not
+           (imported in allowed or imported.startswith(tuple(a + "." for a in allowed[:3])))]
+    assert not bad, bad

@@ -15,7 +15,7 @@ from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
 from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.models.gearbox.master_level import excitation_frequencies_hz, highest_speed
-from vibrogear.pipeline.validate import validate_scene
+from vibrogear.models.validate import validate_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 

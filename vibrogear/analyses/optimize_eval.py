@@ -199,7 +199,7 @@ def evaluate(task: Evaluation, index: int, values: dict) -> dict:
     scratch = Path(task.scratch) / f"eval-{index}"
     try:
         scene = scene_with(task.base, cfg, values)
-        from ..pipeline.validate import validate_scene
+        from ..models.validate import validate_scene
         validate_scene(scene)
         scratch.mkdir(parents=True, exist_ok=True)
         outcomes = _run_analyses(scene, RunContext(out=scratch, quiet=True))

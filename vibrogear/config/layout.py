@@ -49,7 +49,7 @@ def check_layout(scene) -> None:
                 _check_gearbox_in_housing(scene.gearbox, scene.housing, moved)
             else:
                 _check_free_bearings(scene.gearbox)
-        # the gear-mesh geometry needs the model layer: vibrogear.pipeline.validate
+        # the gear-mesh geometry needs the model layer: vibrogear.models.validate
     if scene.time_response is not None and "time_response" in scene.scene.analyses:
         with errs.catch():
             _check_time_response_size(scene)

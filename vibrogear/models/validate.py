@@ -11,6 +11,6 @@ __all__ = ["validate_scene"]
 def validate_scene(scene):
     """Raise :class:`~vibrogear.config.base.ConfigError` naming the field; return the scene."""
     if getattr(scene, "gearbox", None) is not None:
-        from ..models.gearbox.model import check_layout
+        from .gearbox.model import check_layout
         check_layout(scene)
     return scene

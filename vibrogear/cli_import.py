@@ -14,12 +14,12 @@ __all__ = ["import_command"]
 
 
 def import_command(model: str, output: str | None, argv=None, housing: str | None = None) -> int:
-    from ..config import ConfigError, scene_from_dict
-    from ..config.rexs import import_rexs, is_rexs_path
-    from ..config.rexs.scene_toml import scene_toml
-    from .files import atomic_write_bytes
-    from .scene_notes import derived_lines
-    from .validate import validate_scene
+    from .config import ConfigError, scene_from_dict
+    from .config.rexs import import_rexs, is_rexs_path
+    from .config.rexs.scene_toml import scene_toml
+    from .pipeline.files import atomic_write_bytes
+    from .models.scene_notes import derived_lines
+    from .models.validate import validate_scene
     try:
         if not is_rexs_path(model):
             raise ConfigError(model, "expected a REXS file named *.rexs (XML) or *.rexsj (JSON)")

@@ -11,7 +11,7 @@ def derived_lines(scene) -> list[str]:
     cfg = getattr(scene, "gearbox", None)
     if cfg is None:
         return []
-    from ..models.gearbox.bearing_hertz import contact_constant
+    from .gearbox.bearing_hertz import contact_constant
     out = []
     for i, c in enumerate(cfg.couplings):
         if c.load_given == "torque":
