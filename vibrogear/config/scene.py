@@ -18,7 +18,8 @@ from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
 from .verbs import MODEL_KINDS, VERBS
-from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
+from .sections import (ContinuationConfig, CriticalDampingConfig, FiguresConfig,
+                       ImpactPairConfig,
                        IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
                        RpmContinuationConfig, RpmSweepConfig,
                        RpmTimeResponseConfig, SceneInfo, ShootingOptions, SweepConfig,
@@ -58,6 +59,7 @@ class Scene:
     runup: RunupConfig | None = spec(None)
     nnm: NnmConfig | None = spec(None)
     optimize: OptimizeConfig | None = spec(None)
+    figures: FiguresConfig = spec(FiguresConfig())
 
     @property
     def parameter(self) -> Parameter | None:

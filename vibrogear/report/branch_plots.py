@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
-__all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments"]
+__all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments",
+           "label_special_points"]
 
 _MARK = {"LP": ("^", "black"), "PD": ("s", "tab:purple"), "NS": ("D", "tab:orange"),
          "BP": ("o", "tab:brown")}
@@ -31,21 +32,65 @@ def stability_segments(x, y, stable):
 
 def draw_branches(ax, arrays, quantity, *, label_points: bool = False, lw_scale=1.0):
     """Every branch of ``arrays`` (branch.npz's) on ``ax``: ``quantity`` against param,
-    stable solid, unstable dashed, special points marked (and named: ``label_points``)."""
+    stable solid, unstable dashed, special points marked (and named: ``label_points``,
+    :func:`label_special_points`)."""
     _draw(ax, arrays, quantity, lw_scale)
     if label_points:
-        # names only where they do not overprint: one per 3 % x 6 % of the branch's span
-        label = np.asarray(arrays["label"]).astype(str)
-        x, y = np.asarray(arrays["param"], float), np.asarray(arrays[quantity], float)
-        wx, wy = 0.03 * (np.ptp(x) or 1.0), 0.06 * (np.ptp(y) or 1.0)
-        done = []
-        for lab, (_, col) in _MARK.items():
-            for xv, yv in zip(x[label == lab], y[label == lab]):
-                if any(abs(xv - a) < wx and abs(yv - b) < wy for a, b in done):
-                    continue
-                done.append((xv, yv))
-                ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4),
-                            fontsize=7, color=col)
+        label_special_points(ax, arrays, quantity)
+
+
+#: text height and width per character of the labels [points] (fontsize 7)
+_LABEL_PT = 7.0
+_CHAR_PT = 4.6
+
+
+def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0) -> list:
+    """Name the special points (LP / PD / NS / BP) of ``arrays`` with their parameter value
+    so that no two names overprint: points closer than a label's width are named together
+    ("LP 1856 / PD 1861"), and a label that would reach into the one before it moves up by
+    one line (up to 4 lines, then further ones are left to the markers and the legend).
+    Returns the Text artists."""
+    label = np.asarray(arrays["label"]).astype(str)
+    x = np.asarray(arrays["param"], float)
+    y = np.asarray(arrays[quantity], float)
+    pts = sorted((float(x[i]), float(y[i]), str(label[i])) for i in range(label.size)
+                 if label[i] in _MARK)
+    if not pts:
+        return []
+    fig = ax.figure
+    x0, x1 = ax.get_xlim()
+    width_pt = ax.get_position().width * fig.get_figwidth() * 72.0
+    per_pt = (x1 - x0) / max(width_pt, 1.0)           # data units per point along x
+    groups: list[list] = []
+    for p in pts:                                       # join points closer than 24 pt
+        if groups and p[0] - groups[-1][-1][0] < 24.0 * per_pt:
+            groups[-1].append(p)
+        else:
+            groups.append([p])
+    texts, lane_end = [], []                            # right end of each lane (data x)
+    for g in groups:
+        kinds = []
+        for _, _, lab in g:
+            if lab not in kinds:
+                kinds.append(lab)
+        text = " / ".join(f"{k} " + ", ".join(f"{xv:.4g}" for xv, _, lab in g if lab == k)
+                          for k in kinds)
+        xa, ya = g[0][0], max(v for _, v, _ in g)
+        right = xa + (4.0 + _CHAR_PT * len(text) * fontsize / 7.0) * per_pt
+        lane = next((k for k, end in enumerate(lane_end) if end < xa), len(lane_end))
+        if lane >= 4:
+            continue
+        if lane == len(lane_end):
+            lane_end.append(right)
+        else:
+            lane_end[lane] = right
+        col = _MARK[g[0][2]][1] if len(kinds) == 1 else "black"
+        texts.append(ax.annotate(text, (xa, ya), textcoords="offset points",
+                                 xytext=(4, 4 + lane * (_LABEL_PT + 3.0) * fontsize / 7.0),
+                                 fontsize=fontsize, color=col, zorder=8,
+                                 bbox=dict(boxstyle="square,pad=0.05", fc="white", ec="none",
+                                           alpha=0.7)))
+    return texts
 
 
 def branch_legend(arrays) -> list:
@@ -112,13 +157,8 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
 
     fig = new_figure((8.0, 5.0))
     ax = fig.add_subplot(111)
-    label = np.asarray(arrays["label"]).astype(str)
     _draw(ax, arrays, quantity)
-    for lab, (_, col) in _MARK.items():
-        for xv, yv in zip(np.asarray(arrays["param"])[label == lab],
-                          np.asarray(arrays[quantity])[label == lab]):
-            ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4), fontsize=7,
-                        color=col)
+    drawn = []
     if sweep is not None:
         ok = np.asarray(sweep["status"]) == 0 if "status" in sweep else slice(None)
         for d, mk, col in (("up", "^", "tab:cyan"), ("down", "v", "tab:red")):
@@ -126,24 +166,20 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
             if np.any(sel):
                 ax.plot(np.asarray(sweep["param"])[sel], np.asarray(sweep[quantity])[sel],
                         mk, color=col, ms=3, alpha=0.7, ls="none")
+                drawn.append(Line2D([], [], marker=mk, color=col, ls="none", ms=4,
+                                    label=f"sweep {d}"))
     for b in bounds:
         ax.axhline(b, color="0.6", lw=0.8, ls=":")
-    handles = [Line2D([], [], color=_COLOR[1], ls="-", label="period-1 stable"),
-               Line2D([], [], color=_COLOR[1], ls="--", label="period-1 unstable")]
-    if np.any(np.asarray(arrays["n_periods"]) == 2):
-        handles += [Line2D([], [], color=_COLOR[2], ls="-", label="period-2 stable"),
-                    Line2D([], [], color=_COLOR[2], ls="--", label="period-2 unstable")]
-    handles += [Line2D([], [], marker=mk, color=col, ls="none", mfc="none", label=lab)
-                for lab, (mk, col) in _MARK.items() if np.any(label == lab)]
-    if sweep is not None:
-        handles += [Line2D([], [], marker="^", color="tab:cyan", ls="none", ms=4, label="sweep up"),
-                    Line2D([], [], marker="v", color="tab:red", ls="none", ms=4, label="sweep down")]
+    handles = branch_legend(arrays)                     # only what is drawn
+    handles += drawn
     ax.legend(handles=handles, fontsize=7, loc="best")
     nper = np.asarray(arrays["n_periods"])
     if np.any(nper == 2):
         _inset_period_doubling(ax, arrays, quantity)
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(plain_title(title), fontsize=9)
     ax.grid(alpha=0.3)
+    fig.tight_layout()
+    label_special_points(ax, arrays, quantity)
     return save_figure(fig, path, formats, dpi)

@@ -1,0 +1,118 @@
+"""What the figures show: one panel per mesh, motion rows per direction, special-point
+names that do not overprint, legends that list only what is drawn, plain titles, physical
+colour-bar references, resonance speeds (report/*_plots.py)."""
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+from vibrogear.report.branch_plots import branch_legend, draw_branches, label_special_points
+from vibrogear.report.figure import mode_count_note, new_figure, plain_title
+
+
+def _branches():
+    """A period-1 branch, unstable everywhere, with special points bunched as in the
+    two-stage gearbox (folds and a PD within a few rpm of each other) and one far off."""
+    p = np.linspace(3000.0, 1500.0, 61)
+    q = 8.0 + 6.0 * np.exp(-((p - 1870.0) / 80.0) ** 2)
+    label = np.full(p.size, "", dtype="<U2")
+    stable = np.zeros(p.size, bool)
+    at = {"LP": [1856.0, 1862.0], "PD": [1859.0, 1945.0], "NS": [1864.0, 2400.0]}
+    xs, ys, labs = list(p), list(q), list(label)
+    for lab, where in at.items():
+        for x in where:
+            xs.append(x)
+            ys.append(8.0 + 6.0 * np.exp(-((x - 1870.0) / 80.0) ** 2))
+            labs.append(lab)
+    n = len(xs)
+    return {"param": np.array(xs), "qmax": np.array(ys), "qmin": np.array(ys) - 10.0,
+            "label": np.array(labs), "stable": np.zeros(n, bool), "branch": np.zeros(n, int),
+            "n_periods": np.ones(n, int)}
+
+
+def _boxes(fig, texts):
+    fig.canvas.draw()
+    r = fig.canvas.get_renderer()
+    return [t.get_window_extent(r) for t in texts]
+
+
+def test_special_point_names_do_not_overlap():
+    arrays = _branches()
+    fig = new_figure((8.0, 5.0))
+    ax = fig.add_subplot(111)
+    draw_branches(ax, arrays, "qmax")
+    ax.set_xlim(1480.0, 3020.0)
+    fig.tight_layout()
+    texts = label_special_points(ax, arrays, "qmax")
+    boxes = _boxes(fig, texts)
+    for a, b in itertools.combinations(boxes, 2):
+        assert not a.overlaps(b), (a, b)
+    words = " ".join(t.get_text() for t in texts)
+    # every special point is named, with its speed
+    for lab, x in (("LP", "1856"), ("LP", "1862"), ("PD", "1859"), ("PD", "1945"),
+                   ("NS", "1864"), ("NS", "2400")):
+        assert lab in words and x in words, (lab, x, words)
+
+
+def test_branch_legend_lists_only_what_is_drawn():
+    arrays = _branches()                       # unstable everywhere, period 1
+    labels = [h.get_label() for h in branch_legend(arrays)]
+    assert "period-1 branch unstable" in labels
+    assert not any("stable" in s and "unstable" not in s for s in labels)
+    assert not any("period-2" in s for s in labels)
+    assert {"LP", "PD", "NS"} <= set(labels) and "BP" not in labels
+
+
+def test_branch_figure_legend_has_no_stable_entry(tmp_path):
+    from vibrogear.report.branch_plots import plot_branches
+
+    arrays = _branches()
+    svg = plot_branches(arrays, tmp_path / "branch_max", title="two_stage: m = 146 (21+25+100)",
+                        formats=("svg",))[0].read_text()
+    assert "period-1 branch unstable" in svg
+    assert "period-1 stable" not in svg and "branch stable" not in svg
+    assert "m = 146" not in svg
+
+
+def test_titles_lose_the_mode_count_and_the_caption_gets_it():
+    t = "two_stage: m = 146 (21+25+100)"
+    assert plain_title(t) == "two_stage"
+    assert plain_title(t + "\nbackbone") == "two_stage\nbackbone"
+    assert plain_title("impact pair: zeta=0.05") == "impact pair: zeta=0.05"
+    assert "m = 146" in mode_count_note(t) and "21 + 25 + 100" in mode_count_note(t)
+    assert mode_count_note("impact pair: zeta=0.05") == ""
+
+
+def _sweep(n=8):
+    """Two meshes: G1 in contact throughout, G2 rattling (back-flank impacts)."""
+    p = np.tile(np.linspace(1500.0, 3000.0, n), 2)
+    d = np.array(["up"] * n + ["down"] * n)
+    z = np.zeros(2 * n)
+    return {"param": p, "direction": d, "qmin": 1.0 + z, "qmax": 5.0 + z,
+            "poincare": np.full((2 * n, 4), 3.0), "period_n": np.zeros(2 * n, int),
+            "status": np.zeros(2 * n, int), "motion_class": np.full(2 * n, 3),
+            "motion_class_G1": np.ones(2 * n, int), "period_n_G1": np.ones(2 * n, int),
+            "motion_class_G2": np.full(2 * n, 3), "period_n_G2": np.zeros(2 * n, int),
+            "motion_class_bearing:A": np.ones(2 * n, int),
+            "period_n_bearing:A": np.ones(2 * n, int),
+            "impacts_drive_G1": z, "impacts_back_G1": z, "contact_fraction_G1": 1.0 + z,
+            "rattle_G1": z, "impacts_drive_G2": 0.2 + z, "impacts_back_G2": 0.4 + z,
+            "contact_fraction_G2": 0.1 + z, "rattle_G2": 1e-3 + z}
+
+
+def test_bifurcation_has_a_panel_per_mesh_and_rows_per_direction(tmp_path):
+    from vibrogear.report.sweep_plots import plot_bifurcation
+
+    svg = plot_bifurcation(_sweep(), tmp_path / "b", formats=("svg",),
+                           title="two_stage: m = 146 (21+25+100)")[0].read_text()
+    assert "G1: impacts" in svg and "G2: impacts" in svg       # both meshes, G2 rattles
+    assert "out of contact" in svg and "back-flank impacts" in svg
+    assert "G1 up" not in svg and "bearing:A up" not in svg    # rows per direction only
+    assert "Poincare" in svg and "m = 146" not in svg
+    asked = plot_bifurcation(_sweep(), tmp_path / "c", formats=("svg",),
+                             per_contact_rows=True)[0].read_text()
+    for row in ("G1 up", "G1 down", "bearing:A down"):         # differ from the whole
+        assert row in asked
+    assert "G2 up" not in asked                                # same class as the whole
