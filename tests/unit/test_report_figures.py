@@ -116,3 +116,62 @@ def test_bifurcation_has_a_panel_per_mesh_and_rows_per_direction(tmp_path):
     for row in ("G1 up", "G1 down", "bearing:A down"):         # differ from the whole
         assert row in asked
     assert "G2 up" not in asked                                # same class as the whole
+
+
+def test_waterfall_levels_in_physical_references():
+    from vibrogear.report.nvh_plots import levels_db
+
+    lev, ref = levels_db([1e-6, 1e-5, 3.16227766e-8], "m")         # amplitudes: 20 log10
+    assert ref == "1 \u00b5m" and lev == pytest.approx([0.0, 20.0, -30.0], abs=1e-6)
+    lev, ref = levels_db([10.0], "N")
+    assert ref == "1 N" and lev == pytest.approx([20.0])
+    lev, ref = levels_db([1e-12, 1e-9], "W", power=True)          # powers: 10 log10
+    assert ref == "1 pW" and lev == pytest.approx([0.0, 30.0])
+
+
+def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_path):
+    from vibrogear.report.nvh_plots import plot_waterfall, unidentified_note
+
+    kinds = np.array(["mesh", "unidentified", "unidentified", "shaft"])
+    amps = np.array([4.0, 2.0, np.sqrt(5.0), 0.0])
+    note = unidentified_note((np.ones(4), np.ones(4), kinds, amps))
+    assert "36 %" in note and "2 of 4" in note                    # (4 + 5) / 25
+    rpm = np.array([1000.0, 2000.0])
+    order = np.arange(0, 64) / 8.0
+    freq = np.outer(rpm / 60.0 * 40, order)
+    amp = np.full((2, order.size), 1e-7)
+    amp[:, 8] = 2e-6
+    path = plot_waterfall(tmp_path / "w.png", rpm, freq, amp, label="DTE", unit="m",
+                          max_hz=5000.0, mesh_hz=np.outer(rpm, [40 / 60.0]),
+                          shaft_hz=np.outer(rpm, [1 / 60.0]), max_order=3,
+                          title="two_stage: m = 146 (21+25+100)",
+                          lines=(np.array([667.0, 900.0]), rpm, np.array(["mesh", "unidentified"]),
+                                 np.array([2e-6, 1e-6])),
+                          unstable=np.array([True, False]))[0]
+    assert path.stat().st_size > 10_000
+
+
+def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
+    from vibrogear.config.scene import load_scene
+    from vibrogear.report.gearbox_plots import (mesh_orders_per_rpm, plot_resonance_map,
+                                                resonance_crossings)
+    from pathlib import Path
+
+    gb = load_scene(Path(__file__).resolve().parents[2] / "configs/two_stage.toml").gearbox
+    orders = dict(mesh_orders_per_rpm(gb))
+    # G1: z1 (40 teeth) on the driving shaft; G2: z3 (55 teeth), also on the driving shaft
+    assert orders == pytest.approx({"G1": 40 / 60.0, "G2": 55 / 60.0})
+    f = np.array([1000.0, 2000.0, 2500.0])
+    mesh = np.array([[0.3, 0.0, 0.01], [0.0, 0.2, 0.01]])          # mode 2 has no share
+    cross = resonance_crossings(f, mesh.max(axis=0), list(orders.items()), 1000.0, 3000.0)
+    got = {(c["mesh"], c["order"], round(c["rpm"], 6)) for c in cross}
+    # rpm = 60 f / (h z): modes 0 and 1 (share > 5 %) with each mesh's 1x and 2x, in range
+    want = {("G1", 1, 1500.0), ("G2", 1, round(1000 * 60 / 55, 6)),          # mode 0
+            ("G1", 1, 3000.0), ("G1", 2, 1500.0), ("G2", 1, round(2000 * 60 / 55, 6)),
+            ("G2", 2, round(2000 * 60 / 110, 6))}                            # mode 1
+    assert got == want
+    svg = plot_resonance_map(tmp_path / "r", f, mesh, 40, 1000.0, 3000.0,
+                             orders=list(orders.items()), formats=("svg",),
+                             title="two_stage: m = 146 (21+25+100)")[0].read_text()
+    assert "G2 1x mesh frequency" in svg and "G1 2x mesh frequency" in svg
+    assert "1500 rpm" in svg and "2182 rpm" in svg and "m = 146" not in svg
