@@ -175,3 +175,16 @@ def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
                              title="two_stage: m = 146 (21+25+100)")[0].read_text()
     assert "G2 1x mesh frequency" in svg and "G1 2x mesh frequency" in svg
     assert "1500 rpm" in svg and "2182 rpm" in svg and "m = 146" not in svg
+
+
+def test_captions_say_what_to_look_at_and_carry_the_mode_count():
+    from vibrogear.report.captions import CAPTIONS, caption
+
+    for name in ("bifurcation.png", "fig2.png", "branch_max.png", "resonance_map.png",
+                 "nvh_waterfall_dte.png", "erp.png", "gearbox.png", "time_response.png"):
+        assert len(CAPTIONS[name].split()) >= 10, name
+    t = "two_stage: m = 146 (21+25+100)"
+    assert caption("out/two_stage/map_rattle_G2.png", t).startswith("Impact energy")
+    assert "m = 146" in caption("out/two_stage/bifurcation.png", t)
+    assert "m = " not in caption("bifurcation.png", "impact pair: zeta=0.05")
+    assert caption("unknown.png") == ""
