@@ -100,10 +100,12 @@ def branch_legend(arrays) -> list:
     stable = np.asarray(arrays["stable"], dtype=bool)
     label = np.asarray(arrays["label"]).astype(str)
     handles = []
+    plain = label == ""                     # the points the lines are drawn through
     for n in np.unique(nper):
         col = _COLOR.get(int(n), "tab:gray")
         for s, ls, word in ((True, "-", "stable"), (False, "--", "unstable")):
-            if np.any((nper == n) & (stable == s)):
+            if np.sum(plain & (nper == n) & (stable == s)) >= 1 and \
+                    np.sum(plain & (nper == n)) >= 2:
                 handles.append(Line2D([], [], color=col, ls=ls,
                                       label=f"period-{int(n)} branch {word}"))
     handles += [Line2D([], [], marker=mk, color=col, ls="none", mfc="none", label=lab)

@@ -286,7 +286,8 @@ def figure_of(scene):
             cx, cy = s.centre
             # inside its own circle's top (a free gear: bottom), so coaxial gears'
             # labels sit at their own radii
-            _label(end, f"{g.name}: {g.teeth} teeth, m {g.module * _MM:g} mm", cx,
+            helix = f", helix {g.helix_angle:g}\u00b0" if g.helix_angle else ""
+            _label(end, f"{g.name}: {g.teeth} teeth, m {g.module * _MM:g} mm{helix}", cx,
                    cy - s.radius if g.free else cy + s.radius, xytext=(0, 3 if g.free else -10),
                    textcoords="offset points")
     side.set_xlabel("y along the shafts [mm] (front wall at 0)", fontsize=8)
