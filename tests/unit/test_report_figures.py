@@ -188,3 +188,33 @@ def test_captions_say_what_to_look_at_and_carry_the_mode_count():
     assert "m = 146" in caption("out/two_stage/bifurcation.png", t)
     assert "m = " not in caption("bifurcation.png", "impact pair: zeta=0.05")
     assert caption("unknown.png") == ""
+
+
+def _branch_result(stable):
+    from types import SimpleNamespace
+
+    P, K = 4, 33
+    rpm = np.linspace(1500.0, 3000.0, P)
+    order = np.arange(K) / 8.0
+    amp = np.full((P, 1, K), 1e-7)
+    b = SimpleNamespace(rpm=rpm, branch=np.zeros(P, int), index=np.arange(P),
+                        stable=np.asarray(stable, bool), n_periods=np.ones(P, int),
+                        closure=np.zeros(P), first_pass=np.ones(P, bool), order=order,
+                        freq_hz=np.outer(rpm * 40 / 60.0, order), amplitudes={"dte": amp},
+                        parseval={"dte": 0.0}, erp_per_bin=None)
+    r = SimpleNamespace(branch=b, channels={"dte": ["G1"]}, mesh_hz=np.outer(rpm, [40 / 60.0]),
+                        shaft_hz=np.outer(rpm, [1 / 60.0]), rpm=rpm, shaft_names=("driving",),
+                        units={"dte": "m"})
+    return SimpleNamespace(nvh=SimpleNamespace(max_order=3.0)), r
+
+
+def test_branch_waterfall_not_drawn_for_an_orbit_unstable_everywhere(tmp_path):
+    from vibrogear.report.nvh_report import write_branch
+
+    scene, r = _branch_result([False] * 4)
+    files = write_branch(scene, r, tmp_path, 3000.0, "two_stage")
+    assert "waterfall_branch_dte" not in files and (tmp_path / "spectra_branch.npz").exists()
+    assert not (tmp_path / "nvh_waterfall_branch_dte.png").exists()
+    scene, r = _branch_result([True, True, False, False])
+    files = write_branch(scene, r, tmp_path, 3000.0, "two_stage")
+    assert (tmp_path / "nvh_waterfall_branch_dte.png").stat().st_size > 10_000
