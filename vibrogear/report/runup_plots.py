@@ -152,7 +152,9 @@ def plot_waterfall(result, path) -> list:
             ax.plot(xs[order], f, color="w", lw=0.6, ls=":" if "_1x" not in oname else "--")
             j = int(np.argmin(np.abs(np.minimum(f, fmax) - 0.95 * np.minimum(f, fmax).max())))
             if 0.05 * fmax <= f[j] <= fmax:
-                ax.text(xs[order][j], f[j], oname, color="w", fontsize=6, va="bottom")
+                ax.text(xs[order][j], f[j], oname.replace("_", " "), color="k", fontsize=7,
+                        va="bottom", ha="right", bbox=dict(boxstyle="square,pad=0.1",
+                                                           fc="white", ec="none", alpha=0.75))
         ax.set_ylim(0, fmax)
         ax.set_xlabel(study.param_label if monotone else "time [s]")
         ax.set_ylabel("frequency [Hz]")
