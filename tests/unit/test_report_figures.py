@@ -136,6 +136,9 @@ def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_
     amps = np.array([4.0, 2.0, np.sqrt(5.0), 0.0])
     note = unidentified_note((np.ones(4), np.ones(4), kinds, amps))
     assert "36 %" in note and "2 of 4" in note                    # (4 + 5) / 25
+    alt = np.array(["", "G1 mesh 1x; mode 3", "", ""])
+    note = unidentified_note((np.ones(4), np.ones(4), kinds, amps, alt))
+    assert "44 % of that with candidate" in note                  # 4 / 9
     rpm = np.array([1000.0, 2000.0])
     order = np.arange(0, 64) / 8.0
     freq = np.outer(rpm / 60.0 * 40, order)

@@ -62,8 +62,8 @@ def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0) -> list
     width_pt = ax.get_position().width * fig.get_figwidth() * 72.0
     per_pt = (x1 - x0) / max(width_pt, 1.0)           # data units per point along x
     groups: list[list] = []
-    for p in pts:                                       # join points closer than 24 pt
-        if groups and p[0] - groups[-1][-1][0] < 24.0 * per_pt:
+    for p in pts:               # join points within 36 pt of the group's first point
+        if groups and p[0] - groups[-1][0][0] < 36.0 * per_pt:
             groups[-1].append(p)
         else:
             groups.append([p])

@@ -123,7 +123,8 @@ def _mark_lines(ax, lines, max_hz: float) -> str:
 
 def unidentified_note(lines) -> str:
     """The sentence on the unidentified lines of ``lines`` (frequency, rpm, kind[,
-    amplitude]): their share of the lines' power (sum of squared amplitudes) and count."""
+    amplitude[, alternatives]]): their share of the lines' power (sum of squared
+    amplitudes), their count and the share of them that had candidates."""
     kind = np.asarray(lines[2])
     unknown = kind == "unidentified"
     if not np.any(unknown):
@@ -132,8 +133,14 @@ def unidentified_note(lines) -> str:
         return f"{int(np.sum(unknown))} of {kind.size} lines unidentified (not marked)"
     p = np.asarray(lines[3], float) ** 2
     share = float(np.sum(p[unknown]) / np.sum(p)) if np.sum(p) > 0 else 0.0
-    return (f"unidentified lines (not marked): {100.0 * share:.0f} % of the lines' power "
+    text = (f"unidentified lines (not marked): {100.0 * share:.0f} % of the lines' power "
             f"({int(np.sum(unknown))} of {kind.size} lines)")
+    if len(lines) >= 5 and np.sum(p[unknown]) > 0:
+        # lines left unidentified because several sources lie within the resolution
+        amb = unknown & (np.char.str_len(np.asarray(lines[4]).astype(str)) > 0)
+        text += (f", {100.0 * np.sum(p[amb]) / np.sum(p[unknown]):.0f} % of that with "
+                 "candidate sources too close together to tell apart")
+    return text
 
 
 def _mark_unstable(ax, r_edges, unstable, max_hz: float) -> None:

@@ -156,15 +156,16 @@ def line_arrays(r) -> dict:
 
 
 def _lines_of(r, q):
-    """(frequency, rpm, kind, amplitude) of the named lines of quantity ``q`` (None
-    without)."""
+    """(frequency, rpm, kind, amplitude, alternatives) of the named lines of quantity
+    ``q`` (None without)."""
     per = getattr(r, "lines", {}).get(q)
     if not per:
         return None
     return (np.concatenate([ln.freq for ln in per]),
             np.concatenate([np.full(ln.freq.size, p) for p, ln in zip(r.rpm, per)]),
             np.concatenate([np.array(ln.kind, dtype=str) for ln in per]),
-            np.concatenate([np.asarray(ln.amp, dtype=float) for ln in per]))
+            np.concatenate([np.asarray(ln.amp, dtype=float) for ln in per]),
+            np.concatenate([np.array(ln.alternatives, dtype=str) for ln in per]))
 
 
 def _write_spectra(path: Path, arrays: dict, res, channels: dict) -> str:
