@@ -85,8 +85,10 @@ def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: fl
         if unstable is not None and np.any(unstable):
             _mark_unstable(ax, r_edges, np.asarray(unstable, bool), max_hz)
         ax.set_ylabel("driving speed [rpm]")
+        # below the map, on a dark ground like the map's, so the white order lines show
         ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3, fontsize=7,
-                  frameon=False)
+                  frameon=True, facecolor="0.25", edgecolor="none", framealpha=1.0,
+                  labelcolor="white")
     else:
         ax.plot(freq_hz[0], level[0], lw=1.0)
         ax.set_ylabel(bar_label)
@@ -135,10 +137,11 @@ def unidentified_note(lines) -> str:
     share = float(np.sum(p[unknown]) / np.sum(p)) if np.sum(p) > 0 else 0.0
     text = (f"unidentified lines (not marked): {100.0 * share:.0f} % of the lines' power "
             f"({int(np.sum(unknown))} of {kind.size} lines)")
+    sep = "\n"
     if len(lines) >= 5 and np.sum(p[unknown]) > 0:
         # lines left unidentified because several sources lie within the resolution
         amb = unknown & (np.char.str_len(np.asarray(lines[4]).astype(str)) > 0)
-        text += (f", {100.0 * np.sum(p[amb]) / np.sum(p[unknown]):.0f} % of that with "
+        text += (f"{sep}{100.0 * np.sum(p[amb]) / np.sum(p[unknown]):.0f} % of that with "
                  "candidate sources too close together to tell apart")
     return text
 
