@@ -39,57 +39,73 @@ def draw_branches(ax, arrays, quantity, *, label_points: bool = False, lw_scale=
         label_special_points(ax, arrays, quantity)
 
 
-#: text height and width per character of the labels [points] (fontsize 7)
-_LABEL_PT = 7.0
-_CHAR_PT = 4.6
+def _group_text(group) -> str:
+    """"LP 1856, 1862 / PD 1859": each kind with its parameter values (more than three:
+    their count and range)."""
+    kinds = []
+    for _, _, lab in group:
+        if lab not in kinds:
+            kinds.append(lab)
+    parts = []
+    for k in kinds:
+        xs = sorted(x for x, _, lab in group if lab == k)
+        parts.append(f"{k} " + (", ".join(f"{x:.4g}" for x in xs) if len(xs) <= 3
+                                else f"{len(xs)}x {xs[0]:.4g}-{xs[-1]:.4g}"))
+    return " / ".join(parts)
 
 
-def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0) -> list:
+def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0,
+                         lanes: int = 6) -> list:
     """Name the special points (LP / PD / NS / BP) of ``arrays`` with their parameter value
-    so that no two names overprint: points closer than a label's width are named together
-    ("LP 1856 / PD 1861"), and a label that would reach into the one before it moves up by
-    one line (up to 4 lines, then further ones are left to the markers and the legend).
-    Returns the Text artists."""
+    so that no two names overprint.  Points within 36 pt of a group's first point are named
+    together ("LP 1856 / PD 1859"); each name is placed above its point, moved up one line
+    at a time (at most ``lanes``) until its box, measured by the figure's renderer, meets no
+    name placed before; one that would leave the axes on the right is right-aligned; a name
+    that finds no free line is left out (its markers and the legend stay).  Call it once the
+    axes have their final size.  Returns the Text artists."""
     label = np.asarray(arrays["label"]).astype(str)
     x = np.asarray(arrays["param"], float)
     y = np.asarray(arrays[quantity], float)
     pts = sorted((float(x[i]), float(y[i]), str(label[i])) for i in range(label.size)
-                 if label[i] in _MARK)
+                 if label[i] in _MARK and np.isfinite(x[i]) and np.isfinite(y[i]))
     if not pts:
         return []
     fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
     x0, x1 = ax.get_xlim()
-    width_pt = ax.get_position().width * fig.get_figwidth() * 72.0
-    per_pt = (x1 - x0) / max(width_pt, 1.0)           # data units per point along x
+    per_pt = (x1 - x0) / max(frame.width * 72.0 / fig.dpi, 1.0)   # data x per point
     groups: list[list] = []
-    for p in pts:               # join points within 36 pt of the group's first point
+    for p in pts:
         if groups and p[0] - groups[-1][0][0] < 36.0 * per_pt:
             groups[-1].append(p)
         else:
             groups.append([p])
-    texts, lane_end = [], []                            # right end of each lane (data x)
+    texts, placed = [], []
+    step = fontsize + 4.0
     for g in groups:
-        kinds = []
-        for _, _, lab in g:
-            if lab not in kinds:
-                kinds.append(lab)
-        text = " / ".join(f"{k} " + ", ".join(f"{xv:.4g}" for xv, _, lab in g if lab == k)
-                          for k in kinds)
-        xa, ya = g[0][0], max(v for _, v, _ in g)
-        right = xa + (4.0 + _CHAR_PT * len(text) * fontsize / 7.0) * per_pt
-        lane = next((k for k, end in enumerate(lane_end) if end < xa), len(lane_end))
-        if lane >= 4:
-            continue
-        if lane == len(lane_end):
-            lane_end.append(right)
-        else:
-            lane_end[lane] = right
+        kinds = {lab for _, _, lab in g}
         col = _MARK[g[0][2]][1] if len(kinds) == 1 else "black"
-        texts.append(ax.annotate(text, (xa, ya), textcoords="offset points",
-                                 xytext=(4, 4 + lane * (_LABEL_PT + 3.0) * fontsize / 7.0),
-                                 fontsize=fontsize, color=col, zorder=8,
-                                 bbox=dict(boxstyle="square,pad=0.05", fc="white", ec="none",
-                                           alpha=0.7)))
+        xa, ya = g[0][0], max(v for _, v, _ in g)
+        t = ax.annotate(_group_text(g), (xa, ya), textcoords="offset points", xytext=(4, 4),
+                        fontsize=fontsize, color=col, zorder=8, annotation_clip=False,
+                        bbox=dict(boxstyle="square,pad=0.05", fc="white", ec="none",
+                                  alpha=0.75))
+        t.set_in_layout(False)
+        for lane in range(lanes):
+            t.set_horizontalalignment("left")
+            t.xyann = (4, 4 + lane * step)
+            box = t.get_window_extent(renderer)
+            if box.x1 > frame.x1:
+                t.set_horizontalalignment("right")
+                t.xyann = (-4, 4 + lane * step)
+                box = t.get_window_extent(renderer)
+            if not any(box.overlaps(b) for b in placed):
+                placed.append(box)
+                texts.append(t)
+                break
+        else:
+            t.remove()
     return texts
 
 
