@@ -48,9 +48,10 @@ def _group_text(group) -> str:
             kinds.append(lab)
     parts = []
     for k in kinds:
-        xs = sorted(x for x, _, lab in group if lab == k)
-        parts.append(f"{k} " + (", ".join(f"{x:.4g}" for x in xs) if len(xs) <= 3
-                                else f"{len(xs)}x {xs[0]:.4g}-{xs[-1]:.4g}"))
+        xs = sorted({f"{x:.4g}": x for x, _, lab in group if lab == k}.items(),
+                    key=lambda kv: kv[1])            # one name per distinct value
+        parts.append(f"{k} " + (", ".join(t for t, _ in xs) if len(xs) <= 3
+                                else f"{len(xs)}x {xs[0][0]}-{xs[-1][0]}"))
     return " / ".join(parts)
 
 
