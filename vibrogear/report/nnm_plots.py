@@ -89,7 +89,7 @@ def plot_backbone(r, arrays, path, forced=None, sweep=None, to_freq: float = 1.0
         lo, hi = min(fa.min(), f.min()), max(fa.max(), f.max())
         ax.set_xlim(lo - 0.02 * (hi - lo), hi + 0.02 * (hi - lo))
     ax.set_xlabel(f"{r.freq_label} (forced: excitation frequency)")
-    ax.set_ylabel(mon.axis_label("max |.|"))
+    ax.set_ylabel(mon.axis_label("amplitude (largest |value|) of the"))
     ax.set_title(f"{plain_title(r.study.title)}\nbackbone over the forced response", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
