@@ -42,7 +42,8 @@ def _edges(x: np.ndarray) -> np.ndarray:
 
 def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: float,
                    mesh_hz, shaft_hz, max_order: float, shaft_names=(), title: str = "",
-                   power: bool = False, lines=None, unstable=None, span_db: float = 80.0):
+                   power: bool = False, lines=None, unstable=None, span_db: float = 80.0,
+                   mesh_names=()):
     """Colour map of ``amp`` (P, K) [unit] over frequency (P, K) [Hz] and speed (P,) [rpm]
     in dB re :func:`db_reference` (module docstring), with mesh order lines h x f_mesh
     (h = 1 .. max_order, each mesh) and 1x shaft order lines.  Each bin is drawn as the
@@ -76,7 +77,8 @@ def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: fl
             for h in range(1, int(np.floor(max_order)) + 1):
                 ax.plot(h * f0 * scale, speeds, color="w", lw=0.8,
                         ls=_LINE_STYLES[i % len(_LINE_STYLES)],
-                        label=f"mesh {i + 1} orders 1..{int(max_order)}" if h == 1 else None)
+                        label=(f"{mesh_names[i] if i < len(mesh_names) else f'mesh {i + 1}'}"
+                               f" orders 1..{int(max_order)}") if h == 1 else None)
         for i, f0 in enumerate(np.atleast_1d(np.asarray(shaft_hz)[0])):
             name = shaft_names[i] if i < len(shaft_names) else f"shaft {i}"
             ax.plot(f0 * scale, speeds, color="r", lw=0.8,

@@ -100,6 +100,7 @@ def write(scene, outcome, out, previous=None) -> dict:
         plot_waterfall(path, r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
                        max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
                        max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
                        title=f"{title}\n{_LABELS[q]}, steady points from {r.source}",
                        lines=_lines_of(r, q))
         files[f"waterfall_{q}"] = str(path)
@@ -112,6 +113,7 @@ def write(scene, outcome, out, previous=None) -> dict:
         plot_waterfall(out / "nvh_waterfall_erp.png", r.rpm, r.freq_hz, r.erp_per_bin,
                        label="ERP per bin", unit="W", max_hz=max_hz, mesh_hz=r.mesh_hz,
                        shaft_hz=r.shaft_hz, max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
                        title=f"{title}\nERP of the outer housing surface per frequency bin",
                        power=True)
         files["waterfall_erp"] = str(out / "nvh_waterfall_erp.png")
@@ -203,6 +205,7 @@ def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
         plot_waterfall(path, b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
                        unit=r.units["dte"], max_hz=max_hz, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                        max_order=cfg.max_order, shaft_names=names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
                        unstable=~np.asarray(b.stable, bool)[sel],
                        title=f"{title}\n{_LABELS['dte']} of the continuation branch (first "
                              "pass, one orbit period per point)")
