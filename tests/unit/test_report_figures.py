@@ -221,3 +221,21 @@ def test_branch_waterfall_not_drawn_for_an_orbit_unstable_everywhere(tmp_path):
     scene, r = _branch_result([True, True, False, False])
     files = write_branch(scene, r, tmp_path, 3000.0, "two_stage")
     assert (tmp_path / "nvh_waterfall_branch_dte.png").stat().st_size > 10_000
+
+
+def test_resonance_crossings_of_the_first_mesh_are_the_modes_analysis_speeds():
+    """The figure marks, for the first mesh, exactly the speeds the modes analysis lists
+    (its rule: largest mesh share > 5 %, orders 1 and 2, inside the range)."""
+    from types import SimpleNamespace
+
+    from vibrogear.analyses.gearbox_modes import _resonance_speeds
+    from vibrogear.report.gearbox_plots import resonance_crossings
+
+    rng = np.random.default_rng(3)
+    f = np.sort(rng.uniform(200.0, 9000.0, 40))
+    mesh = rng.uniform(0.0, 0.12, (2, 40))
+    ref = _resonance_speeds(SimpleNamespace(mesh_teeth=40), f, mesh, 1500.0, 3000.0)
+    got = [c for c in resonance_crossings(f, mesh.max(axis=0), [("G1", 40 / 60.0)],
+                                          1500.0, 3000.0)]
+    assert sorted(round(c["rpm"], 9) for c in ref) == [round(c["rpm"], 9) for c in got]
+    assert len(got) > 3
