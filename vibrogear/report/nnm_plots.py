@@ -54,8 +54,8 @@ def plot_fep(r, arrays, path):
     ax.set_ylim(lo - pad, hi + pad)
     ax.set_xlabel(f"energy above the static state [{r.energy_unit}]")
     ax.set_ylabel(r.freq_label)
-    ax.set_title(f"{plain_title(r.study.title)}\nfrequency-energy plot (stable solid, unstable dashed)",
-                 fontsize=9)
+    ax.set_title(f"{plain_title(r.study.title)}\nfrequency-energy plot (stable solid, "
+                 "unstable dashed)", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return save_figure(fig, path)

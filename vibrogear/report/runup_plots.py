@@ -91,8 +91,8 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
                "with the inertia torque" if all(getattr(r, "inertia_torque", False)
                                                 for r in result.runs)
                else "without the inertia torque")
-    fig.axes[0].set_title(f"{plain_title(study.title)}\nenvelope per mesh period ({rates}; {inertia})",
-                          fontsize=9)
+    fig.axes[0].set_title(f"{plain_title(study.title)}\nenvelope per mesh period ({rates}; "
+                          f"{inertia})", fontsize=9)
     out = save_figure(fig, path, formats=("png",))
     return out
 
