@@ -291,8 +291,10 @@ def figure_of(scene):
                    cy - s.radius if g.free else cy + s.radius, xytext=(0, 3 if g.free else -10),
                    textcoords="offset points")
     side.set_xlabel("y along the shafts [mm] (front wall at 0)", fontsize=8)
-    side.set_ylabel(f"{lay.across} [mm]", fontsize=8)
-    side.set_title("side view: section through the shaft axes", fontsize=9)
+    seen_from = "from above" if lay.across == "x" else "from the side"
+    side.set_ylabel(f"{lay.across} [mm] (seen {seen_from})", fontsize=8)
+    side.set_title("side view: section through the shaft axes" if scene.housing is not None
+                   else "side view: the plane of the shaft axes", fontsize=9)
     end.set_xlabel("x [mm]", fontsize=8)
     end.set_ylabel("z (up) [mm]", fontsize=8)
     end.set_title("end view: section at mid-width (bores dashed)" if scene.housing is not None
