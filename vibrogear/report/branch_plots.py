@@ -56,14 +56,15 @@ def _group_text(group) -> str:
 
 
 def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0,
-                         lanes: int = 6) -> list:
+                         lanes: int = 6, avoid=()) -> list:
     """Name the special points (LP / PD / NS / BP) of ``arrays`` with their parameter value
     so that no two names overprint.  Points within 36 pt of a group's first point are named
     together ("LP 1856 / PD 1859"); each name is placed above its point, moved up one line
     at a time (at most ``lanes``) until its box, measured by the figure's renderer, meets no
     name placed before; one that would leave the axes on the right is right-aligned; a name
-    that finds no free line is left out (its markers and the legend stay).  Call it once the
-    axes have their final size.  Returns the Text artists."""
+    that finds no free line is left out (its markers and the legend stay).  ``avoid``:
+    axes (an inset) whose area no name may cover and whose points are named there, not
+    here.  Call it once the axes have their final size.  Returns the Text artists."""
     label = np.asarray(arrays["label"]).astype(str)
     x = np.asarray(arrays["param"], float)
     y = np.asarray(arrays[quantity], float)
@@ -75,14 +76,20 @@ def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0,
     renderer = fig.canvas.get_renderer()
     frame = ax.get_window_extent(renderer)
     x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
     per_pt = (x1 - x0) / max(frame.width * 72.0 / fig.dpi, 1.0)   # data x per point
+    blocked = [a.get_tightbbox(renderer) for a in avoid]
+    pts = [p for p in pts if x0 <= p[0] <= x1 and min(y0, y1) <= p[1] <= max(y0, y1)
+           and not any(b.contains(*ax.transData.transform((p[0], p[1]))) for b in blocked)]
+    if not pts:
+        return []
     groups: list[list] = []
     for p in pts:
         if groups and p[0] - groups[-1][0][0] < 36.0 * per_pt:
             groups[-1].append(p)
         else:
             groups.append([p])
-    texts, placed = [], []
+    texts, placed = [], list(blocked)
     step = fontsize + 4.0
     for g in groups:
         kinds = {lab for _, _, lab in g}
@@ -166,6 +173,7 @@ def _inset_period_doubling(ax, arrays, quantity):
     ins.tick_params(labelsize=6)
     ins.set_title("period-doubling region", fontsize=7)
     ax.indicate_inset_zoom(ins, edgecolor="0.5")
+    return ins
 
 
 def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "max q",
@@ -174,7 +182,7 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
     """Plot ``arrays[quantity]`` (e.g. qmax or qmin) of every branch against param."""
     from matplotlib.lines import Line2D
 
-    fig = new_figure((8.0, 5.0))
+    fig = new_figure((9.0, 5.0))
     ax = fig.add_subplot(111)
     _draw(ax, arrays, quantity)
     drawn = []
@@ -191,14 +199,16 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
         ax.axhline(b, color="0.6", lw=0.8, ls=":")
     handles = branch_legend(arrays)                     # only what is drawn
     handles += drawn
-    ax.legend(handles=handles, fontsize=7, loc="best")
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              frameon=False, borderaxespad=0.0)            # beside the axes, off the data
     nper = np.asarray(arrays["n_periods"])
-    if np.any(nper == 2):
-        _inset_period_doubling(ax, arrays, quantity)
+    ins = _inset_period_doubling(ax, arrays, quantity) if np.any(nper == 2) else None
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.set_title(plain_title(title), fontsize=9)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    label_special_points(ax, arrays, quantity)
+    if ins is not None:           # the inset's points named in the inset, not under it
+        label_special_points(ins, arrays, quantity, fontsize=6)
+    label_special_points(ax, arrays, quantity, avoid=() if ins is None else (ins,))
     return save_figure(fig, path, formats, dpi)
