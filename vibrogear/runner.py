@@ -117,6 +117,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             if entry.study and study is None:
                 from .analyses.study import build_study
                 study = build_study(scene)
+                summary["reduced_model"] = study.title       # "name: m = 146 (21+25+100)"
                 summary["wall_time_s"]["model"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
             # analyses that read earlier outcomes take them as ``previous`` (read-only), with

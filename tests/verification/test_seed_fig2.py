@@ -77,5 +77,11 @@ def test_fig2_draws_dots_branches_zero_line_and_band(tmp_path):
                 "n_periods": np.ones(6, int)}
     paths = plot_fig2(sweep, branches, tmp_path / "fig2", param_label="rpm", formats=("svg",))
     svg = paths[0].read_text()
-    assert "PD" in svg and "G1 up" in svg and "bearing up" not in svg
+    # one motion row per direction by default; the PD named with its speed
+    assert "PD 1.4" in svg and "G1 up" not in svg and "bearing up" not in svg
+    # per-contact rows where asked: each group whose own class differs from the whole's
+    # (the bearing has no period of its own here, so its period-n differs too)
+    asked = plot_fig2(sweep, branches, tmp_path / "fig2_rows", param_label="rpm",
+                      formats=("svg",), per_contact_rows=True)[0].read_text()
+    assert "G1 up" in asked and "bearing up" in asked
     assert "period-1 branch stable" in svg and "period-1 branch unstable" in svg

@@ -20,7 +20,8 @@ from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
 from .verbs import MODEL_KINDS, VERBS
-from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
+from .sections import (ContinuationConfig, CriticalDampingConfig, FiguresConfig,
+                       ImpactPairConfig,
                        IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
                        RpmContinuationConfig, RpmSweepConfig,
                        RpmTimeResponseConfig, SceneInfo, ShootingOptions, SweepConfig,
@@ -61,6 +62,7 @@ class Scene:
     nnm: NnmConfig | None = spec(None)
     optimize: OptimizeConfig | None = spec(None)
     findings: FindingsConfig = spec(FindingsConfig())
+    figures: FiguresConfig = spec(FiguresConfig())
 
     @property
     def parameter(self) -> Parameter | None:

@@ -21,7 +21,7 @@ from .verbs import VERBS
 from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
                       Parameter, ShootingOptions, SweepOptions, check_range)
 
-__all__ = ["SceneInfo", "ReductionAccuracyConfig", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
+__all__ = ["SceneInfo", "FiguresConfig", "ReductionAccuracyConfig", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
            "SweepSettings", "ContinuationSettings", "TimeResponseSettings", "with_parameter",
            "SweepConfig", "ContinuationConfig", "TimeResponseConfig", "RpmSweepConfig",
            "RpmContinuationConfig", "RpmTimeResponseConfig", "ReportConfig",
@@ -145,6 +145,16 @@ class ReportConfig:
     shooting_tols: tuple[float, ...] = spec((1e-4, 1e-6, 1e-8, 1e-10, 1e-12), min_len=2, gt=0.0,
                                             lt=1.0, doc="shooting tolerances (integrator rtol matched)")
     repeats: int = spec(5, ge=1, le=100, doc="timing repeats per point (best time is reported)")
+
+
+@dataclass(frozen=True)
+class FiguresConfig:
+    """[figures]: what the figures show beyond their defaults (no effect on any result)."""
+    motion_rows_per_contact: bool = spec(False, doc="the bifurcation diagrams' motion-class "
+                                         "band also gets one row per contact group (mesh, "
+                                         "bearing) and direction where the group's own class "
+                                         "differs from the whole motion's (default: one row "
+                                         "per sweep direction)")
 
 
 @dataclass(frozen=True)

@@ -11,6 +11,7 @@ import numpy as np
 
 from .branch_io import branch_arrays
 from .branch_plots import plot_branches
+from .figure import plain_title
 from .sweep_io import sweep_arrays
 from .sweep_plots import plot_bifurcation
 
@@ -26,22 +27,24 @@ def display_arrays(data: dict, scale: float, keys=("qmin", "qmax", "poincare")) 
     return out
 
 
-def draw_bifurcation(data: dict, study, path, branches: dict | None = None) -> list[Path]:
+def draw_bifurcation(data: dict, study, path, branches: dict | None = None, *,
+                     per_contact_rows: bool = False) -> list[Path]:
     """The bifurcation diagram of sweep arrays ``data`` (display units) to ``path``, with
-    continuation branch arrays (display units) overlaid when given."""
+    continuation branch arrays (display units) overlaid when given; ``per_contact_rows``:
+    the scene's ``[figures] motion_rows_per_contact``."""
     mon = study.monitor
     lines = mon.lines
     if mon.zero_line and lines:      # the back-flank line only when the motion nears it
         near = np.nanmin(data["qmin"], initial=0.0) < 0.5 * min(lines)
         lines = lines if near else ()
-    below = ": below 0 the mesh is interrupted" if mon.zero_line else ""
-    title = study.title + below
+    below = " (below 0: the teeth lose contact)" if mon.zero_line else ""
+    title = f"{plain_title(study.title)}: response against speed, sweep up and down{below}"
     if branches is not None:
-        title += "\nsweep points with the continuation branches"
+        title += "\nwith the continuation branches"
     return plot_bifurcation(data, path, param_label=study.param_label,
                             deformation_label=mon.axis_label(), zero_line=mon.zero_line,
                             bounds=lines, title=title, branches=branches,
-                            energy_unit=study.energy_unit)
+                            energy_unit=study.energy_unit, per_contact_rows=per_contact_rows)
 
 
 def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
@@ -60,15 +63,17 @@ def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
     for q, lab in (("qmax", "max"), ("qmin", "min")):
         paths += plot_branches(arrays, Path(out) / f"branch_{lab}", quantity=q,
                                ylabel=mon.axis_label(lab), xlabel=study.param_label,
-                               title=study.title, sweep=sw, bounds=lines)
+                               title=f"{plain_title(study.title)}: periodic orbits traced "
+                                     f"by continuation, their {lab}ima", sweep=sw,
+                               bounds=lines)
     return paths
 
 
-def plot_combined(result, out, sweep_data: dict) -> list[Path]:
+def plot_combined(result, out, sweep_data: dict, *, per_contact_rows: bool = False) -> list[Path]:
     """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
     branches of ``result`` overlaid."""
     study = result.study
     arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
                             study.monitor.scale, ("qmin", "qmax"))
     return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
-                            branches=arrays)
+                            branches=arrays, per_contact_rows=per_contact_rows)

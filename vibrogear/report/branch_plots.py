@@ -9,9 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
-__all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments"]
+__all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments",
+           "label_special_points"]
 
 _MARK = {"LP": ("^", "black"), "PD": ("s", "tab:purple"), "NS": ("D", "tab:orange"),
          "BP": ("o", "tab:brown")}
@@ -31,21 +32,89 @@ def stability_segments(x, y, stable):
 
 def draw_branches(ax, arrays, quantity, *, label_points: bool = False, lw_scale=1.0):
     """Every branch of ``arrays`` (branch.npz's) on ``ax``: ``quantity`` against param,
-    stable solid, unstable dashed, special points marked (and named: ``label_points``)."""
+    stable solid, unstable dashed, special points marked (and named: ``label_points``,
+    :func:`label_special_points`)."""
     _draw(ax, arrays, quantity, lw_scale)
     if label_points:
-        # names only where they do not overprint: one per 3 % x 6 % of the branch's span
-        label = np.asarray(arrays["label"]).astype(str)
-        x, y = np.asarray(arrays["param"], float), np.asarray(arrays[quantity], float)
-        wx, wy = 0.03 * (np.ptp(x) or 1.0), 0.06 * (np.ptp(y) or 1.0)
-        done = []
-        for lab, (_, col) in _MARK.items():
-            for xv, yv in zip(x[label == lab], y[label == lab]):
-                if any(abs(xv - a) < wx and abs(yv - b) < wy for a, b in done):
-                    continue
-                done.append((xv, yv))
-                ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4),
-                            fontsize=7, color=col)
+        label_special_points(ax, arrays, quantity)
+
+
+def _group_text(group) -> str:
+    """"LP 1856, 1862 / PD 1859": each kind with its parameter values (more than three:
+    their count and range)."""
+    kinds = []
+    for _, _, lab in group:
+        if lab not in kinds:
+            kinds.append(lab)
+    parts = []
+    for k in kinds:
+        xs = sorted({f"{x:.4g}": x for x, _, lab in group if lab == k}.items(),
+                    key=lambda kv: kv[1])            # one name per distinct value
+        parts.append(f"{k} " + (", ".join(t for t, _ in xs) if len(xs) <= 3
+                                else f"{len(xs)}x {xs[0][0]}-{xs[-1][0]}"))
+    return " / ".join(parts)
+
+
+def label_special_points(ax, arrays, quantity, *, fontsize: float = 7.0,
+                         lanes: int = 6, avoid=()) -> list:
+    """Name the special points (LP / PD / NS / BP) of ``arrays`` with their parameter value
+    so that no two names overprint.  Points within 36 pt of a group's first point are named
+    together ("LP 1856 / PD 1859"); each name is placed above its point, moved up one line
+    at a time (at most ``lanes``) until its box, measured by the figure's renderer, meets no
+    name placed before; one that would leave the axes on the right is right-aligned; a name
+    that finds no free line is left out (its markers and the legend stay).  ``avoid``:
+    axes (an inset) whose area no name may cover and whose points are named there, not
+    here.  Call it once the axes have their final size.  Returns the Text artists."""
+    label = np.asarray(arrays["label"]).astype(str)
+    x = np.asarray(arrays["param"], float)
+    y = np.asarray(arrays[quantity], float)
+    pts = sorted((float(x[i]), float(y[i]), str(label[i])) for i in range(label.size)
+                 if label[i] in _MARK and np.isfinite(x[i]) and np.isfinite(y[i]))
+    if not pts:
+        return []
+    fig = ax.figure
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    per_pt = (x1 - x0) / max(frame.width * 72.0 / fig.dpi, 1.0)   # data x per point
+    blocked = [a.get_tightbbox(renderer) for a in avoid]
+    pts = [p for p in pts if x0 <= p[0] <= x1 and min(y0, y1) <= p[1] <= max(y0, y1)
+           and not any(b.contains(*ax.transData.transform((p[0], p[1]))) for b in blocked)]
+    if not pts:
+        return []
+    groups: list[list] = []
+    for p in pts:
+        if groups and p[0] - groups[-1][0][0] < 36.0 * per_pt:
+            groups[-1].append(p)
+        else:
+            groups.append([p])
+    texts, placed = [], list(blocked)
+    step = fontsize + 4.0
+    for g in groups:
+        kinds = {lab for _, _, lab in g}
+        col = _MARK[g[0][2]][1] if len(kinds) == 1 else "black"
+        xa, ya = g[0][0], max(v for _, v, _ in g)
+        t = ax.annotate(_group_text(g), (xa, ya), textcoords="offset points", xytext=(4, 4),
+                        fontsize=fontsize, color=col, zorder=8, annotation_clip=False,
+                        bbox=dict(boxstyle="square,pad=0.05", fc="white", ec="none",
+                                  alpha=0.75))
+        t.set_in_layout(False)
+        for lane in range(lanes):
+            t.set_horizontalalignment("left")
+            t.xyann = (4, 4 + lane * step)
+            box = t.get_window_extent(renderer)
+            if box.x1 > frame.x1:
+                t.set_horizontalalignment("right")
+                t.xyann = (-4, 4 + lane * step)
+                box = t.get_window_extent(renderer)
+            if not any(box.overlaps(b) for b in placed):
+                placed.append(box)
+                texts.append(t)
+                break
+        else:
+            t.remove()
+    return texts
 
 
 def branch_legend(arrays) -> list:
@@ -55,10 +124,12 @@ def branch_legend(arrays) -> list:
     stable = np.asarray(arrays["stable"], dtype=bool)
     label = np.asarray(arrays["label"]).astype(str)
     handles = []
+    plain = label == ""                     # the points the lines are drawn through
     for n in np.unique(nper):
         col = _COLOR.get(int(n), "tab:gray")
         for s, ls, word in ((True, "-", "stable"), (False, "--", "unstable")):
-            if np.any((nper == n) & (stable == s)):
+            if np.sum(plain & (nper == n) & (stable == s)) >= 1 and \
+                    np.sum(plain & (nper == n)) >= 2:
                 handles.append(Line2D([], [], color=col, ls=ls,
                                       label=f"period-{int(n)} branch {word}"))
     handles += [Line2D([], [], marker=mk, color=col, ls="none", mfc="none", label=lab)
@@ -102,6 +173,7 @@ def _inset_period_doubling(ax, arrays, quantity):
     ins.tick_params(labelsize=6)
     ins.set_title("period-doubling region", fontsize=7)
     ax.indicate_inset_zoom(ins, edgecolor="0.5")
+    return ins
 
 
 def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "max q",
@@ -110,15 +182,10 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
     """Plot ``arrays[quantity]`` (e.g. qmax or qmin) of every branch against param."""
     from matplotlib.lines import Line2D
 
-    fig = new_figure((8.0, 5.0))
+    fig = new_figure((9.0, 5.0))
     ax = fig.add_subplot(111)
-    label = np.asarray(arrays["label"]).astype(str)
     _draw(ax, arrays, quantity)
-    for lab, (_, col) in _MARK.items():
-        for xv, yv in zip(np.asarray(arrays["param"])[label == lab],
-                          np.asarray(arrays[quantity])[label == lab]):
-            ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4), fontsize=7,
-                        color=col)
+    drawn = []
     if sweep is not None:
         ok = np.asarray(sweep["status"]) == 0 if "status" in sweep else slice(None)
         for d, mk, col in (("up", "^", "tab:cyan"), ("down", "v", "tab:red")):
@@ -126,24 +193,22 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
             if np.any(sel):
                 ax.plot(np.asarray(sweep["param"])[sel], np.asarray(sweep[quantity])[sel],
                         mk, color=col, ms=3, alpha=0.7, ls="none")
+                drawn.append(Line2D([], [], marker=mk, color=col, ls="none", ms=4,
+                                    label=f"sweep {d}"))
     for b in bounds:
         ax.axhline(b, color="0.6", lw=0.8, ls=":")
-    handles = [Line2D([], [], color=_COLOR[1], ls="-", label="period-1 stable"),
-               Line2D([], [], color=_COLOR[1], ls="--", label="period-1 unstable")]
-    if np.any(np.asarray(arrays["n_periods"]) == 2):
-        handles += [Line2D([], [], color=_COLOR[2], ls="-", label="period-2 stable"),
-                    Line2D([], [], color=_COLOR[2], ls="--", label="period-2 unstable")]
-    handles += [Line2D([], [], marker=mk, color=col, ls="none", mfc="none", label=lab)
-                for lab, (mk, col) in _MARK.items() if np.any(label == lab)]
-    if sweep is not None:
-        handles += [Line2D([], [], marker="^", color="tab:cyan", ls="none", ms=4, label="sweep up"),
-                    Line2D([], [], marker="v", color="tab:red", ls="none", ms=4, label="sweep down")]
-    ax.legend(handles=handles, fontsize=7, loc="best")
+    handles = branch_legend(arrays)                     # only what is drawn
+    handles += drawn
+    ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              frameon=False, borderaxespad=0.0)            # beside the axes, off the data
     nper = np.asarray(arrays["n_periods"])
-    if np.any(nper == 2):
-        _inset_period_doubling(ax, arrays, quantity)
+    ins = _inset_period_doubling(ax, arrays, quantity) if np.any(nper == 2) else None
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(plain_title(title), fontsize=9)
     ax.grid(alpha=0.3)
+    fig.tight_layout()
+    if ins is not None:           # the inset's points named in the inset, not under it
+        label_special_points(ins, arrays, quantity, fontsize=6)
+    label_special_points(ax, arrays, quantity, avoid=() if ins is None else (ins,))
     return save_figure(fig, path, formats, dpi)

@@ -41,6 +41,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {k: str(v) for k, v in paths.items()}
     files["png"] = [str(Path(out) / "branch_max.png"), str(Path(out) / "branch_min.png")]
     if data is not None:
-        files["branches_png"] = str(plot_combined(r, out, data)[0])
-        files["fig2_png"] = str(write_fig2(r, out, data)[0])
+        rows = scene.figures.motion_rows_per_contact
+        files["branches_png"] = str(plot_combined(r, out, data, per_contact_rows=rows)[0])
+        files["fig2_png"] = str(write_fig2(r, out, data, per_contact_rows=rows)[0])
     return files

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["plot_fold_cusp"]
 
@@ -48,7 +48,8 @@ def plot_fold_cusp(result, path, *, title: str = "", extra_scans=(), formats=("p
                     arrowprops={"arrowstyle": "->", "color": "0.4", "lw": 0.8})
     ax.set_xlabel("zeta")
     ax.set_ylabel("fold parameter Omega (LP)")
-    ax.set_title(title + f" ({result.continuations} continuations in the bisection)", fontsize=9)
+    ax.set_title(plain_title(title) + f" ({result.continuations} continuations in the "
+                 "bisection)", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
     return save_figure(fig, path, formats, dpi)

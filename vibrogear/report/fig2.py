@@ -9,8 +9,8 @@ report writer, :mod:`.branch_report`, when the sweep's arrays are at hand):
   branches' maxima and minima: stable solid, unstable dashed, LP / PD / NS marked and named
   (:func:`.branch_plots.draw_branches`);
 * bottom panel: the motion class of every sweep point as a colour band, one row per sweep
-  direction and one per mesh whose own class differs (the band of :mod:`.sweep_plots`;
-  ``bifurcation.png`` also has the bearings' rows).
+  direction (with ``per_contact_rows``, ``[figures] motion_rows_per_contact``, also one per
+  contact group whose own class differs; the band of :mod:`.sweep_plots`).
 
 Unlike ``bifurcation_branches.png`` it leaves out the Poincare samples and the impact and
 rattle panels, so that it reads as the seed's diagram.  Both arrays come in display units
@@ -24,9 +24,9 @@ import numpy as np
 
 from .bifurcation_figures import display_arrays
 from .branch_io import branch_arrays
-from .branch_plots import branch_legend, draw_branches
-from .figure import new_figure, save_figure
-from .sweep_plots import _band, class_categories
+from .branch_plots import branch_legend, draw_branches, label_special_points
+from .figure import new_figure, plain_title, save_figure
+from .sweep_plots import class_categories, draw_band, motion_rows
 
 __all__ = ["plot_fig2", "write_fig2"]
 
@@ -34,26 +34,10 @@ _DOTS = {"up": dict(color="tab:blue", marker="^", label="sweep up: min / max"),
          "down": dict(color="tab:red", marker="v", label="sweep down: min / max")}
 
 
-def _rows(sweep: dict, direction: np.ndarray) -> list:
-    """Band rows: each direction's class, then each mesh whose own class differs (a loaded
-    mesh can be periodic while a free gear rattles)."""
-    cats = class_categories(sweep["motion_class"], sweep["period_n"]) \
-        if "motion_class" in sweep else np.where(np.asarray(sweep["period_n"]) > 0, 0, 6)
-    dirs = [d for d in ("up", "down") if np.any(direction == d)]
-    rows = [(d, direction == d, cats) for d in dirs]
-    groups = sorted(k[len("motion_class_"):] for k in sweep
-                    if k.startswith("motion_class_") and f"impacts_drive_{k[13:]}" in sweep)
-    for g in groups:
-        gc = class_categories(sweep[f"motion_class_{g}"],
-                              sweep.get(f"period_n_{g}", sweep["period_n"]))
-        if np.any(gc != cats):
-            rows += [(f"{g} {d}", direction == d, gc) for d in dirs]
-    return rows
-
-
 def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "parameter",
               ylabel: str = "deformation", title: str = "", zero_line: bool = True,
-              formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+              formats=("png", "svg"), dpi: int = 150,
+              per_contact_rows: bool = False) -> list[Path]:
     """Draw the figure of the module docstring from sweep arrays ``sweep`` and branch
     arrays ``branches`` (branch.npz's; None or empty: the sweep alone) to ``path``."""
     param = np.asarray(sweep["param"], float)
@@ -62,7 +46,9 @@ def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "p
     qmax = np.asarray(sweep["qmax"], float)
     status = np.asarray(sweep.get("status", np.zeros(param.size, int)))
     ok = (status == 0) & np.isfinite(qmin) & np.isfinite(qmax)
-    rows = _rows(sweep, direction)
+    cats = class_categories(sweep["motion_class"], sweep["period_n"]) \
+        if "motion_class" in sweep else np.where(np.asarray(sweep["period_n"]) > 0, 0, 6)
+    rows = motion_rows(sweep, direction, cats, per_contact=per_contact_rows)
     fig = new_figure((9.0, 6.0 + 0.15 * len(rows)))
     ax, axc = fig.subplots(2, 1, sharex=True,
                            gridspec_kw={"height_ratios": [4.0, 0.4 + 0.22 * len(rows)]})
@@ -74,9 +60,10 @@ def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "p
             ax.plot(param[sel], q[sel], st["marker"], ms=2.6, color=st["color"], lw=0,
                     alpha=0.75, label=lab)
     handles = ax.get_legend_handles_labels()[0]
-    if branches is not None and np.size(branches["param"]):
+    drawn_branches = branches is not None and np.size(branches["param"])
+    if drawn_branches:
         for q in ("qmax", "qmin"):
-            draw_branches(ax, branches, q, label_points=q == "qmax")
+            draw_branches(ax, branches, q)
         handles += branch_legend(branches)
     if zero_line:
         ax.axhline(0.0, color="k", lw=0.9)
@@ -85,26 +72,30 @@ def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "p
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     if title:
-        ax.set_title(title, fontsize=10)
-    _band(axc, param, rows)
+        ax.set_title(plain_title(title), fontsize=10)
+    draw_band(axc, param, rows)
     axc.set_ylabel("motion", fontsize=8)
     axc.set_xlabel(param_label)
     if param.size:
         u = np.unique(param)
         pad = 0.5 * (np.min(np.diff(u)) if u.size > 1 else 1.0)
         ax.set_xlim(param.min() - pad, param.max() + pad)
+    fig.tight_layout()
+    if drawn_branches:                  # named once the axes have their final size
+        label_special_points(ax, branches, "qmax")
     return save_figure(fig, path, formats, dpi)
 
 
-def write_fig2(result, out, sweep_data: dict) -> list[Path]:
+def write_fig2(result, out, sweep_data: dict, *, per_contact_rows: bool = False) -> list[Path]:
     """``fig2.png/.svg`` in ``out`` from a continuation ``result`` and the sweep arrays
     ``sweep_data`` (display units) of the same study."""
     study = result.study
     mon = study.monitor
     arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
                             mon.scale, ("qmin", "qmax"))
-    below = ": below 0 the mesh is interrupted" if mon.zero_line else ""
-    title = (f"{study.title}{below}\nsweep minima / maxima, continuation branches "
-             "(stable solid, unstable dashed) and motion classes")
+    below = " (below 0: the teeth lose contact)" if mon.zero_line else ""
+    title = (f"{plain_title(study.title)}: response against speed{below}\nsweep minima / "
+             "maxima, continuation branches (stable solid, unstable dashed), motion classes")
     return plot_fig2(sweep_data, arrays, Path(out) / "fig2", param_label=study.param_label,
-                     ylabel=mon.axis_label(), title=title, zero_line=mon.zero_line)
+                     ylabel=mon.axis_label(), title=title, zero_line=mon.zero_line,
+                     per_contact_rows=per_contact_rows)

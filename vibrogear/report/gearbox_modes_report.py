@@ -3,14 +3,16 @@
 
 * ``modes.csv``: the elastic modes of the linearised reduced model, their dominant
   subsystem and the strain-energy share of each gear mesh.
-* ``resonance_map.png/.svg``: natural frequencies against the mesh orders over the speed
-  range.
+* ``resonance_map.png/.svg``: natural frequencies against every mesh's orders over the
+  speed range, the resonance speeds marked.
+* ``gearbox.png``: the gearbox to scale from the scene (:mod:`.gearbox_drawing`).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from .gearbox_plots import plot_resonance_map, write_modes_csv
+from .gearbox_drawing import draw_gearbox
+from .gearbox_plots import mesh_orders_per_rpm, plot_resonance_map, write_modes_csv
 
 __all__ = ["write"]
 
@@ -22,6 +24,7 @@ def write(scene, outcome, out, previous=None) -> dict:
                                         list(r.names), r.shares, r.mesh,
                                         list(r.mesh_names)))}
     plot_resonance_map(out / "resonance_map", r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo,
-                               r.rpm_hi, title=r.title)
+                       r.rpm_hi, title=r.title, orders=mesh_orders_per_rpm(scene.gearbox))
     files["png"] = str(out / "resonance_map.png")
+    files["drawing_png"] = str(draw_gearbox(scene, out / "gearbox.png"))
     return files

@@ -5,10 +5,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 from ..pipeline.files import atomic_write_bytes
 
-__all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response"]
+__all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response",
+           "mesh_orders_per_rpm", "resonance_crossings"]
 
 
 def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) -> Path:
@@ -27,29 +28,98 @@ def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) ->
     return atomic_write_bytes(Path(path), ("\n".join(lines) + "\n").encode())
 
 
+def mesh_orders_per_rpm(gearbox) -> list[tuple[str, float]]:
+    """(mesh name, mesh frequency per driving-shaft rpm [Hz/rpm]) of every mesh of a
+    ``[gearbox]`` config: teeth x |spin of gear_a| / 60, the gears' spins from the speed
+    ratios of the fixed-gear chain (a free gear takes its fixed partner's)."""
+    _, gear_p = gearbox.speed_ratios()
+    out = []
+    for m in gearbox.meshes:
+        a = gearbox.gear_index(m.gear_a, "")
+        out.append((m.name, abs(gear_p[a]) * gearbox.gears[a].teeth / 60.0))
+    return out
+
+
+def resonance_crossings(f_hz, share, orders, rpm_lo, rpm_hi, *, threshold: float = 0.05,
+                        harmonics=(1, 2)) -> list[dict]:
+    """Speeds where an order h x f_mesh of a mesh meets a mode whose largest mesh
+    strain-energy share ``share`` exceeds ``threshold`` (the rule of the modes analysis'
+    ``resonance_speeds_rpm``), inside [rpm_lo, rpm_hi]."""
+    out = []
+    for i in np.flatnonzero(np.asarray(share) > threshold):
+        for name, per_rpm in orders:
+            for h in harmonics:
+                rpm = float(f_hz[i]) / (h * per_rpm)
+                if rpm_lo <= rpm <= rpm_hi:
+                    out.append({"mesh": name, "order": h, "rpm": rpm, "mode": int(i),
+                                "frequency_hz": float(f_hz[i]), "share": float(share[i])})
+    return sorted(out, key=lambda c: c["rpm"])
+
+
+def _grey(s: float):
+    return (0.8 - 0.8 * min(1.0, 4 * s),) * 3
+
+
 def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: float, *,
-                       title: str = "", f_max: float | None = None,
+                       title: str = "", f_max: float | None = None, orders=None,
                        formats=("png", "svg"), dpi: int = 150) -> list[Path]:
-    """Natural frequencies (horizontal lines, darker = more mesh strain energy) against the
-    mesh-frequency orders 1x and 2x over the speed range: crossings are resonance speeds."""
+    """Natural frequencies (horizontal lines, darker = more mesh strain energy, with its
+    scale) against the orders 1x and 2x of every mesh's frequency over the speed range; the
+    crossings with modes of mesh strain-energy share > 5 % are the resonance speeds, marked
+    and written on the speed axis.  ``orders``: [(mesh name, Hz per rpm)] (default: one
+    mesh of ``teeth`` teeth on the driving shaft).  Returns the paths; the crossings are
+    :func:`resonance_crossings`."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import LinearSegmentedColormap, Normalize
+
     if not rpm_hi > rpm_lo:               # a single speed: a span around it
         rpm_lo, rpm_hi = 0.5 * rpm_lo, max(1.5 * rpm_lo, 1.0)
-    fig = new_figure((8.0, 5.0))
+    orders = list(orders) if orders else [("mesh", teeth / 60.0)]
+    fig = new_figure((8.5, 5.4))
     ax = fig.add_subplot(111)
     rpm = np.linspace(rpm_lo, rpm_hi, 2)
-    top = 2.2 * teeth * rpm_hi / 60.0 if f_max is None else f_max
+    top = 2.2 * max(p for _, p in orders) * rpm_hi if f_max is None else f_max
     share = mesh.max(axis=0) if mesh.size else np.zeros_like(f_hz)
     for f, s in zip(f_hz, share):
         if f <= top:
-            ax.axhline(f, color=(0.8 - 0.8 * min(1.0, 4 * s),) * 3, lw=0.6 + 2.0 * min(1.0, 4 * s))
-    for order, style in ((1, "-"), (2, "--")):
-        ax.plot(rpm, order * teeth * rpm / 60.0, "r" + style, lw=1.5, label=f"{order}x mesh frequency")
+            ax.axhline(f, color=_grey(s), lw=0.6 + 2.0 * min(1.0, 4 * s), zorder=1)
+    for j, (name, per_rpm) in enumerate(orders):
+        for h, style in ((1, "-"), (2, "--")):
+            ax.plot(rpm, h * per_rpm * rpm, style, color=f"C{(3 + j) % 10}", lw=1.5, zorder=2,
+                    label=f"{name} {h}x mesh frequency")
+    cross = resonance_crossings(f_hz, share, orders, rpm_lo, rpm_hi)
+    last = -np.inf
+    lane = 0
+    for c in cross:
+        ax.plot(c["rpm"], c["frequency_hz"], "o", ms=6, mfc="none", mec="k", mew=1.2, zorder=4)
+        ax.axvline(c["rpm"], color="k", lw=0.6, ls=":", zorder=1)
+        close = c["rpm"] - last < 0.07 * (rpm_hi - rpm_lo)
+        lane = (lane + 1) % 3 if close else 0
+        last = c["rpm"]
+        right = c["rpm"] > rpm_lo + 0.85 * (rpm_hi - rpm_lo)     # keep it inside the axes
+        ax.annotate(f"{c['rpm']:.0f} rpm\n{c['mesh']} {c['order']}x", (c["rpm"], 0.0),
+                    xytext=(-2 if right else 2, 3 + 20 * lane), textcoords="offset points",
+                    ha="right" if right else "left", fontsize=7,
+                    zorder=5, bbox=dict(boxstyle="square,pad=0.1", fc="white", ec="none",
+                                        alpha=0.8))
     ax.set_xlim(rpm_lo, rpm_hi)
     ax.set_ylim(0.0, top)
     ax.set_xlabel("driving speed [rpm]")
     ax.set_ylabel("frequency [Hz]")
-    ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(title + "\nnatural frequencies (dark: large gear-mesh strain energy)", fontsize=9)
+    if cross:
+        from matplotlib.lines import Line2D
+        handles = ax.get_legend_handles_labels()[0] + [Line2D(
+            [], [], marker="o", mfc="none", mec="k", lw=0, label="resonance (share > 5 %)")]
+    else:
+        handles = ax.get_legend_handles_labels()[0]
+    ax.legend(handles=handles, loc="upper left", fontsize=7, framealpha=0.85)
+    greys = LinearSegmentedColormap.from_list("share", [_grey(0.0), _grey(0.25)])
+    bar = fig.colorbar(ScalarMappable(Normalize(0.0, 25.0), greys), ax=ax, pad=0.02,
+                       extend="max")
+    bar.set_label("mode's mesh strain-energy share [%]", fontsize=8)
+    head = plain_title(title)
+    ax.set_title((head + "\n" if head else "") + "natural frequencies against the mesh "
+                 "orders: crossings are resonance speeds", fontsize=9)
     return save_figure(fig, path, formats, dpi)
 
 
@@ -93,5 +163,5 @@ def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearin
     if len(mesh_names) < 2:
         axes[1, 0].set_visible(False)
         axes[1, 1].set_visible(False)
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(plain_title(title), fontsize=9)
     return save_figure(fig, path, formats, dpi)

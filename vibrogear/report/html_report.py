@@ -21,7 +21,7 @@ from urllib.parse import quote
 from ..config.verbs import VERBS
 from ..pipeline.files import atomic_write_text
 from ..pipeline.outcome import is_root_process
-from .captions import caption_for
+from .captions import caption
 from .glossary import GLOSSARY, PAPER, SECTION_TITLES
 
 __all__ = ["REPORT_NAME", "write_html_report", "render_html_report"]
@@ -126,7 +126,8 @@ def render_html_report(out, summary: dict) -> str:
     for name in names:
         record = results.get(name)
         wall = (summary.get("wall_time_s") or {}).get(name)
-        parts += _analysis_section(out, name, record, wall, folder)
+        parts += _analysis_section(out, name, record, wall, folder,
+                                   str(summary.get("reduced_model", "")))
 
     unclaimed_figures = [rel for rel in folder if rel.lower().endswith(FIGURE_SUFFIX)
                          and rel not in claimed and rel not in OVERVIEW_FIGURES]
@@ -210,7 +211,8 @@ def _key_figure(name: str, figures: list[str]) -> str | None:
     return figures[0] if figures else None
 
 
-def _analysis_section(out: Path, name: str, record, wall, folder: dict[str, int]) -> list[str]:
+def _analysis_section(out: Path, name: str, record, wall, folder: dict[str, int],
+                      title: str = "") -> list[str]:
     parts = [f'<h2 id="{_anchor(name)}">{_esc(SECTION_TITLES.get(name, name))}</h2>']
     if not isinstance(record, dict):
         parts.append(f"<p>Computation: {_status_badge('not run')}</p>")
@@ -231,11 +233,11 @@ def _analysis_section(out: Path, name: str, record, wall, folder: dict[str, int]
     figures = [rel for rel in files if rel.lower().endswith(FIGURE_SUFFIX)]
     key = _key_figure(name, figures)
     if key is not None:
-        parts.append(_figure(key, key=True))
+        parts.append(_figure(key, key=True, title=title))
     others = [rel for rel in figures if rel != key]
     if others:
         parts.append(f"<details><summary>{len(others)} more figures</summary>")
-        parts += [_figure(rel) for rel in others]
+        parts += [_figure(rel, title=title) for rel in others]
         parts.append("</details>")
     if "error_estimate" in record:
         estimate = record["error_estimate"]
@@ -322,10 +324,12 @@ def _fmt_cell(value):
     return _list_text(value) if isinstance(value, (list, tuple)) else value
 
 
-def _figure(rel: str, key: bool = False) -> str:
+def _figure(rel: str, key: bool = False, title: str = "") -> str:
+    """A figure with its caption; ``title``: the reduced model's study title, whose mode
+    count (m = a+b+c) the caption states."""
     url = _url(rel)
-    caption = caption_for(rel)
-    text = f"{_esc(caption)} <small>({_esc(rel)})</small>" if caption else _esc(rel)
+    text = caption(rel, title)
+    text = f"{_esc(text)} <small>({_esc(rel)})</small>" if text else _esc(rel)
     css = ' class="key"' if key else ""
     return (f'<figure{css}><a href="{url}"><img src="{url}" alt="{_esc(rel)}"></a>'
             f"<figcaption>{text}</figcaption></figure>")

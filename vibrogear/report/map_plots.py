@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 from .sweep_plots import _CATS, class_categories
 
 __all__ = ["plot_map_figures", "plot_class_map", "plot_value_map"]
@@ -85,7 +85,7 @@ def plot_class_map(arrays, path, *, title: str = "") -> Path:
     handles = [Patch(color=_CATS[c][1], label=_CATS[c][0]) for c in sorted(used)]
     fig.legend(handles=handles, loc="center right", fontsize=8, frameon=False,
                title="motion class", title_fontsize=8)
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(plain_title(title), fontsize=10)
     fig.tight_layout(rect=(0, 0, 1 - 1.4 / fig.get_figwidth(), 1))
     saved = save_figure(fig, Path(path), formats=("png",), tight=False)
     return saved[0]
@@ -111,7 +111,7 @@ def plot_value_map(arrays, key, path, *, label: str, title: str = "", log: bool 
                              vmin=vmin, vmax=vmax)
         _draw_curves(ax, arrays)
     fig.colorbar(mesh, ax=axes, label=label, fraction=0.04, pad=0.02)
-    fig.suptitle(title, fontsize=10)
+    fig.suptitle(plain_title(title), fontsize=10)
     return save_figure(fig, Path(path), formats=("png",), tight=False)[0]
 
 

@@ -6,7 +6,7 @@ from fractions import Fraction
 import numpy as np
 
 from .branch_plots import stability_segments
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["plot_fep", "plot_backbone"]
 
@@ -54,8 +54,8 @@ def plot_fep(r, arrays, path):
     ax.set_ylim(lo - pad, hi + pad)
     ax.set_xlabel(f"energy above the static state [{r.energy_unit}]")
     ax.set_ylabel(r.freq_label)
-    ax.set_title(f"{r.study.title}\nfrequency-energy plot (stable solid, unstable dashed)",
-                 fontsize=9)
+    ax.set_title(f"{plain_title(r.study.title)}\nfrequency-energy plot (stable solid, "
+                 "unstable dashed)", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return save_figure(fig, path)
@@ -89,8 +89,8 @@ def plot_backbone(r, arrays, path, forced=None, sweep=None, to_freq: float = 1.0
         lo, hi = min(fa.min(), f.min()), max(fa.max(), f.max())
         ax.set_xlim(lo - 0.02 * (hi - lo), hi + 0.02 * (hi - lo))
     ax.set_xlabel(f"{r.freq_label} (forced: excitation frequency)")
-    ax.set_ylabel(mon.axis_label("max |.|"))
-    ax.set_title(f"{r.study.title}\nbackbone over the forced response", fontsize=9)
+    ax.set_ylabel(mon.axis_label("amplitude (largest |value|) of the"))
+    ax.set_title(f"{plain_title(r.study.title)}\nbackbone over the forced response", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     return save_figure(fig, path)

@@ -34,8 +34,9 @@ its one-period record), ``first_pass``, ``order`` (K,) on the common grid k / N 
 the n_periods; a period-n orbit has lines only at multiples of 1 / n), ``freq_hz`` (P, K),
 ``amp_<q>``, ``channels_<q>``, ``parseval_<q>`` as above, with a housing ``erp_w`` and
 ``erp_w_per_bin``; and ``nvh_waterfall_branch_dte.png``: the DTE over the speeds of the first
-pass of branch 0 (its points up to the first fold, where the branch would revisit speeds;
-stable and unstable alike).
+pass of branch 0 (its points up to the first fold, where the branch would revisit speeds), the
+speeds where the orbit is unstable marked; not drawn when the orbit is unstable at every speed
+(it is never observed; its spectra stay in the npz).
 """
 from __future__ import annotations
 
@@ -104,6 +105,7 @@ def write(scene, outcome, out, previous=None) -> dict:
         plot_waterfall(path, r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
                        max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
                        max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
                        title=f"{title}\n{_LABELS[q]}, steady points from {r.source}",
                        lines=_lines_of(r, q))
         files[f"waterfall_{q}"] = str(path)
@@ -116,6 +118,7 @@ def write(scene, outcome, out, previous=None) -> dict:
         plot_waterfall(out / "nvh_waterfall_erp.png", r.rpm, r.freq_hz, r.erp_per_bin,
                        label="ERP per bin", unit="W", max_hz=max_hz, mesh_hz=r.mesh_hz,
                        shaft_hz=r.shaft_hz, max_order=cfg.max_order, shaft_names=r.shaft_names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
                        title=f"{title}\nERP of the outer housing surface per frequency bin",
                        power=True)
         files["waterfall_erp"] = str(out / "nvh_waterfall_erp.png")
@@ -202,13 +205,16 @@ def line_arrays(r) -> dict:
 
 
 def _lines_of(r, q):
-    """(frequency, rpm, kind) of the named lines of quantity ``q`` (None without)."""
+    """(frequency, rpm, kind, amplitude, alternatives) of the named lines of quantity
+    ``q`` (None without)."""
     per = getattr(r, "lines", {}).get(q)
     if not per:
         return None
     return (np.concatenate([ln.freq for ln in per]),
             np.concatenate([np.full(ln.freq.size, p) for p, ln in zip(r.rpm, per)]),
-            np.concatenate([np.array(ln.kind, dtype=str) for ln in per]))
+            np.concatenate([np.array(ln.kind, dtype=str) for ln in per]),
+            np.concatenate([np.asarray(ln.amp, dtype=float) for ln in per]),
+            np.concatenate([np.array(ln.alternatives, dtype=str) for ln in per]))
 
 
 def _write_spectra(path: Path, arrays: dict, res, channels: dict) -> str:
@@ -233,7 +239,9 @@ def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
     files["branch_npz"] = _write_spectra(out / "spectra_branch.npz", arrays, b, r.channels)
     amp = b.amplitudes["dte"]
     sel = np.flatnonzero(b.first_pass)
-    if amp.shape[1] and sel.size:
+    # an orbit unstable at every speed is never observed: its waterfall is not drawn (the
+    # spectra stay in spectra_branch.npz); where some speeds are stable the others are marked
+    if amp.shape[1] and sel.size and np.any(np.asarray(b.stable)[sel]):
         sel = sel[np.argsort(b.rpm[sel], kind="stable")]
         # order lines: frequencies proportional to the speed (the steady points' ratios)
         mesh_hz = np.outer(b.rpm[sel], np.asarray(r.mesh_hz)[0] / r.rpm[0])
@@ -244,6 +252,8 @@ def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
         plot_waterfall(path, b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
                        unit=r.units["dte"], max_hz=max_hz, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
                        max_order=cfg.max_order, shaft_names=names,
+                       mesh_names=tuple(r.channels.get("dte", ())),
+                       unstable=~np.asarray(b.stable, bool)[sel],
                        title=f"{title}\n{_LABELS['dte']} of the continuation branch (first "
                              "pass, one orbit period per point)")
         files["waterfall_branch_dte"] = str(path)

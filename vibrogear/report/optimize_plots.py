@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["plot_convergence", "plot_landscape"]
 
@@ -42,7 +42,7 @@ def plot_convergence(history, best_so_far, path, *, label: str, title: str = "")
                 clip_on=False, ls="none", label="failed")
     ax.set_xlabel("evaluation")
     ax.set_ylabel(label)
-    ax.set_title(title, fontsize=9)
+    ax.set_title(plain_title(title), fontsize=9)
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)
@@ -118,7 +118,7 @@ def plot_landscape(history, variables, best, path, *, label: str, title: str = "
         for v, setter in zip(variables, (ax.set_xscale, ax.set_yscale)):
             if v.log:
                 setter("log")
-    ax.set_title(title, fontsize=9)
+    ax.set_title(plain_title(title), fontsize=9)
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)

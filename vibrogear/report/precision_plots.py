@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_csv
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["write_table", "plot_work_precision", "plot_shooting_precision",
            "plot_accuracy_rule"]
@@ -48,7 +48,7 @@ def _finish(fig, axes, title, path, formats, dpi) -> list[Path]:
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7, loc="best")
     if title:
-        fig.suptitle(title, fontsize=9)
+        fig.suptitle(plain_title(title), fontsize=9)
     return save_figure(fig, path, formats, dpi)
 
 

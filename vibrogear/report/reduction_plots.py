@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_reduction_tables", "plot_reduction_study"]
@@ -85,7 +85,7 @@ def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
         a3.set_title(f"largest level, m = {last['m']}", fontsize=8)
     for a in (a1, a2, a3):
         a.tick_params(labelsize=8)
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(plain_title(title), fontsize=9)
     return save_figure(fig, path, formats, dpi)
 
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["plot_envelopes", "plot_orders", "plot_waterfall"]
 
@@ -91,8 +91,8 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
                "with the inertia torque" if all(getattr(r, "inertia_torque", False)
                                                 for r in result.runs)
                else "without the inertia torque")
-    fig.axes[0].set_title(f"{study.title}\nenvelope per mesh period ({rates}; {inertia})",
-                          fontsize=9)
+    fig.axes[0].set_title(f"{plain_title(study.title)}\nenvelope per mesh period ({rates}; "
+                          f"{inertia})", fontsize=9)
     out = save_figure(fig, path, formats=("png",))
     return out
 
@@ -119,7 +119,7 @@ def plot_orders(result, path) -> list:
         ax.set_ylabel(f"{name} order amplitude [{study.monitor.unit}]")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=7, ncol=3, loc="best", title="order (per rev)", title_fontsize=7)
-    fig.axes[0].set_title(f"{study.title}\norder tracks (window "
+    fig.axes[0].set_title(f"{plain_title(study.title)}\norder tracks (window "
                           f"{result.runs[0].tracks[result.mesh_names[0]].window_revs} rev; "
                           "run-up solid, run-down dashed)", fontsize=9)
     return save_figure(fig, path, formats=("png",))
@@ -152,12 +152,14 @@ def plot_waterfall(result, path) -> list:
             ax.plot(xs[order], f, color="w", lw=0.6, ls=":" if "_1x" not in oname else "--")
             j = int(np.argmin(np.abs(np.minimum(f, fmax) - 0.95 * np.minimum(f, fmax).max())))
             if 0.05 * fmax <= f[j] <= fmax:
-                ax.text(xs[order][j], f[j], oname, color="w", fontsize=6, va="bottom")
+                ax.text(xs[order][j], f[j], oname.replace("_", " "), color="k", fontsize=7,
+                        va="bottom", ha="right", bbox=dict(boxstyle="square,pad=0.1",
+                                                           fc="white", ec="none", alpha=0.75))
         ax.set_ylim(0, fmax)
         ax.set_xlabel(study.param_label if monotone else "time [s]")
         ax.set_ylabel("frequency [Hz]")
         ax.set_title(f"{_RUN_STYLE.get(r.direction, {}).get('label', r.direction)}: "
                      f"{result.mesh_names[0] if len(result.mesh_names) == 1 else 'monitored mesh'}"
                      " deformation", fontsize=9)
-    fig.axes[0].set_title(f"{study.title}\n" + fig.axes[0].get_title(), fontsize=9)
+    fig.axes[0].set_title(f"{plain_title(study.title)}\n" + fig.axes[0].get_title(), fontsize=9)
     return save_figure(fig, path, formats=("png",))

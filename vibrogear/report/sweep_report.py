@@ -18,11 +18,13 @@ def write(scene, outcome, out, previous=None) -> dict:
     study = r.study
     paths = write_sweep(r.sweep, out)
     data = display_arrays(read_sweep_npz(paths["npz"]), study.monitor.scale)
-    draw_bifurcation(data, study, Path(out) / "bifurcation")
+    rows = scene.figures.motion_rows_per_contact
+    draw_bifurcation(data, study, Path(out) / "bifurcation", per_contact_rows=rows)
     files = {k: str(v) for k, v in paths.items()}
     files["png"] = str(Path(out) / "bifurcation.png")
     branch = (previous or {}).get("continuation")
     if branch is not None:
         plot_branch_figures(branch.result, out, sweep=r)
-        files["branches_png"] = str(plot_combined(branch.result, out, data)[0])
+        files["branches_png"] = str(plot_combined(branch.result, out, data,
+                                                  per_contact_rows=rows)[0])
     return files

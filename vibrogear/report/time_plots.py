@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .figure import new_figure, save_figure
+from .figure import new_figure, plain_title, save_figure
 
 __all__ = ["plot_time_response"]
 
@@ -23,5 +23,5 @@ def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str =
     for b in bounds:
         ax1.axhline(b, color="0.6", ls=":", lw=0.8)
         ax2.axvline(b, color="0.6", ls=":", lw=0.8)
-    fig.suptitle(title, fontsize=9)
+    fig.suptitle(plain_title(title), fontsize=9)
     return save_figure(fig, path, formats, dpi)
