@@ -206,12 +206,16 @@ def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
 
 
 def _write_overview(scene: Scene, out: Path, findings, failure):
-    """The figures the report opens on: the speed-band chart of the findings."""
+    """The figures the report opens on: the speed-band chart of the findings and the
+    drawing of the gearbox."""
     from .report.findings_report import BAND_CHART, plot_band_chart
     try:
         chart = Path(out) / BAND_CHART
         if findings is None or plot_band_chart(findings, chart) is None:
             chart.unlink(missing_ok=True)        # never an old run's chart
+        if scene.gearbox is not None:
+            from .report.gearbox_drawing import draw_gearbox
+            draw_gearbox(scene, Path(out) / "gearbox.png")
     except OSError as exc:
         if failure is None:
             failure = WriteFailure(_file_error(exc))

@@ -5,13 +5,11 @@
   subsystem and the strain-energy share of each gear mesh.
 * ``resonance_map.png/.svg``: natural frequencies against every mesh's orders over the
   speed range, the resonance speeds marked.
-* ``gearbox.png``: the gearbox to scale from the scene (:mod:`.gearbox_drawing`).
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from .gearbox_drawing import draw_gearbox
 from .gearbox_plots import mesh_orders_per_rpm, plot_resonance_map, write_modes_csv
 
 __all__ = ["write"]
@@ -26,5 +24,4 @@ def write(scene, outcome, out, previous=None) -> dict:
     plot_resonance_map(out / "resonance_map", r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo,
                        r.rpm_hi, title=r.title, orders=mesh_orders_per_rpm(scene.gearbox))
     files["png"] = str(out / "resonance_map.png")
-    files["drawing_png"] = str(draw_gearbox(scene, out / "gearbox.png"))
     return files
