@@ -17,6 +17,7 @@ from .optimize_section import OptimizeConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
+from .states_section import RpmStatesConfig, StatesConfig
 from .verbs import MODEL_KINDS, VERBS
 from .sections import (ContinuationConfig, CriticalDampingConfig, ImpactPairConfig,
                        IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
@@ -58,6 +59,7 @@ class Scene:
     runup: RunupConfig | None = spec(None)
     nnm: NnmConfig | None = spec(None)
     optimize: OptimizeConfig | None = spec(None)
+    states: StatesConfig | None = spec(None)
 
     @property
     def parameter(self) -> Parameter | None:
@@ -103,6 +105,8 @@ class Scene:
             self.runup.check_gearbox(self.gearbox, "runup")
         if self.nnm is not None and "nnm" in self.scene.analyses:
             self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
+        if self.states is not None:
+            self.states.check_model(self.impact_pair, self.gearbox, "states")
         from .layout import check_layout        # checks across sections, in one place
         check_layout(self)
         if self.optimize is not None:           # the evaluated scene at the variables' bounds
@@ -116,6 +120,7 @@ class GearboxScene(Scene):
     sweep: RpmSweepConfig | None = spec(None)
     continuation: RpmContinuationConfig | None = spec(None)
     time_response: RpmTimeResponseConfig | None = spec(None)
+    states: RpmStatesConfig | None = spec(None)
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:
