@@ -87,11 +87,15 @@ def continue_branches(study, scene, attractors, previous) -> tuple[list, list]:
         return [], [{"note": "one grid value: no range to continue in"}]
     opts, shooting = _orbit_options(study, scene)
     cont = getattr(scene, "continuation", None)
+    grid_step = (hi - lo) / max(cfg.n_points - 1, 1)
     if cont is not None:
         steps = dict(ds=cont.ds, ds_min=cont.ds_min, ds_max=cont.ds_max)
     else:
-        steps = dict(ds=(hi - lo) / 40, ds_min=(hi - lo) * 1e-6, ds_max=(hi - lo) / 10)
-    grid_step = (hi - lo) / max(cfg.n_points - 1, 1)
+        # first steps of half a grid step; at most a fifth of the range where the arclength
+        # is balanced to the parameter (gearboxes), else the range (the state's change, not
+        # the parameter's, then sets the arclength: the impact pair)
+        steps = dict(ds=min(grid_step / 2, (hi - lo) / 10), ds_min=(hi - lo) * 1e-6,
+                     ds_max=(hi - lo) / 5 if study.balance_arclength else hi - lo)
     steps["ds"] = min(steps["ds"], max(steps["ds_min"], grid_step / 2))
     steps["ds_max"] = max(steps["ds_max"], steps["ds"])
     options = ContinuationOptions(param_min=lo, param_max=hi, max_points=cfg.branch_max_points,

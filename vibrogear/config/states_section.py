@@ -58,7 +58,7 @@ class StatesSettings(SweepOptions):
                            "3 standard errors plus this fraction of their spread")
     branches: bool = spec(True, doc="continue a branch both ways from each distinct periodic "
                           "attractor that no branch found so far passes through")
-    branch_max_points: int = spec(40, ge=2, le=100_000, doc="points per half-branch")
+    branch_max_points: int = spec(60, ge=2, le=100_000, doc="points per half-branch")
     range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
