@@ -119,7 +119,7 @@ _VERBS = (
                          ("runup.npz", "runup.csv", "runup_envelope.png", "runup_waterfall.png"),
                          study=True)}, command="runup"),
     Verb("states", "every operating state at every speed: coexisting attractors from random "
-         "starts, their basins (95 % intervals), branches from each, the danger map", "states",
+         "starts, their basins with Wilson intervals, branches from each, the danger map", "states",
          _both("states:run", "states_report:write", ("states.npz", "states.csv", "states.png")),
          command="states", reads_saved=("sweep", "continuation")),
     Verb("optimize", "design optimisation: the variables (any --set key) that minimise or "
