@@ -165,3 +165,71 @@ def test_states_bad_input_exits_2_naming_the_field(tmp_path, monkeypatch, capsys
     for text in expected[1:]:
         assert text in msg, msg
     assert os.listdir(tmp_path) == []
+
+
+# ------------------------------------------------------------------ the run
+
+def _ip_scene(**states):
+    from vibrogear.config import scene_from_dict
+    d = {"scene": {"name": "ip", "analyses": ["states"]},
+         "impact_pair": {"zeta": 0.05, "kappa": 0.5, "f_m": 0.55, "f_p": 0.12, "b_r": 1.0},
+         "integration": {"rtol": 1e-8, "atol": 1e-10},
+         "states": {"omega_min": 0.9, "omega_max": 1.1, "n_points": 2, "starts": 4,
+                    "batch": 3, "q_range": [-3.0, 4.0], "v_range": [-3.0, 3.0],
+                    "transient_periods": 100, "record_periods": 16, "branches": False,
+                    "workers": 1, **states}}
+    return scene_from_dict(d)
+
+
+def test_resume_reuses_settled_starts_and_more_starts_add_to_them(tmp_path):
+    from vibrogear.analyses import states
+    from vibrogear.analyses.study import build_study
+    from vibrogear.pipeline.outcome import RunContext
+
+    ctx = RunContext(out=tmp_path, quiet=True)
+    first = states.run(build_study(_ip_scene()), _ip_scene(), ctx)
+    assert first.summary["counters"]["starts_resumed"] == 0
+    again = states.run(build_study(_ip_scene()), _ip_scene(), ctx)
+    assert again.summary["counters"]["starts_resumed"] == 8
+    assert again.summary["per_speed"] == first.summary["per_speed"]
+    more = states.run(build_study(_ip_scene(starts=6)), _ip_scene(starts=6), ctx)
+    assert more.summary["counters"]["starts_resumed"] == 8
+    assert more.summary["counters"]["starts_settled"] == 12
+    # the first four starts are the same starts: their end states are reused exactly
+    a, b = first.result.starts, more.result.starts
+    assert np.array_equal(a["attractor"] >= 0, (b["attractor"] >= 0)[np.isin(b["index"], range(4))])
+
+
+def test_the_census_does_not_depend_on_workers_or_batch(tmp_path):
+    from vibrogear.analyses import states
+    from vibrogear.analyses.study import build_study
+    from vibrogear.pipeline.outcome import RunContext
+
+    one = states.run(build_study(_ip_scene()), _ip_scene(),
+                     RunContext(out=tmp_path / "a", quiet=True))
+    two = states.run(build_study(_ip_scene(workers=2, batch=1)), _ip_scene(workers=2, batch=1),
+                     RunContext(out=tmp_path / "b", quiet=True))
+    assert one.summary["per_speed"] == two.summary["per_speed"]
+
+
+def test_cli_writes_the_danger_map_and_its_files(tmp_path):
+    scene = tmp_path / "s.toml"
+    scene.write_text(Path(IMPACT).read_text())
+    code = main(["states", str(scene), "--out", str(tmp_path / "o"), "--quiet",
+                 "--set", "states.n_points=2", "--set", "states.starts=3",
+                 "--set", "states.omega_min=0.95", "--set", "states.branches=false"])
+    assert code == 0
+    o = tmp_path / "o"
+    for name in ("states.npz", "states.csv", "states.png", "summary.json", "report.html"):
+        assert (o / name).is_file(), name
+    assert not (o / "states.partial.jsonl").exists()
+    with np.load(o / "states.npz") as z:
+        for key in ("attractor_param", "attractor_class", "attractor_period_n",
+                    "attractor_qmin", "attractor_qmax", "basin_fraction", "basin_ci_lo",
+                    "basin_ci_hi", "n_starts", "attractor_class_legend"):
+            assert key in z.files, key
+        assert z["n_starts"].tolist() == [3, 3]
+    import json
+    rec = json.loads((o / "summary.json").read_text())["results"]["states"]
+    assert [s["n_starts"] for s in rec["per_speed"]] == [3, 3]
+    assert (o / "states.csv").read_text().splitlines()[0].startswith("Omega,class,period_n")

@@ -62,6 +62,8 @@ class StatesResult:
     sweep: dict | None = None          # the sweep's arrays it was compared with
     timings: dict = field(default_factory=dict)
     counters: dict = field(default_factory=dict)
+    #: per settled start: grid index, start index, wall seconds, attractor index (-1: failed)
+    starts: dict = field(default_factory=dict)
 
 
 def grid(cfg) -> np.ndarray:
@@ -198,6 +200,12 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
         raise NumericalFailure("states: every start failed" + (
             f"; first: {study.param_name} = {first.param:g}: {first.message}" if first else ""))
     recs = [r for v in by_point.values() for r in v]
+    which = {(a.point, k): j for j, a in enumerate(attractors) for k in a.members}
+    starts = {"point": np.array([i for i, v in by_point.items() for _ in v], int),
+              "index": np.array([r.index for v in by_point.values() for r in v], int),
+              "wall_s": np.array([r.wall_time for v in by_point.values() for r in v], float)}
+    starts["attractor"] = np.array([which.get((i, k), -1) for i, k in
+                                    zip(starts["point"], starts["index"])], int)
     timings = {ph: float(sum(r.timings.get(ph, 0.0) for r in recs)) for ph in PHASES}
     timings["clustering"] = t_cluster
     t0 = time.perf_counter()
@@ -218,7 +226,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     result = StatesResult(params=params, attractors=tuple(attractors),
                           n_starts=np.array(n_ok, int), n_failed=np.array(n_failed, int),
                           study=study, branches=tuple(branches), branch_notes=tuple(notes),
-                          sweep=sweep, timings=timings, counters=counters)
+                          sweep=sweep, timings=timings, counters=counters, starts=starts)
     summary = states_summary(result, cfg, opts, info)
     if store is not None and store.note:
         summary["resume"] = store.note

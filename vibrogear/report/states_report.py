@@ -17,6 +17,8 @@
 * branches continued from attractors: ``branch_param``, ``branch_qmin``, ``branch_qmax``,
   ``branch_stable``, ``branch_label`` (points of all branches, concatenated),
   ``branch_start`` (offsets, branches + 1), ``branch_n_periods``;
+* per settled start: ``start_point`` (grid index), ``start_index``, ``start_wall_s`` and
+  ``start_attractor`` (index into the attractor arrays; -1: the integration failed);
 * the sweep compared with: ``sweep_param``, ``sweep_qmin``, ``sweep_qmax`` (empty without).
 
 ``states.csv``: one row per attractor (display units in the header).
@@ -89,6 +91,8 @@ def states_arrays(res) -> dict:
     out["branch_qmax"] = np.array([p.qmax for p in pts], float)
     out["branch_stable"] = np.array([p.stable for p in pts], bool)
     out["branch_label"] = np.array([p.label for p in pts], dtype="<U2")
+    for k, v in (res.starts or {}).items():
+        out[f"start_{k}"] = np.asarray(v)
     sw = res.sweep or {}
     for k in ("param", "qmin", "qmax"):
         v = np.asarray(sw.get(k, np.zeros(0)), float)
