@@ -81,7 +81,7 @@ nnm-impact-pair: $(STAMP)
 ## every operating state at every speed ([states], docs/states.md): attractors from random
 ## starts with their basins, branches from each, the danger map states.png
 states: $(STAMP)
-	$(VG) states configs/gear_pair.toml --out $(OUT)/gear_pair_states
+	$(VG) run configs/gear_pair.toml --set 'scene.analyses=["sweep", "states"]' --out $(OUT)/gear_pair_states
 
 states-impact-pair: $(STAMP)
 	$(VG) states configs/impact_pair.toml --out $(OUT)/impact_pair_states

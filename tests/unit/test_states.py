@@ -78,10 +78,10 @@ def test_scaled_starts_put_the_mesh_in_its_documented_interval():
     lo, hi = -1.0 - 2 * pen, 1.0 + 2 * pen
     assert d.min() < lo + 0.05 * (hi - lo) and d.max() > hi - 0.05 * (hi - lo)   # all of it
     # the forced response of the linearised pair: contact stiffness 1 at the static state,
-    # |v| = Omega f_p / |1 - Omega^2 + 2 i zeta Omega| (one harmonic, one mode)
+    # the velocity c Re(V e^(i phi)), |c| <= 1, |V| = Omega f_p / |1 - Omega^2 + 2 i zeta Omega| (one harmonic, one mode)
     amp = 0.9 * 0.12 / abs(1 - 0.81 + 2j * 0.015 * 0.9)
     v = np.array([draw_start(sc, m, 0, 0, k)[1] for k in range(300)])
-    assert np.max(np.abs(v)) <= amp + 1e-12 and np.max(np.abs(v)) > 0.9 * amp
+    assert np.max(np.abs(v)) <= amp + 1e-12 and np.max(np.abs(v)) > 0.7 * amp
 
 
 def _rec(k, n, cycle, cls=1, qmin=0.0, qmax=1.0, metrics=None):

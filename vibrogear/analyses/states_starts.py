@@ -3,16 +3,20 @@
 Scaled starts (any reduced model; ``docs/states.md``), at parameter value p with static
 equilibrium [x_s, 0]:
 
-1. each modal coordinate x_i = x_s,i + a U(-1, 1) |x_s,i|, a = ``deformation_scale``;
+1. the static deflection scaled as a whole: x = s x_s, s drawn uniformly from [1 - a, 1 + a],
+   a = ``deformation_scale`` (every bearing deflection and every loaded deformation moves
+   together, up to a times its static value: independent modal disturbances would add up
+   incoherently over many modes and load one rolling element tens of times its static
+   deflection);
 2. each two-sided contact j (a gear mesh; the impact pair's clearance) is then put at a
    deformation drawn uniformly from [g_lo - a P_j, g_hi + a P_j]: anywhere in its backlash,
    or on either flank up to a times its static penetration P_j beyond the nearer gap (0 for
    a free gear that floats in its backlash); the smallest change of x that does it (least
    squares over the two-sided contacts' coupling vectors) is added;
-3. each modal velocity v_i = b U(-1, 1) V_i, b = ``velocity_scale``, V_i the amplitude of
-   mode i's velocity in the forced response linearised about the static state (the tangent
-   stiffness and damping there, every harmonic of the load and of the transmission errors,
-   amplitudes summed over harmonics).
+3. the velocities of the forced response linearised about the static state (the tangent
+   stiffness and damping there, every harmonic of the load and of the transmission errors)
+   at a random phase phi, times c: v = c Re(sum_h i h W X_h e^(i h phi)), phi uniform in
+   [0, 2 pi), c uniform in [-b, b], b = ``velocity_scale``.
 
 Box starts (impact pair, ``q_range`` and ``v_range``): q and dq/dtau uniform in the box.
 
@@ -29,15 +33,16 @@ from ..models.contact_law import evaluate_set
 from ..solvers.integrator.contact_eval import contact_kinematics
 from ..solvers.linear import tangent_matrices
 
-__all__ = ["StartScales", "start_scales", "draw_start", "forced_velocity_amplitude"]
+__all__ = ["StartScales", "start_scales", "draw_start", "forced_velocity"]
 
 
 @dataclass(frozen=True, eq=False)
 class StartScales:
     """What the starts at one parameter value are drawn from."""
     u_static: np.ndarray          # (2m,) the static equilibrium
-    x_scale: np.ndarray           # (m,) a |x_s,i|
-    v_scale: np.ndarray           # (m,) b V_i
+    a: float                      # deformation_scale
+    b: float                      # velocity_scale
+    v_harmonics: np.ndarray       # (H, m) complex velocity harmonics of the forced response
     mesh_rows: np.ndarray         # two-sided contacts
     mesh_lo: np.ndarray           # their target interval
     mesh_hi: np.ndarray
@@ -45,17 +50,17 @@ class StartScales:
     box: tuple | None = None      # ((q_lo, q_hi), (v_lo, v_hi)) of the impact pair
 
 
-def forced_velocity_amplitude(model, x_static, param: float) -> np.ndarray:
-    """(m,) amplitude of each modal velocity in the forced response linearised about the
-    static state: sum over harmonics h of h W |X_h|, (K_t - (h W)^2 + i h W D_t) X_h = F_h,
-    F_h the load harmonics plus the transmission errors through the contacts' stiffness."""
+def forced_velocity(model, x_static, param: float) -> np.ndarray:
+    """(H, m) complex velocity harmonics i h W X_h of the forced response linearised about
+    the static state: (K_t - (h W)^2 + i h W D_t) X_h = F_h, F_h the load harmonics plus the
+    transmission errors through the contacts' stiffness (v(t) = Re sum_h V_h e^(i h W t))."""
     m = model.n_modes
     K, D = tangent_matrices(model, x_static, param)
     W = model.excitation_frequency(param)
     ct, fc = model.contacts, model.forcing
     H = max(fc.Fc.shape[0], ct.error_cos.shape[1] if ct.count else 0)
     k = evaluate_set(ct, ct.directions @ x_static[:m]).stiffness if ct.count else np.zeros(0)
-    amp = np.zeros(m)
+    out = np.zeros((H, m), dtype=complex)
     for h in range(1, H + 1):
         F = np.zeros(m, dtype=complex)
         if h <= fc.Fc.shape[0]:
@@ -67,11 +72,10 @@ def forced_velocity_amplitude(model, x_static, param: float) -> np.ndarray:
             continue
         w = h * W
         try:
-            X = np.linalg.solve(K - w * w * np.eye(m) + 1j * w * D, F)
+            out[h - 1] = 1j * w * np.linalg.solve(K - w * w * np.eye(m) + 1j * w * D, F)
         except np.linalg.LinAlgError:
             continue
-        amp += w * np.abs(X)
-    return amp
+    return out
 
 
 def start_scales(model, param: float, u_static, *, deformation_scale: float,
@@ -91,10 +95,9 @@ def start_scales(model, param: float, u_static, *, deformation_scale: float,
         mesh_lo, mesh_hi = lo - a * pen, hi + a * pen
     else:
         e0 = mesh_lo = mesh_hi = np.zeros(0)
-    V = forced_velocity_amplitude(model, u_static[:m], param) if velocity_scale > 0 \
-        else np.zeros(m)
-    return StartScales(u_static, a * np.abs(u_static[:m]), float(velocity_scale) * V, rows,
-                       mesh_lo, mesh_hi, e0, box)
+    V = forced_velocity(model, u_static[:m], param) if velocity_scale > 0 and box is None \
+        else np.zeros((0, m), dtype=complex)
+    return StartScales(u_static, a, float(velocity_scale), V, rows, mesh_lo, mesh_hi, e0, box)
 
 
 def draw_start(scales: StartScales, model, seed: int, point: int, start: int) -> np.ndarray:
@@ -109,13 +112,16 @@ def draw_start(scales: StartScales, model, seed: int, point: int, start: int) ->
         c = model.contacts.directions[model.monitor]
         cc = float(c @ c)
         return np.concatenate([c * q / cc, c * v / cc])
-    u = scales.u_static.copy()
-    x = u[:m] + scales.x_scale * rng.uniform(-1.0, 1.0, m)
+    x = scales.u_static[:m] * rng.uniform(1.0 - scales.a, 1.0 + scales.a)
     rows = scales.mesh_rows
     if rows.size:
         target = rng.uniform(scales.mesh_lo, scales.mesh_hi)
         C = model.contacts.directions[rows]
         now = C @ x - scales.mesh_e0
         x = x + np.linalg.lstsq(C, target - now, rcond=None)[0]
-    v = scales.v_scale * rng.uniform(-1.0, 1.0, m)
+    phi = rng.uniform(0.0, 2.0 * np.pi)
+    c = rng.uniform(-scales.b, scales.b)
+    H = scales.v_harmonics.shape[0]
+    v = c * np.real(np.exp(1j * phi * np.arange(1, H + 1)) @ scales.v_harmonics) if H \
+        else np.zeros(m)
     return np.concatenate([x, v])

@@ -8,10 +8,11 @@ settings ``transient_periods``, ``record_periods``, ``max_period``, ``period_tol
 the settled motions are grouped into attractors with their basin fractions.
 
 Starts (``docs/states.md``): a gearbox's (any reduced model's) are the static equilibrium
-plus a random disturbance: each modal coordinate up to ``deformation_scale`` times its static
-value, each two-sided contact (gear mesh) then set anywhere in its backlash or up to
-``deformation_scale`` times its static penetration on either flank, each modal velocity up
-to ``velocity_scale`` times its amplitude in the linearised forced response.  The impact pair
+disturbed: the static deflection scaled by a factor from [1 - a, 1 + a] (a =
+``deformation_scale``), each two-sided contact (gear mesh) then set anywhere in its backlash
+or up to a times its static penetration on either flank, and the velocities of the
+linearised forced response at a random phase times a factor from [-b, b] (b =
+``velocity_scale``).  The impact pair
 may instead take starts uniform in the box ``q_range`` x ``v_range`` (q and dq/dtau).  The
 random numbers of start k at speed i come from ``seed``, i and k alone: any split over
 workers or a resumed run gives the same starts.
@@ -40,12 +41,12 @@ class StatesSettings(SweepOptions):
     basin_tol: float | None = spec(None, gt=0.0, le=1.0, doc="stop a parameter value early "
                                    "once every basin's 95 % interval is narrower than this "
                                    "(starts run in rounds of `batch`); default: all starts")
-    deformation_scale: float = spec(2.0, gt=0.0, le=1e6, doc="disturbance of each modal "
-                                    "coordinate and of each mesh's penetration, in multiples "
-                                    "of its static value")
-    velocity_scale: float = spec(1.0, ge=0.0, le=1e6, doc="disturbance of each modal "
-                                 "velocity, in multiples of its linearised forced-response "
-                                 "amplitude")
+    deformation_scale: float = spec(2.0, gt=0.0, le=1e6, doc="the static deflection is "
+                                    "scaled by a factor from [1 - a, 1 + a], each mesh's "
+                                    "penetration up to a times its static value")
+    velocity_scale: float = spec(1.0, ge=0.0, le=1e6, doc="the linearised forced "
+                                 "response's velocities at a random phase times a factor "
+                                 "from [-b, b]")
     q_range: tuple[float, float] | None = spec(None, doc="impact pair only: starts uniform "
                                                "in q over [lo, hi] (with v_range)")
     v_range: tuple[float, float] | None = spec(None, doc="impact pair only: starts uniform "
