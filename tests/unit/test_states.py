@@ -233,3 +233,25 @@ def test_cli_writes_the_danger_map_and_its_files(tmp_path):
     rec = json.loads((o / "summary.json").read_text())["results"]["states"]
     assert [s["n_starts"] for s in rec["per_speed"]] == [3, 3]
     assert (o / "states.csv").read_text().splitlines()[0].startswith("Omega,class,period_n")
+
+
+def test_basin_tol_stops_a_speed_once_every_interval_is_narrow_enough(tmp_path):
+    """One sure attractor (a clearance never reached): the Wilson interval after N starts is
+    [N / (N + z^2), 1], width z^2 / (N + z^2) = 0.49, 0.32, 0.24 at N = 4, 8, 12: with
+    basin_tol = 0.3 and rounds of 4 the census stops at 12 of the 40 starts."""
+    from vibrogear.analyses import states
+    from vibrogear.analyses.study import build_study
+    from vibrogear.config import scene_from_dict
+
+    d = {"scene": {"name": "ip", "analyses": ["states"]},
+         "impact_pair": {"zeta": 0.1, "kappa": 0.5, "f_m": 0.55, "f_p": 0.12, "b_r": 100.0},
+         "states": {"omega_min": 0.9, "omega_max": 1.1, "n_points": 2, "starts": 40,
+                    "batch": 4, "basin_tol": 0.3, "q_range": [-3.0, 4.0],
+                    "v_range": [-3.0, 3.0], "transient_periods": 100, "record_periods": 16,
+                    "branches": False, "workers": 1}}
+    scene = scene_from_dict(d)
+    from vibrogear.pipeline.outcome import RunContext
+    out = states.run(build_study(scene), scene, RunContext(out=tmp_path, quiet=True))
+    assert [s["n_starts"] for s in out.summary["per_speed"]] == [12, 12]
+    assert out.summary["stopped_early_at"] == [0.9, 1.1]
+    assert out.summary["counters"]["rounds"] == 3

@@ -3,7 +3,9 @@
 * :func:`refine_orbits`: each periodic attractor is shot over its n periods from its settled
   state (:func:`~vibrogear.solvers.periodic.shooting.shoot`, the continuation's own
   shooting and tolerances): its extrema become the orbit's (located by the integrator, as
-  a branch point's), its stability the Floquet multipliers'.  Run as work units.
+  a branch point's), its stability the Floquet multipliers'.  Run as work units on local
+  processes; under MPI on rank 0 alone, in turn (the other ranks have left after the
+  census).
 * :func:`continue_branches`: pseudo-arclength continuation both ways from each periodic
   attractor through which no branch found so far passes (:func:`.sweep_branches.on_branch`:
   branches of this run's continuation, then those continued here, in grid order), within
@@ -24,7 +26,7 @@ from functools import partial
 import numpy as np
 
 from ..config.options import ContinuationOptions, ShootingOptions
-from ..pipeline.executors import run_units
+from ..pipeline.executors import run_units, under_mpi
 from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ..solvers.periodic.shooting import shoot
 from .study import integration_options
@@ -68,9 +70,12 @@ def refine_orbits(study, scene, attractors, *, workers=None) -> None:
             a.qmin_err = a.qmax_err = 0.0
             a.stable, a.max_multiplier = stable, mu
 
-    if units:
-        run_units(partial(_shoot_unit, study.model, opts, shooting), units, workers=workers,
-                  on_result=on_result)
+    fn = partial(_shoot_unit, study.model, opts, shooting)
+    if under_mpi():         # rank 0 alone gets here (the census was collective): serial
+        for unit in units:
+            fn(unit, lambda item: on_result(0, item))
+    elif units:
+        run_units(fn, units, workers=workers, on_result=on_result)
 
 
 def _this_run_branches(previous) -> list:
