@@ -26,7 +26,7 @@ from vibrogear.runner import run_scene
 pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[2]
-STARTS = 16
+STARTS = 32
 
 
 @pytest.fixture(scope="module")
@@ -34,8 +34,8 @@ def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("gear_pair_states")
     scene = load_scene(ROOT / "configs" / "gear_pair.toml", (
         'scene.analyses=["continuation", "states"]', "continuation.rpm_min=4900.0",
-        "continuation.rpm_max=5400.0", "states.rpm_min=5100.0", "states.rpm_max=5225.0",
-        "states.n_points=6", f"states.starts={STARTS}"))
+        "continuation.rpm_max=5400.0", "states.rpm_min=5100.0", "states.rpm_max=5220.0",
+        "states.n_points=7", f"states.starts={STARTS}"))
     ctx = RunContext(out=out, quiet=True)
     from vibrogear.analyses.continuation import run as cont_run
     from vibrogear.analyses.states import run as states_run
