@@ -10,6 +10,7 @@ export XDG_CACHE_HOME ?= $(HOME)/.cache
 # gearbox scenes and their studies
 .PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: nnm nnm-impact-pair
+.PHONY: states states-impact-pair bench-states
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 .PHONY: optimize-damping optimize-two-stage
 
@@ -81,6 +82,18 @@ nnm: $(STAMP)
 
 nnm-impact-pair: $(STAMP)
 	$(VG) run configs/impact_pair_nnm.toml --out $(OUT)/impact_pair_nnm
+
+## every operating state at every speed ([states], docs/states.md): attractors from random
+## starts with their basins, branches from each, the danger map states.png
+states: $(STAMP)
+	$(VG) run configs/gear_pair.toml --set 'scene.analyses=["sweep", "states"]' --out $(OUT)/gear_pair_states
+
+states-impact-pair: $(STAMP)
+	$(VG) states configs/impact_pair.toml --out $(OUT)/impact_pair_states
+
+## two_stage census: transient / record / clustering split, projection to 64 MPI ranks
+bench-states: $(STAMP)
+	$(PY) benchmarks/bench_states.py
 
 ## run-up / run-down transients ([runup]) in the scene's own output folder, so that the
 ## envelope figure overlays the sweep and branches of `make two-stage` / `make gear-pair`

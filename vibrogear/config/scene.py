@@ -19,6 +19,7 @@ from .optimize_section import OptimizeConfig
 from .options import Parameter
 from .rotor import RotorConfig
 from .runup_section import RunupConfig
+from .states_section import RpmStatesConfig, StatesConfig
 from .verbs import MODEL_KINDS, VERBS
 from .sections import (ContinuationConfig, CriticalDampingConfig, FiguresConfig,
                        ImpactPairConfig,
@@ -61,6 +62,7 @@ class Scene:
     runup: RunupConfig | None = spec(None)
     nnm: NnmConfig | None = spec(None)
     optimize: OptimizeConfig | None = spec(None)
+    states: StatesConfig | None = spec(None)
     findings: FindingsConfig = spec(FindingsConfig())
     figures: FiguresConfig = spec(FiguresConfig())
 
@@ -105,6 +107,9 @@ class Scene:
         if self.nnm is not None and "nnm" in self.scene.analyses:
             with errs.catch():
                 self.nnm.check_model(self.impact_pair, self.gearbox, "nnm")
+        if self.states is not None:
+            with errs.catch():
+                self.states.check_model(self.impact_pair, self.gearbox, "states")
         from .layout import check_layout        # checks across sections, in one place
         with errs.catch():
             check_layout(self)
@@ -132,6 +137,7 @@ class GearboxScene(Scene):
     sweep: RpmSweepConfig | None = spec(None)
     continuation: RpmContinuationConfig | None = spec(None)
     time_response: RpmTimeResponseConfig | None = spec(None)
+    states: RpmStatesConfig | None = spec(None)
 
 
 def read_toml(path: str | Path) -> dict[str, Any]:

@@ -118,6 +118,10 @@ _VERBS = (
          {"gearbox": Run("runup:run", "runup_report:write",
                          ("runup.npz", "runup.csv", "runup_envelope.png", "runup_waterfall.png"),
                          study=True)}, command="runup"),
+    Verb("states", "every operating state at every speed: coexisting attractors from random "
+         "starts, their basins with Wilson intervals, branches from each, the danger map", "states",
+         _both("states:run", "states_report:write", ("states.npz", "states.csv", "states.png")),
+         command="states", reads_saved=("sweep", "continuation")),
     Verb("optimize", "design optimisation: the variables (any --set key) that minimise or "
          "maximise an analysis's metric under constraints", "optimize",
          {kind: Run("optimize:run", "optimize_report:write",

@@ -1,0 +1,234 @@
+"""``vibrogear states``: every operating state at every speed (section ``[states]``).
+
+The sweep follows one path up and one down; the continuation follows the branches it is
+started on.  Neither sees a state that only a disturbance reaches.  This census does:
+
+1. **Starts**: at each grid value, ``starts`` random initial states (:mod:`.states_starts`).
+2. **Settling**: each start is one sweep point
+   (:func:`~vibrogear.solvers.sequential.sweep_point.run_point`: transient until settled,
+   record window, class with its evidence, contact metrics) with the section's sweep
+   settings.  Work units are (grid value, a batch of starts), run by
+   :func:`~vibrogear.pipeline.executors.run_units` on processes or MPI ranks; each settled
+   start is appended to ``states.partial.jsonl`` as it arrives (the one resume rule of
+   :mod:`~vibrogear.pipeline.resume`; the start count, batch, early stop, clustering and
+   branch settings are not part of the signature: a run with more starts reuses the ones
+   done).  With ``basin_tol`` the starts run in rounds of ``batch`` per grid value and a
+   value stops once every basin's 95 % interval is narrower than ``basin_tol``.
+3. **Attractors**: the settled motions of each grid value grouped, with basin fractions and
+   Wilson intervals (:mod:`.states_cluster`).
+4. **Orbits and branches** (:mod:`.states_branches`): each periodic attractor shot (Newton on
+   the period map: its exact extrema and Floquet multipliers), then, with ``branches``, a
+   continuation both ways from each one that no branch found so far passes through; each
+   attractor compared with the sweep of this run or of ``sweep.npz`` in the output folder.
+"""
+from __future__ import annotations
+
+import dataclasses
+import time
+from dataclasses import dataclass, field
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+from ..config.options import SweepOptions
+from ..pipeline.executors import broadcast, run_units
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..pipeline.resume import PartialStore
+from ..solvers.sequential.sweep_point import PHASES, run_point
+from .states_cluster import cluster_point, interval_widths
+from .states_starts import draw_start, start_scales
+from .study import Study, integration_options
+from .sweep import record_from_json, record_to_json
+
+__all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
+
+PARTIAL_NAME = "states.partial.jsonl"
+#: settings that do not change a settled start (left out of the resume signature)
+_NOT_IN_SIGNATURE = ("workers", "starts", "batch", "basin_tol", "cluster_tol", "stat_tol",
+                     "branches", "branch_max_points", "n_points", "directions", "segments")
+
+
+@dataclass(frozen=True, eq=False)
+class StatesResult:
+    """The census: grid, attractors per grid value, starts, branches, timings."""
+    params: np.ndarray                 # (P,)
+    attractors: tuple                  # states_cluster.Attractor, grouped by grid value
+    n_starts: np.ndarray               # (P,) starts settled without failure
+    n_failed: np.ndarray               # (P,) starts whose integration failed
+    study: Study
+    branches: tuple = ()               # Branch objects continued from attractors
+    branch_notes: tuple = ()           # per attractor continued: where and how it ended
+    sweep: dict | None = None          # the sweep's arrays it was compared with
+    timings: dict = field(default_factory=dict)
+    counters: dict = field(default_factory=dict)
+    #: per settled start: grid index, start index, wall seconds, attractor index (-1: failed)
+    starts: dict = field(default_factory=dict)
+
+
+def grid(cfg) -> np.ndarray:
+    lo, hi = float(cfg.param_min), float(cfg.param_max)
+    return np.array([lo]) if cfg.n_points == 1 else np.linspace(lo, hi, cfg.n_points)
+
+
+def _compact(rec):
+    """A settled start as kept: the cycle (last n stroboscopic states) of a periodic one,
+    no states otherwise."""
+    n = int(rec.period_n)
+    st = rec.states
+    keep = np.array(st[-n:], dtype=float) if (n > 0 and st is not None) else None
+    return dataclasses.replace(rec, states=keep)
+
+
+def _settle_unit(model, settings, options, seed, unit, emit) -> int:
+    """Settle the starts of one unit (grid index, value, start indices, scales)."""
+    i, p, ks, scales = unit
+    for k in ks:
+        u = draw_start(scales, model, seed, i, k)
+        rec = run_point(model, float(p), u, "start", int(k), settings, options=options,
+                        keep_states=True)
+        emit((int(i), _compact(rec)))
+    return len(ks)
+
+
+def _describe(param_name, unit) -> str:
+    i, p, ks, _ = unit
+    return f"{param_name} = {p:.6g}, starts {ks[0]}..{ks[-1]}"
+
+
+def census(model, params, cfg, *, options, scales, store=None, done=None, progress=None,
+           root: bool = True) -> tuple[dict, dict]:
+    """Settle the starts of every grid value (module docstring, steps 1-2); returns
+    ({grid index: [PointRecord]}, {"rounds", "new", "stopped_early"}).  ``done``: {(i, k):
+    record} already settled (resumed).  Collective under MPI: every rank calls it."""
+    settings = SweepOptions.of(cfg)
+    done = dict(done or {})
+    P = len(params)
+    round_size = cfg.batch if cfg.basin_tol is not None else cfg.starts
+    active = list(range(P))
+    upto, rounds, new, early = 0, 0, 0, []
+    while active:
+        upto = min(upto + round_size, cfg.starts)
+        units = None
+        if root:
+            units = []
+            for i in active:
+                todo = [k for k in range(upto) if (i, k) not in done]
+                for a in range(0, len(todo), cfg.batch):
+                    units.append((i, float(params[i]), tuple(todo[a:a + cfg.batch]),
+                                  scales[i]))
+        units = broadcast(units)
+
+        def on_result(_u, item):
+            i, rec = item
+            done[(i, int(rec.index))] = rec
+            if store is not None:
+                store.append({"point": i, **record_to_json(rec)})
+            if progress is not None:
+                progress(i, rec)
+
+        if units:
+            run_units(partial(_settle_unit, model, settings, options, cfg.seed), units,
+                      workers=cfg.workers, on_result=on_result,
+                      costs=[len(u[2]) for u in units],
+                      describe=partial(_describe, model.param_name))
+            new += sum(len(u[2]) for u in units)
+        rounds += 1
+        still = None
+        if root:
+            still = []
+            for i in active:
+                if upto >= cfg.starts:
+                    continue
+                recs = [done[(i, k)] for k in range(upto) if (i, k) in done]
+                atts, _, _ = cluster_point(recs, i, params[i], n_modes=model.n_modes,
+                                           cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
+                if interval_widths(atts) < cfg.basin_tol:
+                    early.append(i)
+                else:
+                    still.append(i)
+        active = broadcast(still)
+    by_point = {i: [r for (j, _k), r in sorted(done.items()) if j == i] for i in range(P)}
+    return by_point, {"rounds": rounds, "new": new, "stopped_early": early}
+
+
+def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
+    from .states_branches import compare_with_sweep, continue_branches, refine_orbits
+    from .states_summary import states_summary
+
+    cfg = scene.states
+    model = study.model
+    params = grid(cfg)
+    wall = time.perf_counter()
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
+                               study=study)
+    scales = [start_scales(model, float(p), study.start(float(p)),
+                           deformation_scale=cfg.deformation_scale,
+                           velocity_scale=cfg.velocity_scale, box=cfg.box) for p in params]
+    store, done = None, {}
+    if ctx.root:
+        settings = {k: v for k, v in dataclasses.asdict(cfg).items()
+                    if k not in _NOT_IN_SIGNATURE}
+        store = PartialStore(Path(ctx.out) / PARTIAL_NAME, {
+            "analysis": "states", "physics": study.physics,
+            "grid": [repr(float(p)) for p in params], "settings": settings, "options": opts})
+        for item in store.items:
+            i = int(item["point"])
+            if i < len(params):
+                done[(i, int(item["index"]))] = record_from_json(item)
+        done = {key: r for key, r in done.items() if key[1] < cfg.starts}
+    resumed = len(done)
+    with ctx.progress(len(params) * cfg.starts - resumed, "states") as bar:
+        by_point, info = census(
+            model, params, cfg, options=opts, scales=scales, store=store, done=done,
+            root=ctx.root, progress=lambda i, rec: bar.update(
+                1, f"{params[i]:.4g} {study.param_unit} P{rec.period_n}"))
+    t_census = time.perf_counter() - wall
+    if not ctx.root:            # rank 0 groups, refines, continues and reports
+        return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
+    t0 = time.perf_counter()
+    attractors, n_ok, n_failed = [], [], []
+    for i, p in enumerate(params):
+        atts, k, f = cluster_point(by_point[i], i, p, n_modes=model.n_modes,
+                                   cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
+        attractors += atts
+        n_ok.append(k)
+        n_failed.append(f)
+    t_cluster = time.perf_counter() - t0
+    if sum(n_ok) == 0:
+        first = next((r for recs in by_point.values() for r in recs), None)
+        raise NumericalFailure("states: every start failed" + (
+            f"; first: {study.param_name} = {first.param:g}: {first.message}" if first else ""))
+    recs = [r for v in by_point.values() for r in v]
+    which = {(a.point, k): j for j, a in enumerate(attractors) for k in a.members}
+    starts = {"point": np.array([i for i, v in by_point.items() for _ in v], int),
+              "index": np.array([r.index for v in by_point.values() for r in v], int),
+              "wall_s": np.array([r.wall_time for v in by_point.values() for r in v], float)}
+    starts["attractor"] = np.array([which.get((i, k), -1) for i, k in
+                                    zip(starts["point"], starts["index"])], int)
+    timings = {ph: float(sum(r.timings.get(ph, 0.0) for r in recs)) for ph in PHASES}
+    timings["clustering"] = t_cluster
+    t0 = time.perf_counter()
+    refine_orbits(study, scene, attractors, workers=cfg.workers)
+    timings["orbits"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    branches, notes = (), ()
+    if cfg.branches:
+        branches, notes = continue_branches(study, scene, attractors, previous or {})
+    timings["branches"] = time.perf_counter() - t0
+    sweep = compare_with_sweep(study, attractors, (previous or {}).get("sweep"))
+    timings["census_wall"] = t_census
+    timings["total_wall"] = time.perf_counter() - wall
+    counters = {"starts_settled": len(recs), "starts_resumed": resumed, "rounds": info["rounds"],
+                "steps": int(sum(r.steps for r in recs)),
+                "rhs_calls": int(sum(r.rhs_calls for r in recs)),
+                "events": int(sum(r.events for r in recs))}
+    result = StatesResult(params=params, attractors=tuple(attractors),
+                          n_starts=np.array(n_ok, int), n_failed=np.array(n_failed, int),
+                          study=study, branches=tuple(branches), branch_notes=tuple(notes),
+                          sweep=sweep, timings=timings, counters=counters, starts=starts)
+    summary = states_summary(result, cfg, opts, info)
+    if store is not None and store.note:
+        summary["resume"] = store.note
+    return AnalysisOutcome(summary=summary, result=result,
+                           partial_files=() if store is None else (store.path,))

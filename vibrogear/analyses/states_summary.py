@@ -1,0 +1,81 @@
+"""The ``states`` entry of ``summary.json``: what the census found, per grid value, in plain
+records the findings engine reads.
+
+``per_speed``: one record per grid value: ``param`` (the scene's parameter: rpm or Omega),
+``n_starts`` (settled), ``failed``, ``coexisting`` (more than one attractor) and
+``attractors``, largest basin first, each ``{"class", "period_n", "basin_fraction",
+"basin_ci_95": [lo, hi], "starts", "qmin", "qmax" (display unit of the monitored mesh
+deformation: um for a gearbox), "stable" (Floquet; None: not shot), "impacts_per_period":
+{mesh: contact onsets per excitation period}, "rattle": {mesh: impact energy per period},
+"seen_by_sweep"}``.  ``unseen_by_sweep`` lists the attractors the sweep path missed.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..solvers.status import Status
+
+__all__ = ["states_summary", "coexisting_points"]
+
+
+def _num(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def coexisting_points(result) -> list[int]:
+    """Grid indices with more than one attractor."""
+    counts = np.bincount([a.point for a in result.attractors], minlength=result.params.size)
+    return [int(i) for i in np.flatnonzero(counts > 1)]
+
+
+def states_summary(result, cfg, opts, info) -> dict:
+    study = result.study
+    scale = study.monitor.scale
+    name = study.param_name
+    per_speed = []
+    for i, p in enumerate(result.params):
+        atts = [a for a in result.attractors if a.point == i]
+        per_speed.append({"param": float(p), "n_starts": int(result.n_starts[i]),
+                          "failed": int(result.n_failed[i]), "coexisting": len(atts) > 1,
+                          "attractors": [a.summary(scale) for a in atts]})
+    unseen = [{"param": a.param, "class": a.class_name, "period_n": a.period_n,
+               "basin_fraction": a.fraction, "basin_ci_95": list(a.ci),
+               "qmin": a.qmin * scale, "qmax": a.qmax * scale}
+              for a in result.attractors if a.seen_by_sweep is False]
+    widths = [a.ci[1] - a.ci[0] for a in result.attractors]
+    failed = int(result.n_failed.sum())
+    coex = coexisting_points(result)
+    n_att = len(result.attractors)
+    msg = (f"{n_att} attractors at {result.params.size} {name} values; "
+           f"{len(coex)} with coexisting states")
+    if result.sweep is not None:
+        msg += f"; {len(unseen)} attractors not on the sweep's path"
+    classes = {}
+    for a in result.attractors:
+        key = a.class_name if a.period_n == 0 else f"period-{a.period_n}"
+        classes[key] = classes.get(key, 0) + 1
+    summary = {
+        "status": Status.OK.text if failed == 0 else "partial",
+        "message": msg + (f"; {failed} starts failed" if failed else ""),
+        "param_name": name, "param_unit": study.param_unit,
+        "q_unit": study.monitor.unit or "model units",
+        "energy_unit": study.energy_unit,
+        "points": int(result.params.size), "starts_per_point": int(cfg.starts),
+        "seed": int(cfg.seed), "attractors": n_att, "attractor_classes": classes,
+        "coexisting_at": [float(result.params[i]) for i in coex],
+        "stopped_early_at": [float(result.params[i]) for i in info.get("stopped_early", [])],
+        "per_speed": per_speed,
+        "unseen_by_sweep": unseen if result.sweep is not None else None,
+        "sweep_match_rule": "periodicity and extrema within 5 % of the sweep's range "
+                            "(a heuristic)" if result.sweep is not None else None,
+        "branches": list(result.branch_notes),
+        "counters": result.counters,
+        "wall_split_s": {k: round(float(v), 3) for k, v in result.timings.items()},
+        "error_estimate": {"rtol": opts.rtol, "atol": opts.atol, "period_tol": cfg.period_tol,
+                           "widest_basin_ci_95": _num(max(widths)) if widths else None,
+                           "failed_starts": failed},
+    }
+    return summary
