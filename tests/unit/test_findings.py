@@ -222,3 +222,28 @@ def test_runup_bands_merge_close_periods():
     got = [(b["where"], b["from"], b["to"], b["points"]) for b in f["bands"]]
     assert got == [("G2", 300.0, 340.0, 22), ("G2", 800.0, 800.0, 1)]
     assert all(b["edge_err"] == 1.0 and b["direction"] == "up" for b in f["bands"])
+
+
+def test_coexisting_states_band_and_events():
+    """A census with one attractor at 100 and 300 rpm and two at 200 rpm (a quiet period-1
+    seen by the sweep, a rattling chaotic state off its path): one band at 200 rpm, two
+    events there with their basins."""
+    arrays = {"attractor_param": np.array([100.0, 200.0, 200.0, 300.0]),
+              "attractor_class": np.array([1, 1, 3, 1]),
+              "attractor_class_legend": np.array(["failed", "periodic", "quasi-periodic",
+                                                  "chaotic", "not settled", "aperiodic"]),
+              "attractor_period_n": np.array([1, 1, 0, 1]),
+              "basin_fraction": np.array([1.0, 0.75, 0.25, 1.0]),
+              "basin_ci_lo": np.array([0.9, 0.5, 0.1, 0.9]),
+              "basin_ci_hi": np.array([1.0, 0.9, 0.5, 1.0]),
+              "attractor_seen_by_sweep": np.array([1, 1, 0, 1]),
+              "attractor_impacts_G1": np.array([0.0, 0.0, 0.4, 0.0])}
+    f = derive_findings({"states.npz": arrays}, {}, FindingsConfig())
+    band, = [b for b in f["bands"] if b["quantity"] == "coexisting states"]
+    assert (band["from"], band["to"], band["severity"]) == (200.0, 200.0, "caution")
+    events = [e for e in f["events"] if e["kind"] == "coexisting"]
+    assert [e["at"] for e in events] == [200.0, 200.0]
+    rattle = [e for e in events if e["where"] == "chaotic"][0]
+    assert "G1 0.40 impacts per period" in rattle["evidence"]
+    assert "25 % of the disturbances" in rattle["evidence"]
+    assert "not on the sweep's path" in rattle["evidence"]

@@ -110,13 +110,23 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
                           "starts", source="states.npz", edge_err=step,
                           points=int(i1 - i0 + 1),
                           extra={"compare": "count of attractor_param equal to the speed"}))
+    period = np.asarray(arrays.get("attractor_period_n", np.zeros(ap.size, int)))
+    seen = np.asarray(arrays.get("attractor_seen_by_sweep", np.full(ap.size, -1)))
+    meshes = sorted(k[len("attractor_impacts_"):] for k in arrays
+                    if k.startswith("attractor_impacts_"))
     for j in np.flatnonzero(np.isin(ap, grid[count > 1])):
         name = legend[int(cls[j])] if legend and 0 <= int(cls[j]) < len(legend) else str(cls[j])
+        if name == "periodic":
+            name = f"period-{int(period[j])}"
+        hits = [f"{m} {fmt(float(arrays[f'attractor_impacts_{m}'][j]), 2)} impacts per period"
+                for m in meshes if float(arrays[f"attractor_impacts_{m}"][j]) > 0]
+        text = f"a {name} state" + (f" ({', '.join(hits)})" if hits else " without impacts")
+        text += f"; {fmt(100 * basin[j], 2)} % of the disturbances end there (95 %: " \
+                f"{fmt(100 * lo[j], 2)}–{fmt(100 * hi[j], 2)} %)"
+        if int(seen[j]) == 0:
+            text += "; not on the sweep's path"
         events.append({"kind": "coexisting", "at": float(ap[j]), "where": name,
-                       "basin_fraction": float(basin[j]),
-                       "evidence": f"a {name} state; {fmt(100 * basin[j], 2)} % of the "
-                       f"disturbances end there (95 %: {fmt(100 * lo[j], 2)}–"
-                       f"{fmt(100 * hi[j], 2)} %)"})
+                       "basin_fraction": float(basin[j]), "evidence": text})
     return bands, events
 
 
