@@ -25,7 +25,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from vibrogear.analyses.continuation import starting_orbit  # noqa: E402
+from vibrogear.solvers.periodic.starting_orbit import starting_orbit  # noqa: E402
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config.scene import load_scene  # noqa: E402
 from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402

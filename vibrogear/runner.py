@@ -19,7 +19,7 @@ from typing import Any
 
 from . import __version__
 from .config import Scene
-from .analyses.invoke import invoke, load
+from .analyses.invoke import invoke, load, with_needs
 from .config.verbs import VERBS
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
@@ -123,6 +123,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
             # analyses that read earlier outcomes take them as ``previous`` (read-only), with
             # the saved results of verbs that did not run here
             seen = {**_load_saved(name, scene.model_kind, ctx.out, previous), **previous}
+            seen = with_needs(name, scene.model_kind, study, scene, ctx, seen)
             outcome = invoke(load(entry.analysis), study if entry.study else None, scene, ctx,
                              seen)
             record = outcome.record()

@@ -228,6 +228,45 @@ def test_analyses_compute_and_report_writes():
     assert not {n: b for n, b in bad.items() if b}
 
 
+def _verb_modules() -> set[str]:
+    """The analysis modules the verb registry runs (``Verb.runs``: ``module:function``)."""
+    from vibrogear.config.verbs import VERBS
+    return {f"vibrogear.analyses.{run.analysis.split(':')[0]}"
+            for verb in VERBS.values() for run in verb.runs.values()}
+
+
+def _imports_of_verbs(edges, verb_modules) -> dict[tuple[str, str], list[int]]:
+    """The edges from a module under analyses/ to a verb's analysis module other than itself."""
+    return {(a, b): lines for (a, b), lines in edges.items()
+            if a.startswith("vibrogear.analyses.") and b in verb_modules and a != b}
+
+
+def test_verbs_import_no_verbs():
+    """No module under analyses/ (a verb's or a helper) imports a verb's analysis module,
+    inside functions included: what verbs share lives in a helper, a lower layer or the
+    config layer, and a verb that needs another's outcome declares it (``Verb.needs``,
+    ``Verb.reads_saved``) instead of running it.  So no verb reaches another through a helper."""
+    verbs = _verb_modules()
+    assert len(verbs) > 10
+    bad = _imports_of_verbs(_edges(), verbs)
+    assert not bad, "a verb's analysis module imported by another analysis module:\n" + \
+        "\n".join(f"  {a} -> {b} (line {', '.join(map(str, v))})" for (a, b), v in sorted(bad.items()))
+
+
+def test_the_verb_rule_sees_a_verb_importing_a_verb():
+    verbs = _verb_modules()
+    assert {"vibrogear.analyses.sweep", "vibrogear.analyses.gearbox_modes",
+            "vibrogear.analyses.nvh", "vibrogear.analyses.continuation"} <= verbs
+    edges = {("vibrogear.analyses.gearbox_modes", "vibrogear.analyses.sweep"): [19],
+             ("vibrogear.analyses.line_sources", "vibrogear.analyses.gearbox_modes"): [95],
+             ("vibrogear.analyses.nvh", "vibrogear.analyses.line_sources"): [39],
+             ("vibrogear.analyses.sweep", "vibrogear.analyses.study"): [27],
+             ("vibrogear.runner", "vibrogear.analyses.sweep"): [1]}
+    assert sorted(_imports_of_verbs(edges, verbs)) == [
+        ("vibrogear.analyses.gearbox_modes", "vibrogear.analyses.sweep"),
+        ("vibrogear.analyses.line_sources", "vibrogear.analyses.gearbox_modes")]
+
+
 def test_the_import_reader_sees_imports_inside_functions(tmp_path):
     p = tmp_path / "x.py"
     p.write_text("def f():\n    from ..report.figure import new_figure\n"

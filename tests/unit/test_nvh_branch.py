@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vibrogear.analyses import continuation, nvh
+from vibrogear.analyses.invoke import with_needs
 from vibrogear.analyses.study import build_study, integration_options
 from vibrogear.config import load_scene
 from vibrogear.pipeline.outcome import RunContext
@@ -38,7 +39,8 @@ def _run(tmp_path, lo: float, hi: float, transient: int):
     study = build_study(scene)
     ctx = RunContext(out=tmp_path, quiet=True)
     cont = continuation.run(study, scene, ctx)
-    out = nvh.run(study, scene, ctx, previous={"continuation": cont})
+    out = nvh.run(study, scene, ctx, previous=with_needs("nvh", "gearbox", study, scene, ctx,
+                                                        {"continuation": cont}))
     assert out.result.branch is not None and not out.warnings, out.warnings
     return scene, study, cont, out
 

@@ -56,3 +56,37 @@ def test_a_verb_on_the_wrong_model_is_refused_naming_the_field(tmp_path):
     from vibrogear.config import ConfigError, load_scene
     with pytest.raises(ConfigError, match=r"scene\.analyses\[0\].*campbell"):
         load_scene(scene)
+
+
+def test_what_a_verb_needs_exists_for_each_of_its_models():
+    """``Verb.needs``: the needed verb runs on every model the verb runs on, and takes a
+    study only where the verb has one to give it."""
+    for verb in VERBS.values():
+        for dep in verb.needs:
+            assert dep in VERBS and dep != verb.name, (verb.name, dep)
+            for kind, run in verb.runs.items():
+                assert kind in VERBS[dep].runs, (verb.name, dep, kind)
+                assert run.study or not VERBS[dep].runs[kind].study, (verb.name, dep, kind)
+    assert VERBS["nvh"].needs == ("modes",)
+
+
+def test_with_needs_runs_a_needed_verb_once_and_only_where_it_did_not_run(monkeypatch):
+    from vibrogear.analyses import invoke as invoke_mod
+
+    calls = []
+
+    def fake_load(target):
+        def analysis(study, scene, ctx):
+            calls.append((target, study))
+            return {"status": "ok", "target": target}
+        return analysis
+
+    monkeypatch.setattr(invoke_mod, "load", fake_load)
+    seen = invoke_mod.with_needs("nvh", "gearbox", "the study", None, None, {"sweep": 1})
+    assert calls == [("vibrogear.analyses.gearbox_modes:run", "the study")]
+    assert seen["sweep"] == 1 and seen["modes"].summary["target"].endswith("gearbox_modes:run")
+    calls.clear()
+    again = invoke_mod.with_needs("nvh", "gearbox", "the study", None, None, seen)
+    assert calls == [] and again["modes"] is seen["modes"]
+    assert invoke_mod.with_needs("sweep", "gearbox", None, None, None, {}) == {}
+    assert calls == []

@@ -203,7 +203,7 @@ def test_rattle_cascade_agrees_with_settled_integration(rattle):
 def test_starting_orbit_uses_the_settled_period():
     """The continuation analysis starts from the period the sweep's detector finds in the
     settled motion: period 2 between the two PDs of the rattle cascade."""
-    from vibrogear.analyses.continuation import starting_orbit
+    from vibrogear.solvers.periodic.starting_orbit import starting_orbit
 
     model = loose_gear_model(1.0, d=0.1)
     u0, n, _, how = starting_orbit(model, 1.11, np.array([0.0, -1.0, 0.0, 0.0]),

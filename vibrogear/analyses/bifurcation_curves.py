@@ -32,7 +32,7 @@ import numpy as np
 from ..config.options import ContinuationOptions
 from ..pipeline.executors import run_units, under_mpi
 from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
-from .continuation import starting_orbit
+from ..solvers.periodic.starting_orbit import starting_orbit
 from .load_scaling import LoadScaling
 from .study import Study, integration_options, start_state
 

@@ -16,7 +16,6 @@ import time
 import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, RunContext
-from .sweep import param_range
 
 __all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL", "GearboxModesResult"]
 
@@ -54,7 +53,7 @@ def reference_rpm(scene) -> float:
         return float(tr.param if hasattr(tr, "param") else tr.omega)
     for sec in (scene.sweep, scene.continuation):
         if sec is not None:
-            return 0.5 * sum(param_range(sec))
+            return 0.5 * sum(sec.param_range())
     return 0.0
 
 
@@ -100,7 +99,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     shares, names = _subsystem_shares(gm, lm.vectors[:, elastic])
     mesh = _mesh_energy(gm, model, lm, u0)[:, elastic]
     if scene.sweep is not None:
-        lo, hi = param_range(scene.sweep)
+        lo, hi = scene.sweep.param_range()
     elif rpm > 0:
         lo, hi = 0.5 * rpm, 1.5 * rpm
     else:            # at rest: the speeds up to the 1x resonance of the highest mode listed

@@ -5,30 +5,14 @@ are written by rank 0 only.
 """
 from __future__ import annotations
 
-import os
 import resource
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
+from ..pipeline.outcome import AnalysisOutcome
+from .housing_compute import compute_modes
 
-__all__ = ["run_modes", "is_root", "compute_modes", "modes_summary"]
-
-
-def is_root() -> bool:
-    return os.environ.get("OMPI_COMM_WORLD_RANK", os.environ.get("PMI_RANK", "0")) == "0"
-
-
-def compute_modes(cfg, *, cache: bool = True):
-    """housing_modes with geometry/solver failures turned into NumericalFailure (exit 1)."""
-    from ..geometry.housing import MeshingError
-    from ..models.housing.fe import HousingSolveError
-    from ..models.housing.run import housing_modes
-
-    try:
-        return housing_modes(cfg, cache=cache)
-    except (MeshingError, HousingSolveError) as exc:
-        raise NumericalFailure(f"housing: {exc}") from None
+__all__ = ["run_modes", "modes_summary"]
 
 
 def _expected_mass(res, cfg) -> float | None:

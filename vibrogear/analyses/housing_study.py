@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome
-from .housing import compute_modes
+from .housing_compute import compute_modes
 
 __all__ = ["observed_order", "richardson", "run_convergence", "with_mesh",
            "HousingConvergenceResult"]

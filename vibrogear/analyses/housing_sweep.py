@@ -18,9 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure
+from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, is_root_process
 from ..pipeline.resume import PartialStore
-from .housing import is_root
 
 __all__ = ["run_sweep", "sweep_point", "sweep_signature", "HousingSweepResult"]
 
@@ -71,7 +70,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     opts = scene.housing_sweep
     cfgs = opts.housing_points(scene.housing, "housing_sweep")
     values = opts.points()
-    if not is_root():
+    if not is_root_process():
         raise NumericalFailure("housing_sweep runs its points in worker processes: start it without mpirun")
     ctx.out.mkdir(parents=True, exist_ok=True)
     store = PartialStore(ctx.out / POINTS_FILE, sweep_signature(scene))

@@ -86,14 +86,15 @@ def bearing_geometry(scene) -> list[dict]:
     return out
 
 
-def natural_frequencies(study, scene, previous, ctx) -> tuple[np.ndarray, float]:
+def natural_frequencies(previous) -> tuple[np.ndarray, float]:
     """(damped natural frequencies [Hz] of the elastic modes, the speed they were computed
-    at): the ``modes`` analysis of this run, else computed here the same way."""
+    at), from the ``modes`` outcome in ``previous``: the nvh verb needs it
+    (``Verb.needs``), so the runner runs ``modes`` first where the scene does not."""
     prev = (previous or {}).get("modes")
-    res = prev.result if prev is not None and prev.result is not None else None
+    res = prev.result if prev is not None else None
     if res is None or not hasattr(res, "fd_hz"):
-        from .gearbox_modes import run as gearbox_modes
-        res = gearbox_modes(study, scene, ctx).result
+        raise LookupError("nvh needs the gearbox modes: call it through "
+                          "vibrogear.analyses.invoke.with_needs (the verb registry's needs)")
     return np.asarray(res.fd_hz, dtype=float), float(res.rpm)
 
 

@@ -308,7 +308,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     amplitudes = {k: np.array(v) for k, v in records.items()}
     classes = sweep_classes(previous, cfg.sweep_direction, rpm) if source.startswith(
         "sweep") else np.full(rpm.size, -1, dtype=np.int64)
-    modes_hz, modes_rpm = natural_frequencies(study, scene, previous, ctx)
+    modes_hz, modes_rpm = natural_frequencies(previous)
     lines, evidence, lines_summary = label_points(
         scene, rpm, f1_hz, np.outer(f1_hz, order), amplitudes, R * S, classes, modes_hz,
         cfg.max_order * float(np.max(mesh_hz)))

@@ -43,7 +43,7 @@ from ..solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
 from ..config.options import SweepOptions
 from .study import Study, integration_options, start_state
-from .sweep import record_from_json, record_to_json
+from ..solvers.sequential.record_json import record_from_json, record_to_json
 
 __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
            "grid_array"]

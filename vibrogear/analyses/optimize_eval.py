@@ -31,7 +31,7 @@ from ..config.base import ConfigError
 from ..config.optimize_section import data_with
 from ..config.verbs import VERBS
 from ..pipeline.outcome import AnalysisOutcome, RunContext
-from .invoke import invoke, load
+from .invoke import invoke, load, with_needs
 
 __all__ = ["Evaluation", "MetricError", "metric_values", "reduce_values", "scene_with", "evaluate"]
 
@@ -65,7 +65,8 @@ def _run_analyses(scene, ctx: RunContext) -> dict[str, AnalysisOutcome]:
             from .study import build_study
             study = build_study(scene)
         outcomes[name] = invoke(load(f"vibrogear.analyses.{run.analysis}"),
-                                study if run.study else None, scene, ctx, outcomes)
+                                study if run.study else None, scene, ctx,
+                                with_needs(name, kind, study, scene, ctx, outcomes))
     return outcomes
 
 

@@ -11,23 +11,21 @@ report has written ``sweep.npz``.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import finite_json
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
 from ..status import Status
-from ..solvers.sequential.sweep import PointRecord, SweepResult, sweep
+from ..solvers.sequential.record_json import json_number as _num, record_from_json, record_to_json
+from ..solvers.sequential.sweep import SweepResult, sweep
 from ..config.options import SweepOptions
 from .study import Study, integration_options
 
-__all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "param_range", "PARTIAL_NAME",
-           "record_to_json", "record_from_json", "motion_summary"]
+__all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME", "motion_summary"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 #: sweep settings that do not change the results (left out of the resume signature)
@@ -38,13 +36,6 @@ _NOT_IN_SIGNATURE = ("workers", "callback", "done")
 class SweepStudyResult:
     sweep: SweepResult
     study: Study
-
-
-def param_range(section) -> tuple[float, float]:
-    """(min, max) of a scene section's parameter range, whatever the parameter's name."""
-    if hasattr(section, "param_min"):
-        return float(section.param_min), float(section.param_max)
-    return float(section.omega_min), float(section.omega_max)
 
 
 def jumps(param, q, rel: float = 0.15) -> list[float]:
@@ -88,7 +79,7 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.sweep
-    lo, hi = param_range(cfg)
+    lo, hi = cfg.param_range()
     params = np.linspace(lo, hi, cfg.n_points)
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, study=study)
     total = len(cfg.directions) * params.size
@@ -173,60 +164,3 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
                           "settled_by": {s: int(np.sum(res.settled_by[ok] == s))
                                          for s in ("map", "statistics", "budget")}},
             "contact_metrics_max": metrics}
-
-
-# ---------------------------------------------------------------- partial-file records
-
-def _num(x):
-    return finite_json(float(x))
-
-
-def _arr(a):
-    return None if a is None else [_num(v) for v in np.asarray(a, dtype=float).ravel()]
-
-
-def _f(x) -> float:
-    return math.nan if x is None else float(x)
-
-
-def _a(x) -> np.ndarray:
-    return np.array([_f(v) for v in x], dtype=float)
-
-
-def record_to_json(r: PointRecord) -> dict:
-    """A sweep point as JSON (floats exact, NaN as null)."""
-    d = {"direction": r.direction, "index": int(r.index), "param": _num(r.param),
-         "qmin": _num(r.qmin), "qmax": _num(r.qmax), "poincare": _arr(r.poincare),
-         "period_n": int(r.period_n), "impacts": _num(r.impacts), "defect": _num(r.defect),
-         "clusters": int(r.clusters), "status": int(r.status), "message": r.message,
-         "u_end": _arr(r.u_end), "steps": int(r.steps), "rejected": int(r.rejected),
-         "rhs_calls": int(r.rhs_calls), "events": int(r.events),
-         "wall_time": _num(r.wall_time), "motion_class": int(r.motion_class),
-         "lyapunov": _num(r.lyapunov), "lyapunov_ci": _arr(r.lyapunov_ci),
-         "transient_used": int(r.transient_used), "settled_by": r.settled_by,
-         "metrics": {k: _num(v) for k, v in r.metrics.items()},
-         "timings": {k: _num(v) for k, v in r.timings.items()}}
-    if r.states is not None:
-        d["states_shape"] = list(np.shape(r.states))
-        d["states"] = _arr(r.states)
-    return d
-
-
-def record_from_json(d: dict) -> PointRecord:
-    states = None
-    if d.get("states") is not None:
-        states = _a(d["states"]).reshape(d["states_shape"])
-    return PointRecord(
-        direction=d["direction"], index=int(d["index"]), param=_f(d["param"]),
-        qmin=_f(d["qmin"]), qmax=_f(d["qmax"]), poincare=_a(d["poincare"]),
-        period_n=int(d["period_n"]), impacts=_f(d["impacts"]), defect=_f(d["defect"]),
-        clusters=int(d["clusters"]), status=int(d["status"]), message=d["message"],
-        u_end=_a(d["u_end"]), steps=int(d["steps"]), rejected=int(d["rejected"]),
-        rhs_calls=int(d["rhs_calls"]), events=int(d["events"]),
-        wall_time=_f(d["wall_time"]), states=states,
-        motion_class=int(d.get("motion_class", 0)), lyapunov=_f(d.get("lyapunov")),
-        lyapunov_ci=tuple(_a(d.get("lyapunov_ci") or [None, None])),
-        transient_used=int(d.get("transient_used", 0)), settled_by=d.get("settled_by", ""),
-        metrics={k: (int(v) if k.startswith(("period_n_", "motion_class_")) and v is not None
-                     else _f(v)) for k, v in (d.get("metrics") or {}).items()},
-        timings={k: _f(v) for k, v in (d.get("timings") or {}).items()})

@@ -69,6 +69,10 @@ class SweepSettings(SweepOptions):
         if len(self.range_keys) == 2:
             check_range(self, path, *self.range_keys)
 
+    def param_range(self) -> tuple[float, float]:
+        """(min, max) of the parameter range, in the parameter's unit, whatever its keys."""
+        return float(self.param_min), float(self.param_max)
+
 
 @dataclass(frozen=True, kw_only=True)
 class ContinuationSettings(ContinuationSteps):
@@ -88,6 +92,10 @@ class ContinuationSettings(ContinuationSteps):
     def validate(self, path: str) -> None:
         if len(self.range_keys) == 2:
             check_range(self, path, *self.range_keys)
+
+    def param_range(self) -> tuple[float, float]:
+        """(min, max) of the parameter range, in the parameter's unit, whatever its keys."""
+        return float(self.param_min), float(self.param_max)
 
     def options(self) -> ContinuationOptions:
         """The solver's options: this section's steps over [param_min, param_max]."""

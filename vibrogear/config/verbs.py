@@ -44,6 +44,10 @@ class Verb:
     #: their main file from the output folder into ``previous`` (e.g. ``vibrogear continue``
     #: after ``vibrogear sweep`` into the same folder)
     reads_saved: tuple[str, ...] = ()
+    #: verbs whose outcome it needs: where one is not in this run before it, that verb's
+    #: analysis runs first for it alone (its outcome goes to ``previous``; no files, no
+    #: summary entry), so that no analysis calls another (analyses/invoke.py)
+    needs: tuple[str, ...] = ()
 
     @property
     def models(self) -> tuple[str, ...]:
@@ -108,7 +112,7 @@ _VERBS = (
     Verb("nvh", "spectra of mesh deformations and forces, bearing forces; housing ERP and surface "
          "velocity", "nvh",
          {"gearbox": Run("nvh:run", "nvh_report:write", ("spectra.npz", "erp.csv", "erp.png"),
-                         study=True)}, command="nvh"),
+                         study=True)}, command="nvh", needs=("modes",)),
     Verb("map", "speed x load operating map (sweeps over speed at each load) with LP/PD curves", "map",
          {"gearbox": Run("operating_map:run", "map_report:write",
                          ("map.npz", "map.csv", "map_curves.csv", "map_class.png"), study=True)},
