@@ -228,3 +228,60 @@ def test_amplitude_range_ends_at_its_excursion(tmp_path):
     with np.load(out / "nnm.npz") as z:
         exc = z["excursion"]
     assert exc[-1] > 0.2 and np.all(exc[:-1] <= 0.2)
+
+
+def test_the_steps_rule_is_written_once_and_names_the_field():
+    """[nnm] and the solver's settings share :class:`NnmSteps`: one ds rule, one field name,
+    and the section builds the solver's NnmMethod with every step it holds."""
+    from vibrogear.config.base import build
+    from vibrogear.config.options import NnmSteps
+
+    assert issubclass(NnmConfig, NnmSteps) and issubclass(NnmMethod, NnmSteps)
+    with pytest.raises(ConfigError) as exc:
+        NnmMethod(energy_min=1.0, energy_max=2.0, ds=0.5, ds_max=0.3)
+    assert exc.value.path == "ds"
+    with pytest.raises(ConfigError) as exc:
+        NnmMethod(energy_min=2.0, energy_max=1.0)
+    assert exc.value.path == "energy_max"
+    cfg = build(NnmConfig, {"energy_min": 0.1, "energy_max": 2.0, "ds": 0.2, "ds_max": 0.4,
+                            "phase": "mode", "tol": 1e-6, "rational_max": 7}, "nnm")
+    opts = IntegrationOptions(rtol=1e-8, atol=1e-10)
+    m = cfg.method(energy_min=1.0, energy_max=3.0, integration=opts, delta_static=0.5)
+    assert (m.ds, m.ds_max, m.phase, m.rational_max, m.tol, m.delta_static, m.excursion_max,
+            m.integration, m.energy_min, m.energy_max) == \
+        (0.2, 0.4, "mode", 7, 1e-6, 0.5, None, opts, 1.0, 3.0)
+    assert {k: getattr(m, k) for k in cfg.steps()} == cfg.steps()
+
+
+def test_a_bad_ds_exits_2_naming_the_field(tmp_path, capsys):
+    out = tmp_path / "out"
+    scene = str(ROOT / "configs" / "impact_pair_nnm.toml")
+    assert main(["nnm", scene, "--out", str(out), "--quiet", "--set", "nnm.ds=0.5"]) == 2
+    err = capsys.readouterr().err
+    assert "invalid input: nnm.ds: expected ds_min <= ds <= ds_max" in err, err
+    assert not out.exists()
+
+
+def test_nnm_takes_its_integrator_options_from_the_one_tolerance_rule(tmp_path, monkeypatch):
+    """The options the backbone is integrated with are ``integration_options(scene,
+    section=[nnm], study)``: rtol from [nnm], atol = 1e-2 rtol on the impact pair."""
+    from vibrogear.analyses import nnm as nnm_analysis
+    from vibrogear.analyses.study import build_study, integration_options
+    from vibrogear.config import load_scene
+    from vibrogear.pipeline.outcome import RunContext
+
+    class Seen(Exception):
+        pass
+
+    def spy(model, u_static, omega0, phi, method, **kw):
+        raise Seen(method)
+
+    monkeypatch.setattr(nnm_analysis, "nnm_branch", spy)
+    scene = load_scene(ROOT / "configs" / "impact_pair_nnm.toml", ("nnm.rtol=2e-8",))
+    study = build_study(scene)
+    with pytest.raises(Seen) as exc:
+        nnm_analysis.run(study, scene, RunContext(out=tmp_path, quiet=True))
+    used = exc.value.args[0].integration
+    assert used == integration_options(scene, section=scene.nnm, study=study)
+    assert (used.rtol, used.atol) == pytest.approx((2e-8, 2e-10), rel=1e-12)
+    assert used.max_steps == scene.integration.max_steps

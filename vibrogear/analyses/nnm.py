@@ -13,7 +13,6 @@ contact's extrema in display units, stability and labels, and the orbits at
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -24,10 +23,11 @@ from ..solvers.linear import contact_slopes
 from ..config.base import ConfigError
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..solvers.integrator.integrate import integrate
-from ..solvers.periodic.nnm import NnmMethod, nnm_branch
+from ..solvers.periodic.nnm import nnm_branch
 from ..solvers.periodic.nnm_problem import (conservative_model, linear_modes_at,
                                             onset_amplitude)
 from ..solvers.static import static_equilibrium
+from .study import integration_options
 
 __all__ = ["NnmStudyResult", "run", "start_mode"]
 
@@ -101,9 +101,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     if omega.size == 0:
         raise NumericalFailure("nnm: the model has no elastic mode")
     fs, fkey, flabel, es, eunit = _units(study, cm)
-    gearbox = cm.length_unit == "m"
-    atol_per = 1e-6 if gearbox else 1e-2
-    opts = dataclasses.replace(scene.integration, rtol=cfg.rtol, atol=atol_per * cfg.rtol)
+    opts = integration_options(scene, section=cfg, study=study)
     first = start_mode(cfg, study, cm, us[:m], omega, phi, fs)
     modes = [first] + ([cfg.second_mode] if cfg.second_mode is not None
                        and cfg.second_mode != first else [])
@@ -120,12 +118,8 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
         lo, hi, excursion_max = _energy_range(cfg, cm, phi[:, j], omega[j], e_on, es,
                                               mon.scale, us)
         _check_energy_floor(cfg, cm, us, lo, hi, es, eunit)
-        method = NnmMethod(energy_min=lo, energy_max=hi, integration=opts, tol=cfg.tol,
-                           ds=cfg.ds, ds_min=cfg.ds_min, ds_max=cfg.ds_max,
-                           max_points=cfg.max_points, phase=cfg.phase,
-                           stability_tol=cfg.stability_tol, rational_max=cfg.rational_max,
-                           rational_tol=cfg.rational_tol, excursion_max=excursion_max,
-                           delta_static=d_s)
+        method = cfg.method(energy_min=lo, energy_max=hi, integration=opts,
+                            excursion_max=excursion_max, delta_static=d_s)
         with ctx.progress(cfg.max_points, f"nnm mode {j}") as bar:
             br = nnm_branch(cm, us, omega[j], phi[:, j], method, rigid=rigid, mode=j,
                             other_omegas=np.delete(omega, j),

@@ -21,13 +21,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from .base import ConfigError, spec
+from .options import IntegrationOptions, NnmMethod, NnmSteps
 
 __all__ = ["NnmConfig"]
 
 
 @dataclass(frozen=True, kw_only=True)
-class NnmConfig:
-    """[nnm]: start mode, energy or amplitude range, steps, tolerances."""
+class NnmConfig(NnmSteps):
+    """[nnm]: start mode, energy or amplitude range, steps (:class:`NnmSteps`: ds, ds_min,
+    ds_max, max_points, phase, stability_tol, rational_max, rational_tol), tolerances."""
     mode: int | None = spec(None, ge=0, le=100_000, doc="start mode: index among the "
                             "elastic modes (0 = lowest)")
     frequency: float | None = spec(None, gt=0.0, le=1e9, doc="start mode: the one nearest "
@@ -44,22 +46,10 @@ class NnmConfig:
     amplitude_min: float | None = spec(None, gt=0.0, le=1e30, doc="instead of energies: "
                                        "start excursion of the monitored contact (um / model)")
     amplitude_max: float | None = spec(None, gt=0.0, le=1e30, doc="end excursion")
-    ds: float = spec(0.05, gt=0.0, le=10.0, doc="first relative step")
-    ds_min: float = spec(1e-4, gt=0.0, le=10.0, doc="smallest relative step")
-    ds_max: float = spec(0.3, gt=0.0, le=10.0, doc="largest relative step")
-    max_points: int = spec(200, ge=2, le=1_000_000, doc="points per backbone")
-    phase: str = spec("monitor", choices=("monitor", "mode"), doc="phase condition: the "
-                      "velocity of the monitored contact's deformation (or of the start "
-                      "mode's coordinate) zero at t = 0")
     rtol: float = spec(1e-9, gt=0.0, lt=1e-3, doc="integrator rtol (atol = 1e-6 rtol for a "
                        "gearbox, 1e-2 rtol for the impact pair)")
     tol: float = spec(1e-7, gt=0.0, lt=1.0, doc="periodicity residual relative to the "
                       "orbit's size")
-    stability_tol: float = spec(1e-6, gt=0.0, lt=1.0, doc="a nontrivial multiplier with "
-                                "|mu| > 1 + stability_tol makes the orbit unstable")
-    rational_max: int = spec(5, ge=1, le=20, doc="largest p, q of an internal resonance p:q")
-    rational_tol: float = spec(0.01, gt=0.0, lt=0.5, doc="relative distance of a frequency "
-                               "ratio from p/q that labels an internal resonance")
     shape_energies: tuple[float, ...] = spec((), max_len=20, gt=0.0, le=1e30,
                                              doc="energies (energy_unit) at which the orbit "
                                              "(mode shape over one period) is written")
@@ -70,9 +60,6 @@ class NnmConfig:
         if len(given) > 1:
             raise ConfigError(f"{path}.{given[1]}", f"give one of mode, frequency, mesh "
                               f"(got {', '.join(given)})")
-        if not self.ds_min <= self.ds <= self.ds_max:
-            raise ConfigError(f"{path}.ds", f"expected ds_min <= ds <= ds_max "
-                              f"({self.ds_min:g} <= {self.ds:g} <= {self.ds_max:g})")
         amp = (self.amplitude_min is not None, self.amplitude_max is not None)
         en = (self.energy_min is not None, self.energy_max is not None)
         if any(amp) and any(en):
@@ -86,6 +73,14 @@ class NnmConfig:
                               f"range needs both {lo} and {hi} (numbers > 0)")
         if not a < b:
             raise ConfigError(f"{path}.{hi}", f"expected {hi} > {lo} = {a:g}, got {b:g}")
+
+    def method(self, *, energy_min: float, energy_max: float, integration: IntegrationOptions,
+               excursion_max: float | None = None, delta_static: float = 0.0) -> NnmMethod:
+        """The solver's settings: this section's steps and tolerance over the energy range
+        [energy_min, energy_max] in model units (known once the model is built)."""
+        return NnmMethod(**self.steps(), tol=self.tol, energy_min=energy_min,
+                         energy_max=energy_max, integration=integration,
+                         excursion_max=excursion_max, delta_static=delta_static)
 
     def check_model(self, impact_pair, gearbox, path: str = "nnm") -> None:
         """The checks against the scene's model section that need no model build (the

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from .base import ConfigError, check, spec
 
 __all__ = ["Parameter", "OMEGA", "RPM", "IntegrationOptions", "ShootingOptions",
-           "SweepOptions", "ContinuationSteps", "ContinuationOptions", "check_fields",
-           "check_range"]
+           "SweepOptions", "ContinuationSteps", "ContinuationOptions", "NnmSteps", "NnmMethod",
+           "check_fields", "check_range"]
 
 
 @dataclass(frozen=True)
@@ -178,3 +178,63 @@ class ContinuationOptions(ContinuationSteps):
     def __post_init__(self):
         super().__post_init__()
         check_range(self, "", "param_min", "param_max")
+
+
+@dataclass(frozen=True, kw_only=True)
+class NnmSteps:
+    """Steps, limits and labels of the NNM continuation in energy (shared by ``[nnm]``,
+    :class:`~vibrogear.config.nnm_section.NnmConfig`, and the solver's
+    :class:`NnmMethod`, so that their rules are written once).  The steps are relative:
+    times the orbit's distance from the static state in state space."""
+    ds: float = spec(0.05, gt=0.0, le=10.0, doc="first relative step")
+    ds_min: float = spec(1e-4, gt=0.0, le=10.0, doc="smallest relative step")
+    ds_max: float = spec(0.3, gt=0.0, le=10.0, doc="largest relative step")
+    max_points: int = spec(200, ge=2, le=1_000_000, doc="points per backbone")
+    phase: str = spec("monitor", choices=("monitor", "mode"), doc="phase condition: the "
+                      "velocity of the monitored contact's deformation (or of the start "
+                      "mode's coordinate) zero at t = 0")
+    stability_tol: float = spec(1e-6, gt=0.0, lt=1.0, doc="a nontrivial multiplier with "
+                                "|mu| > 1 + stability_tol makes the orbit unstable")
+    rational_max: int = spec(5, ge=1, le=20, doc="largest p, q of an internal resonance p:q")
+    rational_tol: float = spec(0.01, gt=0.0, lt=0.5, doc="relative distance of a frequency "
+                               "ratio from p/q that labels an internal resonance")
+
+    def __post_init__(self):
+        check_fields(self)
+        if self.phase not in ("monitor", "mode"):
+            raise ConfigError("phase", f"expected 'monitor' or 'mode', got {self.phase!r}")
+        if not self.ds_min <= self.ds <= self.ds_max:
+            raise ConfigError("ds", f"expected ds_min <= ds <= ds_max "
+                              f"({self.ds_min:g} <= {self.ds:g} <= {self.ds_max:g})")
+
+    def steps(self) -> dict:
+        """These fields as keyword arguments (for :class:`NnmMethod`)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(NnmSteps)}
+
+
+@dataclass(frozen=True, kw_only=True)
+class NnmMethod(NnmSteps):
+    """The settings of :func:`vibrogear.solvers.periodic.nnm.nnm_branch`: the steps
+    (:class:`NnmSteps`), the energy range in model units, the integrator's options, the
+    periodicity tolerance and the corrector's limits.  ``[nnm]`` builds it
+    (:meth:`~vibrogear.config.nnm_section.NnmConfig.method`)."""
+    energy_min: float
+    energy_max: float
+    integration: IntegrationOptions = IntegrationOptions(rtol=1e-10, atol=1e-12)
+    tol: float = spec(1e-9, gt=0.0, lt=1.0, doc="periodicity residual relative to "
+                      "|u0 - u_s|")
+    max_corrector_iter: int = spec(8, ge=1, le=100)
+    max_angle: float = spec(0.35, gt=0.0)
+    quasi_newton: bool = True
+    #: the branch also ends (LEFT_RANGE) once the monitored deformation's largest excursion
+    #: from its static value ``delta_static`` exceeds this (an amplitude range; None: no)
+    excursion_max: float | None = None
+    delta_static: float = 0.0
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not 0.0 < self.energy_min:
+            raise ConfigError("energy_min", f"must be > 0, got {self.energy_min:g}")
+        if not self.energy_min < self.energy_max:
+            raise ConfigError("energy_max", f"must be greater than energy_min = "
+                              f"{self.energy_min:g}, got {self.energy_max:g}")

@@ -32,7 +32,7 @@ from typing import Callable
 
 import numpy as np
 
-from ...config.options import IntegrationOptions
+from ...config.options import NnmMethod
 from ...pipeline.executors import blas_threads
 from ...status import Outcome, Status
 from .branch import PseudoArclength
@@ -44,36 +44,6 @@ from .shooting import residual_norm
 from .special_points import switch_counts
 
 __all__ = ["NnmMethod", "NnmPoint", "NnmBranch", "nnm_branch", "rational_near"]
-
-
-@dataclass(frozen=True)
-class NnmMethod:
-    """Settings of :func:`nnm_branch` (see the module docstring); energies in model units."""
-    energy_min: float
-    energy_max: float
-    integration: IntegrationOptions = IntegrationOptions(rtol=1e-10, atol=1e-12)
-    tol: float = 1e-9                   # periodicity residual relative to |u0 - u_s|
-    ds: float = 0.05                    # relative steps (x |u0 - u_s|)
-    ds_min: float = 1e-4
-    ds_max: float = 0.3
-    max_points: int = 200
-    max_corrector_iter: int = 8
-    max_angle: float = 0.35
-    phase: str = "monitor"
-    quasi_newton: bool = True
-    stability_tol: float = 1e-6
-    rational_max: int = 5
-    rational_tol: float = 0.01
-    #: the branch also ends (LEFT_RANGE) once the monitored deformation's largest excursion
-    #: from its static value ``delta_static`` exceeds this (an amplitude range; None: no)
-    excursion_max: float | None = None
-    delta_static: float = 0.0
-
-    def __post_init__(self):
-        if not (0 < self.energy_min < self.energy_max and 0 < self.ds_min <= self.ds
-                <= self.ds_max and self.max_points >= 2 and self.phase in ("monitor", "mode")):
-            raise ValueError("NnmMethod: need 0 < energy_min < energy_max, 0 < ds_min <= ds "
-                             "<= ds_max, max_points >= 2, phase 'monitor' or 'mode'")
 
 
 @dataclass(frozen=True, eq=False)
