@@ -15,6 +15,14 @@ they see the same load:
   same number of computing processes as ``ours_2`` with one process more than there are
   cores (2 here).
 
+Sessions: Linux's autogroup scheduler (on here) shares the cores between sessions, not
+processes, and every process started from one shell is in one session; on a machine loaded
+by other jobs a job then gets one session's slice however many of its ranks compute, and a
+second computing rank cannot show in the wall time (``--one-session`` measures it so:
+bench_mpi_pool_one_session.json).  By default each rank runs under ``setsid -w``, in a
+session of its own, and gets the slice every other job here gets, as each rank gets a core
+of its own on a dedicated node; each run records its ranks' autogroups.
+
 Each computing process builds the model and computes one short point (every compiled kernel
 loaded) before the clock starts; the clock covers the pool alone: from the first unit handed
 out to the last point received on rank 0.  Every way must give the same points (the largest
@@ -111,22 +119,16 @@ def _lose_after_first(emit):
     return wrapped
 
 
-def _own_session() -> bool:
-    """This process in a session of its own: Linux's autogroup scheduler (on here) shares
-    the cores between sessions, so without it a job's ranks share one session's slice of a
-    loaded machine and a second computing rank cannot show; with it every rank gets the
-    slice any other job gets, as a rank gets a core of its own on a dedicated node."""
+def _autogroup() -> str:
+    """The scheduler group of this process (Linux autogroup: one per session)."""
     try:
-        os.setsid()
-        return True
+        return Path("/proc/self/autogroup").read_text().split()[0]
     except OSError:
-        return False
+        return "?"
 
 
-def child_ours(points: int, segments: int, lose: bool, own: bool) -> None:
+def child_ours(points: int, segments: int, lose: bool) -> None:
     from mpi4py import MPI
-
-    own = own and _own_session()
 
     from vibrogear.pipeline.executors import run_units
 
@@ -147,17 +149,16 @@ def child_ours(points: int, segments: int, lose: bool, own: bool) -> None:
     wall = time.perf_counter() - t0
     cpu = time.process_time() - c0
     cpus = comm.gather(cpu, root=0) if error is None else [cpu]
+    groups = comm.gather(_autogroup(), root=0) if error is None else [_autogroup()]
     if comm.rank == 0:
         print("RESULT " + json.dumps({"wall_s": wall, "points": len(got),
                                       "digest": _digest(got), "error": error,
-                                      "cpu_s_per_rank": cpus, "own_session": own}),
+                                      "cpu_s_per_rank": cpus, "autogroups": groups}),
               flush=True)
 
 
-def _init_worker(points: int, segments: int, lose: bool, own: bool) -> None:
+def _init_worker(points: int, segments: int, lose: bool) -> None:
     """mpi4py.futures' initializer: the unit function and the units, built in the worker."""
-    if own:
-        _own_session()
     _WORK["fn"], _WORK["units"] = _setup(points, segments)
     _WORK["lose"] = lose
 
@@ -171,13 +172,11 @@ def _run_unit(k: int) -> list:
         emit = _lose_after_first(emit)
     c0 = time.process_time()
     _WORK["fn"](unit, emit)
-    return items, time.process_time() - c0
+    return items, time.process_time() - c0, _autogroup()
 
 
-def child_futures(points: int, segments: int, lose: bool, own: bool) -> None:
+def child_futures(points: int, segments: int, lose: bool) -> None:
     from mpi4py.futures import MPIPoolExecutor
-
-    own = own and _own_session()
 
     from vibrogear.config import load_scene
     from vibrogear.solvers.sequential.sweep import sweep_units
@@ -186,7 +185,7 @@ def child_futures(points: int, segments: int, lose: bool, own: bool) -> None:
     n_units = len(sweep_units(points, scene.sweep.directions, segments))
     got, error = [], None
     with MPIPoolExecutor(initializer=_init_worker,
-                         initargs=(points, segments, lose, own)) as ex:
+                         initargs=(points, segments, lose)) as ex:
         ex.bootup(wait=True)
         # a warm-up task per worker would not reach every worker for sure: the initializer
         # has built the model and loaded the integrator before bootup returns
@@ -194,23 +193,37 @@ def child_futures(points: int, segments: int, lose: bool, own: bool) -> None:
         t0 = time.perf_counter()
         # the manager sends the unit's index only (the workers hold the units)
         futs = [ex.submit(_run_unit, k) for k in range(n_units)]
-        worker_cpu = 0.0
+        worker_cpu, groups = 0.0, {_autogroup()}
         try:
             for f in futs:
-                items, cpu = f.result()
+                items, cpu, group = f.result()
                 got.extend(items)
                 worker_cpu += cpu
+                groups.add(group)
         except Exception as exc:        # noqa: BLE001 - the lost-rank case reports it
             error = f"{type(exc).__name__}: {exc}"
         wall = time.perf_counter() - t0
         manager_cpu = time.process_time() - c0
     print("RESULT " + json.dumps({"wall_s": wall, "points": len(got), "digest": _digest(got),
                                   "error": error, "cpu_s_manager": manager_cpu,
-                                  "cpu_s_workers": worker_cpu, "own_session": own}),
+                                  "cpu_s_workers": worker_cpu, "autogroups": sorted(groups)}),
           flush=True)
 
 
 # ----------------------------------------------------------------- the driver
+
+def _session_pids(sid: int) -> list[int]:
+    """The processes of session ``sid`` (started by this driver)."""
+    pids = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if os.getsid(int(d.name)) == sid:
+                    pids.append(int(d.name))
+            except OSError:
+                pass
+    return pids
+
 
 def _mpirun(way: str, args, *, lose: bool = False, timeout: float = 900.0) -> dict:
     n = WAYS[way]
@@ -219,15 +232,15 @@ def _mpirun(way: str, args, *, lose: bool = False, timeout: float = 900.0) -> di
         cmd.append("--allow-run-as-root")
     if lose:
         cmd.append("--enable-recovery")
+    if not args.one_session and not lose:
+        # every rank in a session of its own (see _autogroup); not in the lost-rank case,
+        # whose processes are then simpler to end after a hang
+        cmd += ["setsid", "-w"]
     py = [sys.executable] + (["-m", "mpi4py.futures"] if way.startswith("futures") else [])
     cmd += py + [str(Path(__file__).resolve()), "--child", way.split("_")[0],
                  "--points", str(args.points), "--segments", str(args.segments)]
     if lose:
         cmd.append("--lose")
-    if not args.one_session and not lose:
-        # (not in the lost-rank case: a hung job is ended by its process group, which a
-        # rank in a session of its own has left)
-        cmd.append("--own-sessions")
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
@@ -237,8 +250,13 @@ def _mpirun(way: str, args, *, lose: bool = False, timeout: float = 900.0) -> di
         out, err = p.communicate(timeout=timeout)
         code, hung = p.returncode, False
     except subprocess.TimeoutExpired:
-        # a hung job: the whole process group this driver started (mpirun and its ranks)
-        os.killpg(p.pid, signal.SIGKILL)
+        # a hung job: every process of the session this driver started (mpirun and its
+        # ranks, each rank in a process group of its own), by id
+        for pid in _session_pids(p.pid):
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
         out, err = p.communicate()
         code, hung = None, True
     job = time.perf_counter() - t0
@@ -259,14 +277,13 @@ def main() -> None:
     ap.add_argument("--lost", action="store_true")
     ap.add_argument("--child", choices=("ours", "futures"))
     ap.add_argument("--lose", action="store_true")
-    ap.add_argument("--own-sessions", action="store_true")
     ap.add_argument("--one-session", action="store_true",
                     help="every rank of a job in the job's session (one autogroup)")
     args = ap.parse_args()
     if args.child == "ours":
-        return child_ours(args.points, args.segments, args.lose, args.own_sessions)
+        return child_ours(args.points, args.segments, args.lose)
     if args.child == "futures":
-        return child_futures(args.points, args.segments, args.lose, args.own_sessions)
+        return child_futures(args.points, args.segments, args.lose)
     if MPIRUN is None:
         sys.exit("bench_mpi_pool: no mpirun")
     import mpi4py
