@@ -39,7 +39,7 @@ from ..solvers.sequential.sweep_point import PHASES, run_point
 from .states_cluster import cluster_point, interval_widths
 from .states_starts import draw_start, start_scales
 from .study import Study, integration_options
-from .sweep import record_from_json, record_to_json
+from ..solvers.sequential.record_json import record_from_json, record_to_json
 
 __all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
 

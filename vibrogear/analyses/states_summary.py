@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ..solvers.status import Status
+from ..status import Status
 
 __all__ = ["states_summary", "coexisting_points"]
 
