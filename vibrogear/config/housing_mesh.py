@@ -1,0 +1,107 @@
+"""``[housing.mesh]``: how the housing is discretised, and the default size rules.
+
+Two element families:
+
+- ``element = "tet"`` (every source): Lagrange tetrahedra of ``degree`` from gmsh, sizes ``size``
+  (default by degree, :data:`DEFAULT_SIZE_PER_WALL`), ``bore_size`` (default size / 2) and the
+  optional junction grading ``edge_size`` / ``edge_distance``.
+- ``element = "hex"`` (parametric housings only): Lagrange hexahedra of ``degree`` (Q2 or Q3) on a
+  structured grid, one element through each wall (:mod:`vibrogear.geometry.housing_hex`).  The
+  sizes mean, in the wall planes: ``size`` the bulk cell size, ``edge_size`` the cell size next to
+  the wall junctions (growing by :data:`HEX_GRADING` per cell to ``size``), ``bore_size`` the
+  spacing of the block of cells around each bore (its rings).  Defaults :func:`hex_rule`
+  (docs/housing.md, "Hexahedra").
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .base import ConfigError, spec
+
+__all__ = ["HousingMeshConfig", "ELEMENTS", "MAX_SIZE_PER_WALL", "DEFAULT_SIZE_PER_WALL",
+           "HEX_GRADING", "HEX_DEFAULT_PER_WALL", "HexMeshRule", "hex_rule"]
+
+ELEMENTS = ("tet", "hex")
+#: largest global mesh size, in wall thicknesses, that still puts an element across the wall
+MAX_SIZE_PER_WALL = 2.0
+#: the default element size per wall thickness by Lagrange degree (issue 23 study of
+#: configs/housing.toml, 100 modes against a p-refinement reference: P3 at 2 x wall is within
+#: 0.7 % for every mode, 34 s under mpirun -n 2; P2 at 1.3 x wall 2.1 %, no P2 mesh within 1 %)
+DEFAULT_SIZE_PER_WALL = {1: 1.3, 2: 1.3, 3: 2.0}
+#: hexahedra: growth of the in-plane cell size per cell away from a junction or a bore block
+HEX_GRADING = 1.5
+#: hexahedra: default (size, edge_size, bore_size) in wall thicknesses (docs/housing.md, "Hexahedra")
+HEX_DEFAULT_PER_WALL = (6.0, 1.0, 2.0)
+#: hexahedra: the bulk size may not exceed this many wall thicknesses
+HEX_MAX_SIZE_PER_WALL = 12.0
+
+
+@dataclass(frozen=True, kw_only=True)
+class HousingMeshConfig:
+    element: str = spec("tet", choices=ELEMENTS, doc="tetrahedra (gmsh, any source) or hexahedra "
+                        "(structured, one element through each wall: parametric housings only)")
+    size: float | None = spec(None, gt=0.0, doc="global element size, m (tet: default 1.3 x wall for "
+                              "P2, 2 x wall for P3; hex: the in-plane bulk size, default 6 x wall)")
+    bore_size: float | None = spec(None, gt=0.0, doc="element size at the bores, m (tet: default size/2; "
+                                   "hex: the spacing around the bores, default 2 x wall)")
+    degree: int = spec(2, ge=1, le=3, doc="Lagrange degree (tet: 2 for thin walls, 3: p-refinement; hex: 2 or 3)")
+    refine: int = spec(0, ge=0, le=3, doc="uniform splits of every tet (nested meshes, h / 2^refine)")
+    edge_size: float | None = spec(None, gt=0.0, doc="element size at the re-entrant junction edges "
+                                   "(wall/base, wall/wall, rib and boss junctions), m (tet default: no "
+                                   "grading; hex default: 1 x wall)")
+    edge_distance: float | None = spec(None, gt=0.0, doc="distance from those edges over which the size "
+                                       "grows linearly from edge_size to size, m (tet only; default 2 x wall)")
+
+    def validate(self, path: str) -> None:
+        if self.element == "hex":
+            self._validate_hex(path)
+            return
+        if self.size is not None and self.bore_size is not None and self.bore_size > self.size:
+            raise ConfigError(f"{path}.bore_size", f"must be <= size = {self.size:g}, got {self.bore_size:g}")
+        if self.edge_distance is not None and self.edge_size is None:
+            raise ConfigError(f"{path}.edge_distance", "only with edge_size (the size at the junction edges)")
+
+    def _validate_hex(self, path: str) -> None:
+        if self.degree < 2:
+            raise ConfigError(f"{path}.degree", "must be 2 or 3 with element = 'hex' (one trilinear "
+                              "element through a wall locks in bending), got 1")
+        if self.refine:
+            raise ConfigError(f"{path}.refine", "only for element = 'tet' (the hex grid is set by "
+                              f"size, edge_size and bore_size), got {self.refine}")
+        if self.edge_distance is not None:
+            raise ConfigError(f"{path}.edge_distance", "only for element = 'tet'; hex cells grow by "
+                              f"{HEX_GRADING:g} per cell from edge_size to size")
+
+
+@dataclass(frozen=True)
+class HexMeshRule:
+    """Resolved in-plane sizes of the hex grid, m: bulk, next to the junctions, around the bores."""
+    size: float
+    edge: float
+    bore: float
+    grading: float = HEX_GRADING
+
+    def key_data(self) -> dict:
+        return {"size": self.size, "edge_size": self.edge, "bore_size": self.bore, "grading": self.grading}
+
+
+def hex_rule(mesh: HousingMeshConfig, wall: float | None, path: str = "housing.mesh") -> HexMeshRule:
+    """The hex grid's sizes: the given ones, the rest from :data:`HEX_DEFAULT_PER_WALL`; checked
+    against the wall thickness (ConfigError naming the key)."""
+    t = wall if wall is not None else math.nan
+    ds, de, db = HEX_DEFAULT_PER_WALL
+    rule = HexMeshRule(size=mesh.size if mesh.size is not None else ds * t,
+                       edge=mesh.edge_size if mesh.edge_size is not None else de * t,
+                       bore=mesh.bore_size if mesh.bore_size is not None else db * t)
+    if wall is None:
+        return rule
+    if not t / 4 <= rule.size <= HEX_MAX_SIZE_PER_WALL * t:
+        raise ConfigError(f"{path}.size", f"with element = 'hex' must lie in [wall_thickness / 4, "
+                          f"{HEX_MAX_SIZE_PER_WALL:g} x wall_thickness] = [{t / 4:g}, "
+                          f"{HEX_MAX_SIZE_PER_WALL * t:g}] m, got {rule.size:g}")
+    for key, v in (("edge_size", rule.edge), ("bore_size", rule.bore)):
+        if not t / 4 <= v <= rule.size:
+            raise ConfigError(f"{path}.{key}", f"with element = 'hex' must lie in [wall_thickness / 4, "
+                              f"size] = [{t / 4:g}, {rule.size:g}] m, got {v:g}")
+    return rule
