@@ -7,8 +7,9 @@ Two element families:
   optional junction grading ``edge_size`` / ``edge_distance``.
 - ``element = "hex"`` (parametric housings only): Lagrange hexahedra of ``degree`` (Q2 or Q3) on a
   structured grid, one element through each wall (:mod:`vibrogear.geometry.housing_hex`).  The
-  sizes mean, in the wall planes: ``size`` the bulk cell size, ``edge_size`` the cell size next to
-  the wall junctions (growing by :data:`HEX_GRADING` per cell to ``size``), ``bore_size`` the
+  sizes mean, in the wall planes: ``size`` the bulk cell size, ``edge_size`` the size of the cell
+  function at the wall junctions (growing linearly with the distance from them, by
+  :data:`HEX_SIZE_GRADIENT` per metre, up to ``size``), ``bore_size`` the
   spacing of the block of cells around each bore (its rings).  Defaults :func:`hex_rule`
   (docs/housing.md, "Hexahedra").
 """
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 from .base import ConfigError, spec
 
 __all__ = ["HousingMeshConfig", "ELEMENTS", "MAX_SIZE_PER_WALL", "DEFAULT_SIZE_PER_WALL",
-           "HEX_GRADING", "HEX_DEFAULT_PER_WALL", "HexMeshRule", "hex_rule"]
+           "HEX_SIZE_GRADIENT", "HEX_DEFAULT_PER_WALL", "HexMeshRule", "hex_rule"]
 
 ELEMENTS = ("tet", "hex")
 #: largest global mesh size, in wall thicknesses, that still puts an element across the wall
@@ -29,8 +30,9 @@ MAX_SIZE_PER_WALL = 2.0
 #: configs/housing.toml, 100 modes against a p-refinement reference: P3 at 2 x wall is within
 #: 0.7 % for every mode, 34 s under mpirun -n 2; P2 at 1.3 x wall 2.1 %, no P2 mesh within 1 %)
 DEFAULT_SIZE_PER_WALL = {1: 1.3, 2: 1.3, 3: 2.0}
-#: hexahedra: growth of the in-plane cell size per cell away from a junction or a bore block
-HEX_GRADING = 1.5
+#: hexahedra: growth of the in-plane cell size per metre of distance from a junction or a bore block
+#: (consecutive cells ~1.65 x apart; :mod:`vibrogear.geometry.hex_grid`)
+HEX_SIZE_GRADIENT = 0.5
 #: hexahedra: default (size, edge_size, bore_size) in wall thicknesses (docs/housing.md, "Hexahedra")
 HEX_DEFAULT_PER_WALL = (6.0, 1.0, 2.0)
 #: hexahedra: the bulk size may not exceed this many wall thicknesses
@@ -70,8 +72,8 @@ class HousingMeshConfig:
             raise ConfigError(f"{path}.refine", "only for element = 'tet' (the hex grid is set by "
                               f"size, edge_size and bore_size), got {self.refine}")
         if self.edge_distance is not None:
-            raise ConfigError(f"{path}.edge_distance", "only for element = 'tet'; hex cells grow by "
-                              f"{HEX_GRADING:g} per cell from edge_size to size")
+            raise ConfigError(f"{path}.edge_distance", "only for element = 'tet'; hex cells grow "
+                              f"linearly (by {HEX_SIZE_GRADIENT:g} x distance) from edge_size to size")
 
 
 @dataclass(frozen=True)
@@ -80,10 +82,10 @@ class HexMeshRule:
     size: float
     edge: float
     bore: float
-    grading: float = HEX_GRADING
+    gradient: float = HEX_SIZE_GRADIENT
 
     def key_data(self) -> dict:
-        return {"size": self.size, "edge_size": self.edge, "bore_size": self.bore, "grading": self.grading}
+        return {"size": self.size, "edge_size": self.edge, "bore_size": self.bore, "size_gradient": self.gradient}
 
 
 def hex_rule(mesh: HousingMeshConfig, wall: float | None, path: str = "housing.mesh") -> HexMeshRule:

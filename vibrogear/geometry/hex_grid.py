@@ -2,9 +2,11 @@
 
 - :func:`graded_fill` / :func:`axis_lines`: the grid lines along one axis.  Every *essential* line
   (a wall face, a block edge, a feature edge) is kept exactly; the interval between two of them is
-  filled with cells whose size starts at the size asked for at each end and grows by ``ratio`` per
-  cell up to the bulk size (the size function s(x) = min(h, h_a + (ratio - 1)(x - a),
-  h_b + (ratio - 1)(b - x)) integrated: N = round(int dx / s) cells at equal steps of that integral).
+  filled with cells whose size grows linearly with the distance from each end, by ``gradient`` per
+  metre, from the size asked for there up to the bulk size: s(x) = min(h, h_a + gradient (x - a),
+  h_b + gradient (b - x)), integrated: N = round(int dx / s) cells at equal steps of that integral.
+  Consecutive cells then differ by a factor ~exp(gradient) (1.65 for 0.5), and the first cell is
+  ~h_a (exp(gradient) - 1) / gradient (1.30 h_a for 0.5).
 - :func:`merge_hexes`: hexahedra given by their corner coordinates -> shared nodes and cells in
   dolfinx's tensor-product vertex order (vertex ``i + 2 j + 4 k`` at local (i, j, k)), each with a
   positive Jacobian at its first corner.
@@ -25,11 +27,11 @@ HEX_FACES = np.array([[0, 2, 4, 6], [1, 3, 5, 7], [0, 1, 4, 5], [2, 3, 6, 7], [0
 _SAMPLES = 2001
 
 
-def graded_fill(a: float, b: float, ha: float, hb: float, h: float, ratio: float) -> np.ndarray:
-    """Interior grid points of [a, b] (a < b): cells of ~ha next to a and ~hb next to b, growing
-    by ``ratio`` per cell up to ``h``."""
+def graded_fill(a: float, b: float, ha: float, hb: float, h: float, gradient: float) -> np.ndarray:
+    """Interior grid points of [a, b] (a < b): the size function ha + gradient x distance from a
+    (hb from b), capped at ``h``, integrated (module docstring)."""
     length = b - a
-    g = ratio - 1.0
+    g = gradient
     x = np.linspace(a, b, _SAMPLES)
     s = np.minimum(h, np.minimum(ha + g * (x - a), hb + g * (b - x)))
     s = np.maximum(s, 1e-12)
@@ -41,7 +43,7 @@ def graded_fill(a: float, b: float, ha: float, hb: float, h: float, ratio: float
     return np.interp(np.arange(1, n) * cum[-1] / n, cum, x)
 
 
-def axis_lines(essential: dict[float, float], h: float, ratio: float) -> np.ndarray:
+def axis_lines(essential: dict[float, float], h: float, gradient: float) -> np.ndarray:
     """Sorted grid lines: the keys of ``essential`` (line -> cell size wanted next to it; lines
     closer than 1e-9 merged, the smaller size kept) and the graded fill between neighbours."""
     keys = sorted(essential)
@@ -54,7 +56,7 @@ def axis_lines(essential: dict[float, float], h: float, ratio: float) -> np.ndar
         sizes.append(essential[v])
     out = [lines[0]]
     for (a, ha), (b, hb) in zip(zip(lines[:-1], sizes[:-1]), zip(lines[1:], sizes[1:])):
-        out.extend(graded_fill(a, b, ha, hb, h, ratio))
+        out.extend(graded_fill(a, b, ha, hb, h, gradient))
         out.append(b)
     return np.array(out)
 

@@ -5,8 +5,9 @@ cells of one tensor grid (lines from :func:`.hex_grid.axis_lines`); each bore si
 *block* of the front and back walls whose cells are rings (an O-grid):
 
 - one element through each wall (the wall's two faces are grid lines, nothing between them);
-- in the wall planes the cells are ``edge`` next to the wall junctions (the inner wall faces) and
-  grow by ``grading`` per cell up to ``size``; the block edges carry cells of ``bore`` size;
+- in the wall planes the cells are ~``edge`` next to the wall junctions (the inner wall faces) and
+  grow with the distance from them (``gradient``, :mod:`.hex_grid`) up to ``size``; the block
+  edges carry cells of ``bore`` size;
 - a block's boundary nodes (every grid line crossing it) are mapped radially onto the boss circle
   (``boss_radius``) and the bore circle; rings of cells join square, boss circle and bore circle;
   the boss is the rings inside the boss circle extruded outwards by ``boss_length``; a rib is the
@@ -36,7 +37,7 @@ from ..config.housing import HousingConfig
 from .hex_grid import axis_lines, boundary_quads, merge_hexes
 from .housing import BASE_TAG, BORE_TAG0, VOLUME_TAG, HousingMesh, bore_layout
 
-__all__ = ["build_hex_housing_mesh", "hex_housing_arrays", "read_hex_mesh", "HEX_CELL_TYPE"]
+__all__ = ["build_hex_housing_mesh", "build_hex_beam_mesh", "hex_housing_arrays", "read_hex_mesh", "HEX_CELL_TYPE"]
 
 HEX_CELL_TYPE = "hexahedron"
 
@@ -155,7 +156,7 @@ def _grid(cfg: HousingConfig, blocks: list[_Block]):
         ex[f] = ex[L - f] = e
         ey[f] = ey[W - f] = e
         ez[-cfg.base_thickness] = out_size
-    return tuple(axis_lines(d, rule.size, rule.grading) for d in (ex, ey, ez))
+    return tuple(axis_lines(d, rule.size, rule.gradient) for d in (ex, ey, ez))
 
 
 def _tensor_cells(cfg, blocks, xs, ys, zs) -> np.ndarray:
@@ -273,3 +274,23 @@ def read_hex_mesh(path: str | Path):
     """(x, cells, facets, facet tags) of a mesh written by :func:`build_hex_housing_mesh`."""
     with np.load(path) as z:
         return z["x"], z["cells"].astype(np.int64), z["facets"].astype(np.int64), z["values"].astype(np.int32)
+
+
+def build_hex_beam_mesh(length: float, width: float, height: float, path: str | Path, *,
+                        cells: tuple[int, int, int]) -> HousingMesh:
+    """A solid cantilever along x of ``cells`` = (nx, ny, nz) equal hexahedra, clamped at x = 0
+    (group BASE_TAG); no bores (the hex counterpart of :func:`.housing.build_beam_mesh`)."""
+    t0 = time.perf_counter()
+    xs, ys, zs = (np.linspace(0.0, a, n + 1) for a, n in zip((length, width, height), cells))
+    i, j, k = (a.ravel() for a in np.meshgrid(*(np.arange(n) for n in cells), indexing="ij"))
+    corners = np.stack([np.c_[xs[i + di], ys[j + dj], zs[k + dk]]
+                        for dk in (0, 1) for dj in (0, 1) for di in (0, 1)], axis=1)
+    x, hexes = merge_hexes(corners)
+    faces = boundary_quads(hexes)
+    clamp = faces[np.all(np.abs(x[faces][..., 0]) < 1e-12, axis=1)]
+    path = Path(path).with_suffix(".npz")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "wb") as fh:
+        np.savez(fh, x=x, cells=hexes, facets=clamp, values=np.full(len(clamp), BASE_TAG, np.int32))
+    return HousingMesh(path, BASE_TAG, (), VOLUME_TAG, len(x), len(hexes), time.perf_counter() - t0,
+                       HEX_CELL_TYPE)
