@@ -9,7 +9,7 @@ import numpy as np
 
 _PREVIEW_POINTS = 4000
 #: modes evaluated together by :func:`_eval_modes`
-_EVAL_CHUNK = 20
+_EVAL_CHUNK = 50
 
 
 def _locate(dmesh, points, comm):
@@ -134,7 +134,12 @@ def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
     mids = 0.5 * (tri + tri[:, [1, 2, 0]])                                     # edge midpoints
     pts, where = mids.reshape(-1, 3), np.repeat(cells, 3)
-    u = _eval_modes(uh, Vloc, pts, where).reshape(len(tri), 3, 3, -1)          # (nf, q, c, m)
+    # an edge midpoint is shared by the two facets at that edge: evaluate each point once (the
+    # field is continuous, so the cell it is evaluated in does not matter)
+    scale = max(float(np.ptp(pts, axis=0).max()), 1e-300) if len(pts) else 1.0
+    _, first, back = np.unique(np.round(pts / (1e-9 * scale)).astype(np.int64), axis=0,
+                               return_index=True, return_inverse=True)
+    u = _eval_modes(uh, Vloc, pts[first], where[first])[back.ravel()].reshape(len(tri), 3, 3, -1)
     vals = np.einsum("fqcm,fc->fqm", u, unit)
     tris, allv = comm.gather(tri, root=0), comm.gather(vals, root=0)
     if comm.rank != 0:
