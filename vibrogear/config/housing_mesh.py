@@ -34,7 +34,7 @@ DEFAULT_SIZE_PER_WALL = {1: 1.3, 2: 1.3, 3: 2.0}
 #: (consecutive cells ~1.65 x apart; :mod:`vibrogear.geometry.hex_grid`)
 HEX_SIZE_GRADIENT = 0.5
 #: hexahedra: default (size, edge_size, bore_size) in wall thicknesses (docs/housing.md, "Hexahedra")
-HEX_DEFAULT_PER_WALL = (6.0, 1.0, 2.0)
+HEX_DEFAULT_PER_WALL = (6.0, 1.0, 2.5)
 #: hexahedra: the bulk size may not exceed this many wall thicknesses
 HEX_MAX_SIZE_PER_WALL = 12.0
 
@@ -46,7 +46,7 @@ class HousingMeshConfig:
     size: float | None = spec(None, gt=0.0, doc="global element size, m (tet: default 1.3 x wall for "
                               "P2, 2 x wall for P3; hex: the in-plane bulk size, default 6 x wall)")
     bore_size: float | None = spec(None, gt=0.0, doc="element size at the bores, m (tet: default size/2; "
-                                   "hex: the spacing around the bores, default 2 x wall)")
+                                   "hex: the spacing around the bores, default 2.5 x wall)")
     degree: int = spec(2, ge=1, le=3, doc="Lagrange degree (tet: 2 for thin walls, 3: p-refinement; hex: 2 or 3)")
     refine: int = spec(0, ge=0, le=3, doc="uniform splits of every tet (nested meshes, h / 2^refine)")
     edge_size: float | None = spec(None, gt=0.0, doc="element size at the re-entrant junction edges "
