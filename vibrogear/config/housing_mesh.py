@@ -89,13 +89,15 @@ class HexMeshRule:
 
 
 def hex_rule(mesh: HousingMeshConfig, wall: float | None, path: str = "housing.mesh") -> HexMeshRule:
-    """The hex grid's sizes: the given ones, the rest from :data:`HEX_DEFAULT_PER_WALL`; checked
+    """The hex grid's sizes: the given ones, the rest from :data:`HEX_DEFAULT_PER_WALL` (edge and
+    bore at most ``size``); checked
     against the wall thickness (ConfigError naming the key)."""
     t = wall if wall is not None else math.nan
     ds, de, db = HEX_DEFAULT_PER_WALL
-    rule = HexMeshRule(size=mesh.size if mesh.size is not None else ds * t,
-                       edge=mesh.edge_size if mesh.edge_size is not None else de * t,
-                       bore=mesh.bore_size if mesh.bore_size is not None else db * t)
+    size = mesh.size if mesh.size is not None else ds * t
+    rule = HexMeshRule(size=size,                   # defaults of edge and bore: at most the size
+                       edge=mesh.edge_size if mesh.edge_size is not None else min(de * t, size),
+                       bore=mesh.bore_size if mesh.bore_size is not None else min(db * t, size))
     if wall is None:
         return rule
     if not t / 4 <= rule.size <= HEX_MAX_SIZE_PER_WALL * t:
