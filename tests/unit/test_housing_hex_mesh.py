@@ -14,7 +14,8 @@ from vibrogear.config.scene import load_scene
 from vibrogear.geometry.hex_grid import (HEX_FACES, axis_lines, boundary_quads, graded_fill, hex_volumes,
                                          merge_hexes, min_corner_jacobian)
 from vibrogear.geometry.housing import BASE_TAG, BORE_TAG0, bore_layout, housing_volume
-from vibrogear.geometry.housing_hex import _blocks, hex_housing_arrays
+from vibrogear.config.housing_mesh import hex_blocks as _blocks
+from vibrogear.geometry.housing_hex import hex_housing_arrays
 from vibrogear.models.housing.run import housing_cache_keys
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -149,9 +150,8 @@ def test_close_bosses_abut_half_way():
     (("housing.bores[0].x=0.055",), "housing.bores[0].x"),  # boss on a junction
 ])
 def test_layouts_a_structured_grid_cannot_take_are_refused(sets, field):
-    cfg = _cfg(sets=sets)
-    with pytest.raises(ConfigError) as e:
-        hex_housing_arrays(cfg)
+    with pytest.raises(ConfigError) as e:             # at load time, before anything is written
+        _cfg(sets=sets)
     assert e.value.path == field and "element = 'tet'" in str(e.value)
 
 
@@ -187,3 +187,16 @@ def test_cache_keys_tet_unchanged_hex_distinct():
     # a changed hex size changes both keys
     kh2 = housing_cache_keys(dataclasses.replace(hexc, mesh=dataclasses.replace(hexc.mesh, bore_size=0.02)))
     assert kh2[0] != kh[0] and kh2[1] != kh[1]
+
+
+def test_refused_layout_through_the_cli_exits_2_and_writes_nothing(tmp_path):
+    import subprocess
+    import sys
+
+    vg = Path(sys.executable).parent / "vibrogear"
+    out = tmp_path / "out"
+    r = subprocess.run([str(vg), "modes", str(ROOT / "configs" / "housing.toml"), "--out", str(out),
+                        "--set", HEX[0], "--set", "housing.bores[2].x=0.36"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "housing.bores[2]" in r.stderr and "element = 'tet'" in r.stderr
+    assert not out.exists()

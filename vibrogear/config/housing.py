@@ -23,7 +23,7 @@ from typing import Any
 
 from .base import ConfigError, spec
 from .housing_mesh import (DEFAULT_SIZE_PER_WALL, ELEMENTS, MAX_SIZE_PER_WALL, HexMeshRule,
-                           HousingMeshConfig, hex_rule)
+                           HousingMeshConfig, hex_blocks, hex_rule)
 
 __all__ = ["HousingConfig", "BoreConfig", "FixedRegionConfig", "SOURCES", "FILE_SUFFIXES", "LENGTH_UNITS", "MaterialConfig", "HousingMeshConfig",
            "HousingModesConfig", "HOUSING_SOLVERS",
@@ -282,6 +282,7 @@ class HousingConfig:
         self._validate_bores(p)
         if self.mesh.element == "hex":
             hex_rule(self.mesh, t, f"{p}.mesh")
+            hex_blocks(self)                   # a layout the structured grid cannot take: refused
             self._validate_modes(p)
             return
         size = self.mesh_size

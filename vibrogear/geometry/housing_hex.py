@@ -27,97 +27,19 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..config.base import ConfigError
 from ..config.housing import HousingConfig
+from ..config.housing_mesh import HexBlock, hex_blocks
 from .hex_grid import axis_lines, boundary_quads, merge_hexes
 from .housing import BASE_TAG, BORE_TAG0, VOLUME_TAG, HousingMesh, bore_layout
 
 __all__ = ["build_hex_housing_mesh", "build_hex_beam_mesh", "hex_housing_arrays", "read_hex_mesh", "HEX_CELL_TYPE"]
 
 HEX_CELL_TYPE = "hexahedron"
-
-
-@dataclass
-class _Block:
-    bx: float
-    bz: float
-    r: float
-    R: float
-    lb: float
-    rib: float          # rib thickness, 0: no rib
-    x0: float
-    x1: float
-    z0: float
-    z1: float
-
-
-def _blocks(cfg: HousingConfig) -> list[_Block]:
-    """One block per bore, laid out as described in the module docstring."""
-    L, H, t = cfg.length, cfg.height, cfg.wall_thickness
-    gap = 0.25 * t
-    out = []
-    for i, b in enumerate(cfg.bores):
-        R = b.boss_radius
-        s = R + max(0.5 * t, 0.1 * R)
-        for c, lo_wall, hi_wall, key in ((b.x, t, L - t, "x"), (b.z, t, H - t, "z")):
-            if not (lo_wall + gap <= c - R and c + R <= hi_wall - gap):
-                raise ConfigError(f"housing.bores[{i}].{key}", f"with element = 'hex' the boss "
-                                  f"(boss_radius = {R:g}) must keep {gap:g} m from the inner wall faces: "
-                                  f"{key} in [{lo_wall + gap + R:g}, {hi_wall - gap - R:g}], got {c:g}; "
-                                  "use element = 'tet'")
-        rib = cfg.rib_t if cfg.ribs and b.boss_length > 0 else 0.0
-        out.append(_Block(b.x, b.z, b.bore_radius, R, b.boss_length, rib,
-                          max(b.x - s, t + gap), min(b.x + s, L - t - gap),
-                          max(b.z - s, t + gap), min(b.z + s, H - t - gap)))
-    for _ in range(2 * len(out)):
-        changed = _unify(out, "z0", "z1", gap) | _unify(out, "x0", "x1", gap)
-        if not changed:
-            break
-    for i, a in enumerate(out):
-        for j in range(i):
-            o = out[j]
-            if a.z0 < o.z1 - 1e-12 and o.z0 < a.z1 - 1e-12 and a.x0 < o.x1 - 1e-12 and o.x0 < a.x1 - 1e-12:
-                raise ConfigError(f"housing.bores[{i}]", f"too close to bores[{j}] for element = 'hex' "
-                                  "(their bosses need separate blocks of ring cells); use element = 'tet'")
-            if (a.rib and a.x0 < o.x1 and o.x0 < a.x1 and o.z1 <= a.z0) or \
-                    (o.rib and a.x0 < o.x1 and o.x0 < a.x1 and a.z1 <= o.z0):
-                raise ConfigError("housing.ribs", f"bores[{i}] and bores[{j}] are stacked: a rib would run "
-                                  "through the lower boss; use element = 'tet' or ribs = false")
-    return out
-
-
-def _unify(blocks: list[_Block], lo: str, hi: str, gap: float) -> bool:
-    """Blocks whose [lo, hi] ranges overlap and whose bosses are apart (by >= ``gap``) in the other
-    direction get one common range; in the other direction they then abut half-way between the
-    bosses where they would overlap or leave less than ``gap`` between them."""
-    olo, ohi = ("x0", "x1") if lo == "z0" else ("z0", "z1")
-    centre = (lambda blk: blk.bx) if olo == "x0" else (lambda blk: blk.bz)
-    changed = False
-    for i, a in enumerate(blocks):
-        for o in blocks[:i]:
-            if not (getattr(a, lo) < getattr(o, hi) - 1e-12 and getattr(o, lo) < getattr(a, hi) - 1e-12):
-                continue
-            if abs(centre(a) - centre(o)) < a.R + o.R + gap:
-                continue                                    # not apart: refused by _blocks
-            lo_v, hi_v = min(getattr(a, lo), getattr(o, lo)), max(getattr(a, hi), getattr(o, hi))
-            for blk in (a, o):
-                if (getattr(blk, lo), getattr(blk, hi)) != (lo_v, hi_v):
-                    setattr(blk, lo, lo_v)
-                    setattr(blk, hi, hi_v)
-                    changed = True
-            left, right = sorted((a, o), key=centre)
-            if getattr(left, ohi) > getattr(right, olo) - gap:
-                mid = 0.5 * (centre(left) + left.R + centre(right) - right.R)
-                if (getattr(left, ohi), getattr(right, olo)) != (mid, mid):
-                    setattr(left, ohi, mid)
-                    setattr(right, olo, mid)
-                    changed = True
-    return changed
 
 
 def _block_lines(a: float, b: float, h: float, centre: float | None = None,
@@ -132,7 +54,7 @@ def _block_lines(a: float, b: float, h: float, centre: float | None = None,
     return np.concatenate([left, right])
 
 
-def _grid(cfg: HousingConfig, blocks: list[_Block]):
+def _grid(cfg: HousingConfig, blocks: list[HexBlock]):
     L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
     rule = cfg.hex_mesh
     e, hb, out_size = rule.edge, rule.bore, 2.5 * t
@@ -187,7 +109,7 @@ def _tensor_cells(cfg, blocks, xs, ys, zs) -> np.ndarray:
                      for dk in (0, 1) for dj in (0, 1) for di in (0, 1)], axis=1)
 
 
-def _ring_cells(cfg, blk: _Block, xs, ys, zs, rule) -> list[np.ndarray]:
+def _ring_cells(cfg, blk: HexBlock, xs, ys, zs, rule) -> list[np.ndarray]:
     """Corner coordinates of the O-grid cells of one block in both walls and its two bosses."""
     W, t = cfg.width, cfg.wall_thickness
     bxl = xs[(xs >= blk.x0 - 1e-12) & (xs <= blk.x1 + 1e-12)]
@@ -234,7 +156,7 @@ def _ring_cells(cfg, blk: _Block, xs, ys, zs, rule) -> list[np.ndarray]:
 
 def hex_housing_arrays(cfg: HousingConfig):
     """(x (N, 3), cells (n, 8), facets (k, 4), facet tags (k,)) of the parametric housing."""
-    blocks = _blocks(cfg)
+    blocks = hex_blocks(cfg)
     xs, ys, zs = _grid(cfg, blocks)
     parts = [_tensor_cells(cfg, blocks, xs, ys, zs)]
     for blk in blocks:
