@@ -36,7 +36,8 @@ HEX = ('housing.mesh.element="hex"',)
 #: (label, size, degree, bore_size, extra overrides, rank counts): the shipped P3 scene and the
 #: hex defaults (the tolerance check, tol 1e-8 against 1e-5, at one rank only)
 CASES = {
-    "tet": [("P3 tet 0.024 / 0.012", 0.024, 3, 0.012, ("housing.modes.tol=1e-05",), (1, 2))],
+    "tet": [("P3 tet 0.024 / 0.012", 0.024, 3, 0.012, ('housing.mesh.element="tet"', "housing.modes.tol=1e-05"),
+             (1, 2))],
     "hex": [("Q3 hex, tol 1e-8", 0.072, 3, 0.030, HEX + ("housing.modes.tol=1e-08",), (1,)),
             ("Q3 hex, tol 1e-5", 0.072, 3, 0.030, HEX + ("housing.modes.tol=1e-05",), (1, 2))],
 }

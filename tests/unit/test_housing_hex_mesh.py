@@ -175,8 +175,8 @@ def test_hex_only_for_the_parametric_housing():
 
 
 def test_cache_keys_tet_unchanged_hex_distinct():
-    tet = load_scene(ROOT / "configs" / "housing.toml").housing
-    assert tet.mesh.element == "tet"
+    assert load_scene(ROOT / "configs" / "housing_small.toml").housing.mesh.element == "tet"   # the default
+    tet = load_scene(ROOT / "configs" / "housing.toml", ('housing.mesh.element="tet"',)).housing
     assert "element" not in tet.key_data()["mesh"] and "mesh_element" not in tet.key_data()
     hexc = _cfg()
     me = hexc.key_data()["mesh_element"]
