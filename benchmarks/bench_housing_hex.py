@@ -13,7 +13,7 @@ Every run's frequencies are compared per mode with the P3 reference of docs/hous
 factorisation, iterations, bore/surface values), CPU seconds of the process tree and the load
 average before and after are recorded in ``benchmarks/results/bench_housing_hex.json``.
 
-Usage: ``python benchmarks/bench_housing_hex.py [--ranks 1 2] [--only hex|tet]``
+Usage: ``python benchmarks/bench_housing_hex.py [--ranks 1 2] [--only hex|tet] [--out FILE]``
 """
 from __future__ import annotations
 
@@ -56,6 +56,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--ranks", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--only", choices=["hex", "tet"], default=None)
+    ap.add_argument("--out", type=Path, default=OUT, help="results JSON (default %(default)s)")
     a = ap.parse_args()
     ref_rec = json.loads(REF.read_text())["reference"]
     ref = np.array(ref_rec["reference_hz"])
@@ -84,11 +85,11 @@ def main() -> None:
                           f"{100 * r.get('max_abs_err', np.nan):.2f} % (mode {r.get('max_err_mode')}), "
                           f"split {r.get('split_s')}", flush=True)
                     rows.append(r)
-                    OUT.write_text(json.dumps({"scene": "configs/housing.toml", "runs": rows}, indent=1))
+                    a.out.write_text(json.dumps({"scene": "configs/housing.toml", "runs": rows}, indent=1))
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     rec = {"scene": "configs/housing.toml", "runs": rows, "ratios": _ratios(rows)}
-    OUT.write_text(json.dumps(rec, indent=1))
+    a.out.write_text(json.dumps(rec, indent=1))
     print(json.dumps(rec["ratios"], indent=1))
 
 
