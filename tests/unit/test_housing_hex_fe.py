@@ -47,8 +47,9 @@ def small_hex(tmp_path_factory):
 
 
 def test_lumped_mass_is_diagonal_positive_and_sums_to_the_mass(tmp_path):
-    """GLL quadrature on the Q3 nodes: M is diagonal, every entry > 0, and (no clamped rows with an
-    elastic support) its entries sum to 3 x rho x the mesh volume (numpy, trilinear cells)."""
+    """The FE path's lumped M (diagonal by construction, after a runtime check that the dropped
+    part is zero): every entry > 0, and (no clamped rows with an elastic support) its entries sum
+    to 3 x rho x the mesh volume (numpy, trilinear cells)."""
     from vibrogear.geometry.housing_hex import build_hex_housing_mesh, read_hex_mesh
     from vibrogear.models.housing.fe import assemble_mesh_matrices
 
@@ -63,6 +64,30 @@ def test_lumped_mass_is_diagonal_positive_and_sums_to_the_mass(tmp_path):
     assert M.data.sum() == pytest.approx(3 * cfg.material.rho * vol, rel=1e-10)
     assert raw["mass_kg"] == pytest.approx(cfg.material.rho * vol, rel=1e-10)
     assert raw["n_fallback_points"] == 0
+
+
+def test_gll_quadrature_makes_the_q3_mass_exactly_diagonal_on_the_housing_cells(tmp_path):
+    """The form the FE path assembles for hexahedra, on the housing's (non-affine) ring cells, before
+    anything is dropped: no off-diagonal entry above round-off (the element's nodes are the GLL points)."""
+    import scipy.sparse as sp
+    import ufl
+    import dolfinx.fem.petsc
+    from dolfinx import fem
+    from mpi4py import MPI
+
+    from vibrogear.geometry.housing_hex import build_hex_housing_mesh
+    from vibrogear.models.housing.fe import _read_mesh
+
+    hm = build_hex_housing_mesh(_small(), tmp_path / "mesh")
+    msh, _ = _read_mesh(hm.path, MPI.COMM_WORLD)
+    V = fem.VectorFunctionSpace(msh, ("Lagrange", 3))
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    m = fem.form(ufl.inner(u, v) * ufl.dx(metadata={"quadrature_rule": "GLL", "quadrature_degree": 5}))
+    A = dolfinx.fem.petsc.assemble_matrix(m)
+    A.assemble()
+    M = sp.csr_matrix(A.getValuesCSR()[::-1], shape=A.getSize())
+    off = M - sp.diags(M.diagonal())
+    assert abs(off).max() < 1e-14 * M.diagonal().max() and M.diagonal().min() > 0
 
 
 def test_small_housing_pipeline_with_hexahedra(small_hex):
