@@ -55,7 +55,7 @@ def main() -> None:
     ap.add_argument("-n", type=int, default=2, help="MPI ranks")
     a = ap.parse_args()
     # ~160k P2 DOF: global size 1.5 x wall, 12 mm at the bores
-    sets = ["--set", "housing.modes.count=100", "--set", "housing.mesh.degree=2",
+    sets = ["--set", 'housing.mesh.element="tet"', "--set", "housing.modes.count=100", "--set", "housing.mesh.degree=2",
             "--set", "housing.mesh.size=0.018",
             "--set", "housing.mesh.bore_size=0.012"] + [x for s in a.sets for x in ("--set", s)]
     tmp = Path(tempfile.mkdtemp(prefix="vg-bench-"))

@@ -50,7 +50,7 @@ def run_modes(size: float, *, count: int, n: int, sets=(), tmp: Path, timeout: f
     out = Path(tempfile.mkdtemp(prefix="o-", dir=tmp))
     grading = [] if edge_size is None else [f"housing.mesh.edge_size={edge_size}"] + (
         [] if edge_distance is None else [f"housing.mesh.edge_distance={edge_distance}"])
-    args = [f"housing.modes.count={count}", "housing.modes.shapes=0", "housing.mesh.degree=2",
+    args = ['housing.mesh.element="tet"', f"housing.modes.count={count}", "housing.modes.shapes=0", "housing.mesh.degree=2",
             f"housing.mesh.size={size}",
             f"housing.mesh.bore_size={size / 2}", *grading, *sets]
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "VIBROGEAR_CACHE_DIR": str(cache),

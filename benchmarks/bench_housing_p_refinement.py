@@ -81,7 +81,7 @@ def run_modes(size: float, degree: int, *, bore_size: float | None = None, edge_
     bore_size = size / 2 if bore_size is None else bore_size
     cache = Path(tempfile.mkdtemp(prefix="c-", dir=tmp))
     out = Path(tempfile.mkdtemp(prefix="o-", dir=tmp))
-    args = [f"housing.modes.count={count}", "housing.modes.shapes=0", f"housing.mesh.size={size}",
+    args = ['housing.mesh.element="tet"', f"housing.modes.count={count}", "housing.modes.shapes=0", f"housing.mesh.size={size}",
             f"housing.mesh.bore_size={bore_size}", f"housing.mesh.degree={degree}",
             *([f"housing.mesh.edge_size={edge_size}"] if edge_size else []), *sets]
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "VIBROGEAR_CACHE_DIR": str(cache),

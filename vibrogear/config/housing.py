@@ -22,23 +22,18 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, spec
+from .housing_mesh import (DEFAULT_SIZE_PER_WALL, ELEMENTS, MAX_SIZE_PER_WALL, HexMeshRule,
+                           HousingMeshConfig, hex_blocks, hex_rule)
 
 __all__ = ["HousingConfig", "BoreConfig", "FixedRegionConfig", "SOURCES", "FILE_SUFFIXES", "LENGTH_UNITS", "MaterialConfig", "HousingMeshConfig",
            "HousingModesConfig", "HOUSING_SOLVERS",
-           "MAX_SIZE_PER_WALL", "DEFAULT_SIZE_PER_WALL", "check_file", "resolve_file"]
+           "MAX_SIZE_PER_WALL", "DEFAULT_SIZE_PER_WALL", "ELEMENTS", "HexMeshRule", "hex_rule", "check_file", "resolve_file"]
 
 #: ``[housing.modes] solver``: block Lanczos (own) or SLEPc Krylov-Schur / subspace iteration in
 #: shift-and-invert on the Cholesky factor of K; ``krylovschur_gamg``: Krylov-Schur with CG + GAMG
 #: inner solves, no factor (housings beyond the direct factor's memory).  SLEPc's LOBPCG is not
 #: offered: it broke down on the clamped housing (docs/housing.md, "Solvers")
 HOUSING_SOLVERS = ("block", "krylovschur", "subspace", "krylovschur_gamg")
-#: largest global mesh size, in wall thicknesses, that still puts an element across the wall
-MAX_SIZE_PER_WALL = 2.0
-#: the default element size per wall thickness by Lagrange degree (issue 23 study of
-#: configs/housing.toml, 100 modes against a p-refinement reference: P3 at 2 x wall is within
-#: 0.7 % for every mode, 34 s under mpirun -n 2; P2 at 1.3 x wall 2.1 %, no P2 mesh within 1 %)
-DEFAULT_SIZE_PER_WALL = {1: 1.3, 2: 1.3, 3: 2.0}
-
 SOURCES = ("parametric", "step", "mesh", "modal")
 #: file suffixes (lower case) each imported source reads
 FILE_SUFFIXES = {
@@ -143,25 +138,6 @@ class MaterialConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class HousingMeshConfig:
-    size: float | None = spec(None, gt=0.0, doc="global element size, m (default 1.3 x wall for "
-                              "P2, 2 x wall for P3: docs/housing.md, mesh convergence)")
-    bore_size: float | None = spec(None, gt=0.0, doc="element size at the bores, m (default size/2)")
-    degree: int = spec(2, ge=1, le=3, doc="Lagrange degree of the tetrahedra (2 for thin walls; 3: p-refinement)")
-    refine: int = spec(0, ge=0, le=3, doc="uniform splits of every tet (nested meshes, h / 2^refine)")
-    edge_size: float | None = spec(None, gt=0.0, doc="element size at the re-entrant junction edges "
-                                   "(wall/base, wall/wall, rib and boss junctions), m (default: no grading)")
-    edge_distance: float | None = spec(None, gt=0.0, doc="distance from those edges over which the size "
-                                       "grows linearly from edge_size to size, m (default 2 x wall)")
-
-    def validate(self, path: str) -> None:
-        if self.size is not None and self.bore_size is not None and self.bore_size > self.size:
-            raise ConfigError(f"{path}.bore_size", f"must be <= size = {self.size:g}, got {self.bore_size:g}")
-        if self.edge_distance is not None and self.edge_size is None:
-            raise ConfigError(f"{path}.edge_distance", "only with edge_size (the size at the junction edges)")
-
-
-@dataclass(frozen=True, kw_only=True)
 class HousingModesConfig:
     count: int = spec(20, ge=1, le=2000, doc="number of master modes (ignored with cutoff_hz)")
     cutoff_hz: float | None = spec(None, gt=0.0, doc="all modes below this (paper: >= 2 x highest excitation)")
@@ -199,7 +175,14 @@ class HousingConfig:
     modes: HousingModesConfig = spec(HousingModesConfig())
 
     @property
+    def hex_mesh(self) -> HexMeshRule:
+        """The hex grid's resolved sizes (``mesh.element = "hex"``)."""
+        return hex_rule(self.mesh, self.wall_thickness)
+
+    @property
     def mesh_size(self) -> float:
+        if self.mesh.element == "hex":
+            return self.hex_mesh.size
         if self.mesh.size is not None:
             return self.mesh.size
         per_wall = DEFAULT_SIZE_PER_WALL[self.mesh.degree]
@@ -207,6 +190,8 @@ class HousingConfig:
 
     @property
     def bore_mesh_size(self) -> float:
+        if self.mesh.element == "hex":
+            return self.hex_mesh.bore
         return self.mesh.bore_size if self.mesh.bore_size is not None else 0.5 * self.mesh_size
 
     @property
@@ -239,9 +224,11 @@ class HousingConfig:
         d["modes"].pop("plot")               # what is drawn, not what is solved
         # the edge grading enters the keys only where it is on (keys of ungraded scenes unchanged),
         # resolved and at the top level, so that the mesh entry's key (which replaces "mesh") has it
-        for k in ("edge_size", "edge_distance"):
+        for k in ("edge_size", "edge_distance", "element"):
             d["mesh"].pop(k)
-        if self.edge_mesh_size is not None:
+        if self.mesh.element == "hex":           # a tet scene's keys stay as they were
+            d["mesh_element"] = {"element": "hex", **self.hex_mesh.key_data()}
+        elif self.edge_mesh_size is not None:
             d["mesh_grading"] = {"edge_size": self.edge_mesh_size, "edge_distance": self.edge_mesh_distance}
         if self.source == "parametric":
             for k in ("source", "file", "fixed_region", "length_unit"):
@@ -260,6 +247,9 @@ class HousingConfig:
     def validate(self, path: str) -> None:
         p = path or "housing"
         if self.source != "parametric":
+            if self.mesh.element != "tet":
+                raise ConfigError(f"{p}.mesh.element", f"'hex' only for the parametric housing (its "
+                                  f"walls are known); a {self.source!r} housing is meshed with 'tet'")
             if self.mesh.edge_size is not None:
                 raise ConfigError(f"{p}.mesh.edge_size", "only for the parametric housing (its junction "
                                   "edges are known); an imported housing is meshed with size / bore_size")
@@ -293,6 +283,11 @@ class HousingConfig:
             raise ConfigError(f"{p}.foot_size", f"must be < half of min(length, width) = "
                               f"{0.5 * min(self.length, self.width):g}, got {self.foot_size:g}")
         self._validate_bores(p)
+        if self.mesh.element == "hex":
+            hex_rule(self.mesh, t, f"{p}.mesh")
+            hex_blocks(self)                   # a layout the structured grid cannot take: refused
+            self._validate_modes(p)
+            return
         size = self.mesh_size
         if size > MAX_SIZE_PER_WALL * t:
             raise ConfigError(f"{p}.mesh.size", f"too coarse to put an element across the wall: must be "

@@ -37,13 +37,14 @@ class MeshingError(RuntimeError):
 
 
 class HousingMesh(NamedTuple):
-    path: Path                   # gmsh .msh (version 4.1), physical groups only
+    path: Path                   # gmsh .msh (version 4.1), physical groups only; hexahedra: .npz
     base_tag: int                # facet tag of the supported (base) surface
     bore_tags: tuple[int, ...]   # facet tag of each bore surface, in bore_layout order
     volume_tag: int
     n_nodes: int
-    n_tets: int
+    n_tets: int                  # number of cells (tetrahedra, or hexahedra)
     seconds: float
+    cell_type: str = "tetrahedron"   # or "hexahedron" (geometry.housing_hex)
 
 
 @dataclass(frozen=True)

@@ -334,6 +334,9 @@ def build_mesh(cfg: HousingConfig, path: str | Path) -> HousingMesh:
     from .housing import build_housing_mesh
 
     if cfg.source == "parametric":
+        if cfg.mesh.element == "hex":
+            from .housing_hex import build_hex_housing_mesh
+            return build_hex_housing_mesh(cfg, path)
         return build_housing_mesh(cfg, path)
     if cfg.source == "step":
         res = build_step_mesh(cfg, path)

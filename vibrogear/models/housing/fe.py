@@ -22,6 +22,7 @@ import numpy as np
 
 from ...config.housing import MaterialConfig
 from ...geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
+from ...geometry.housing_hex import read_hex_mesh
 from .fe_eigen import HousingSolveError, _eigensolve, _matmul
 from .fe_post import _bore_values, _locate, _preview, _surface_values, _write_shapes
 from .result import HousingModes
@@ -130,7 +131,10 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     eps = lambda w: ufl.sym(ufl.grad(w))  # noqa: E731
     sig = lambda w: 2 * mu * eps(w) + lmbda * ufl.tr(eps(w)) * ufl.Identity(3)  # noqa: E731
-    a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx
+    hexes = dmesh.topology.cell_type.name == "hexahedron"
+    # hexahedra: (p + 1)^3 Gauss points, exact for the stiffness of a parallelepiped (FFCx's own
+    # estimate for the trilinear map asks for (p + 2)^3 or more)
+    a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx(metadata={"quadrature_degree": 2 * degree} if hexes else {})
     fdim = dmesh.topology.dim - 1
     dmesh.topology.create_connectivity(fdim, dmesh.topology.dim)
     base_facets = facet_tags.indices[facet_tags.values == mesh.base_tag]
@@ -143,7 +147,10 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
         bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), dofs, V)]
     rho_c = fem.Constant(dmesh, PETSc.ScalarType(rho))
     a = fem.form(a_ufl)
-    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx)
+    # hexahedra: Gauss-Lobatto-Legendre quadrature on the element's own nodes lumps the mass
+    # exactly onto the diagonal (spectral-element lumping; docs/housing.md, "Hexahedra")
+    md = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1} if hexes else {}
+    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx(metadata=md))
     mass_form = fem.form(rho_c * ufl.dx)
     timings["form_compilation"] = time.perf_counter() - t0
 
@@ -152,6 +159,18 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
     K.assemble()
     M = dolfinx.fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
     M.assemble()
+    if hexes:                                 # keep the diagonal only: the rest is exactly zero
+        diag = M.getDiagonal()
+        full, on_diag = M.norm(PETSc.NormType.FROBENIUS), diag.norm()
+        if full ** 2 - on_diag ** 2 > 1e-10 * on_diag ** 2:     # round-off of the two sums: ~1e-16
+            raise HousingSolveError(f"the GLL-lumped hexahedral mass matrix is not diagonal (off-diagonal "
+                                    f"Frobenius norm {max(full ** 2 - on_diag ** 2, 0) ** 0.5:.3g} against "
+                                    f"{on_diag:.3g}): the element's nodes are not the GLL points")
+        M.destroy()
+        M = PETSc.Mat().createAIJ(K.getSizes(), nnz=(1, 0), comm=comm)
+        M.setDiagonal(diag)
+        M.assemble()
+        diag.destroy()
     mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
     timings["assembly"] = time.perf_counter() - t0
     return dmesh, V, K, M, bcs, mass, timings, facet_tags
@@ -209,12 +228,14 @@ def _read_mesh(path: Path, comm):
     import ufl
     from dolfinx import cpp, mesh as dmesh_mod
 
+    hexes = Path(path).suffix == ".npz"          # geometry.housing_hex writes .npz
+    nv, nf = (8, 4) if hexes else (4, 3)
     if comm.rank == 0:
-        x, cells, facets, values = read_msh_arrays(path)
+        x, cells, facets, values = read_hex_mesh(path) if hexes else read_msh_arrays(path)
     else:
-        x, cells = np.zeros((0, 3)), np.zeros((0, 4), dtype=np.int64)
-        facets, values = np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int32)
-    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.tetrahedron, 1))
+        x, cells = np.zeros((0, 3)), np.zeros((0, nv), dtype=np.int64)
+        facets, values = np.zeros((0, nf), dtype=np.int64), np.zeros(0, dtype=np.int32)
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.hexahedron if hexes else ufl.tetrahedron, 1))
     msh = dmesh_mod.create_mesh(comm, cells, x, domain)
     tdim = msh.topology.dim
     ents, vals = cpp.io.distribute_entity_data(msh._mesh if hasattr(msh, "_mesh") else msh, tdim - 1,

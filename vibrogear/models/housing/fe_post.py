@@ -8,6 +8,8 @@ from pathlib import Path
 import numpy as np
 
 _PREVIEW_POINTS = 4000
+#: modes evaluated together by :func:`_eval_modes`
+_EVAL_CHUNK = 50
 
 
 def _locate(dmesh, points, comm):
@@ -51,6 +53,28 @@ def _locate(dmesh, points, comm):
     return cells, owner, n_fallback
 
 
+def _eval_modes(uh, Vloc, pts, cells) -> np.ndarray:
+    """Every mode's displacement (npts, 3, m) at ``pts`` in the local ``cells``: the modes are
+    packed :data:`_EVAL_CHUNK` at a time into one function of 3 x chunk components, so that each
+    point is located in its cell (for hexahedra: a Newton pull-back) once per chunk, not per mode."""
+    from dolfinx import fem
+
+    m = Vloc.shape[1]
+    out = np.zeros((len(pts), 3, m))
+    if not len(pts) or not m:
+        return out
+    V = uh.function_space
+    n_own = V.dofmap.index_map.size_local
+    for i0 in range(0, m, _EVAL_CHUNK):
+        k = min(_EVAL_CHUNK, m - i0)
+        W = fem.VectorFunctionSpace(V.mesh, ("Lagrange", V.ufl_element().degree()), dim=3 * k)
+        w = fem.Function(W)
+        w.x.array[:n_own * 3 * k] = Vloc[:, i0:i0 + k].reshape(n_own, 3, k).transpose(0, 2, 1).ravel()
+        w.x.scatter_forward()
+        out[:, :, i0:i0 + k] = w.eval(pts, cells).reshape(len(pts), k, 3).transpose(0, 2, 1)
+    return out
+
+
 def _bore_values(dmesh, uh, Vloc, bores, comm):
     from mpi4py import MPI
 
@@ -65,11 +89,8 @@ def _bore_values(dmesh, uh, Vloc, bores, comm):
     cells, owner, n_fallback = _locate(dmesh, flat, comm)
     mine = np.flatnonzero(owner == comm.rank)
     local = np.zeros((len(flat), 3, m))
-    for i in range(m):
-        uh.vector.array[:] = Vloc[:, i]
-        uh.x.scatter_forward()
-        if len(mine):
-            local[mine, :, i] = uh.eval(flat[mine], cells[mine])
+    if len(mine):
+        local[mine] = _eval_modes(uh, Vloc, flat[mine], cells[mine])
     allv = np.zeros_like(local)
     comm.Allreduce(local, allv, op=MPI.SUM)
     k = 0
@@ -84,7 +105,8 @@ def _bore_values(dmesh, uh, Vloc, bores, comm):
 
 def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     """Exterior facets not tagged ``skip_tags`` (base, bores), gathered on rank 0: their vertex
-    coordinates (nf, 3, 3), ordered so that (b - a) x (c - a) points out of the solid, and each
+    coordinates (nf, 3, 3) (a hexahedral mesh's quads split into two triangles each), ordered so
+    that (b - a) x (c - a) points out of the solid, and each
     mode's displacement along that normal at the three edge midpoints (nf, 3, m)."""
     import dolfinx.mesh
     from dolfinx import cpp
@@ -98,8 +120,12 @@ def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     facets = np.setdiff1d(facets, ftags.indices[np.isin(ftags.values, skip_tags)])
     x = dmesh.geometry.x
     cmesh = dmesh._mesh if hasattr(dmesh, "_mesh") else dmesh
-    tri = x[cpp.mesh.entities_to_geometry(cmesh, fdim, facets, False)]        # (nf, 3, 3)
+    poly = x[cpp.mesh.entities_to_geometry(cmesh, fdim, facets, False)]       # (nf, 3 or 4, 3)
     cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32)
+    if poly.shape[1] == 4:        # hexahedra: each quad (tensor order, 3 opposite 0) as 2 triangles
+        poly = np.concatenate([poly[:, [0, 1, 3]], poly[:, [0, 3, 2]]])
+        cells = np.concatenate([cells, cells])
+    tri = poly
     centroid = np.array([x[dmesh.geometry.dofmap.links(c)].mean(axis=0) for c in cells])
     normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     flip = np.einsum("ij,ij->i", normal, tri[:, 0] - centroid.reshape(-1, 3)) < 0
@@ -108,13 +134,13 @@ def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
     mids = 0.5 * (tri + tri[:, [1, 2, 0]])                                     # edge midpoints
     pts, where = mids.reshape(-1, 3), np.repeat(cells, 3)
-    vals = np.zeros((len(facets), 3, Vloc.shape[1]))
-    for i in range(Vloc.shape[1]):
-        uh.vector.array[:] = Vloc[:, i]
-        uh.x.scatter_forward()
-        if len(pts):
-            u = uh.eval(pts, where).reshape(-1, 3, 3)
-            vals[:, :, i] = np.einsum("fqc,fc->fq", u, unit)
+    # an edge midpoint is shared by the two facets at that edge: evaluate each point once (the
+    # field is continuous, so the cell it is evaluated in does not matter)
+    scale = max(float(np.ptp(pts, axis=0).max()), 1e-300) if len(pts) else 1.0
+    _, first, back = np.unique(np.round(pts / (1e-9 * scale)).astype(np.int64), axis=0,
+                               return_index=True, return_inverse=True)
+    u = _eval_modes(uh, Vloc, pts[first], where[first])[back.ravel()].reshape(len(tri), 3, 3, -1)
+    vals = np.einsum("fqcm,fc->fqm", u, unit)
     tris, allv = comm.gather(tri, root=0), comm.gather(vals, root=0)
     if comm.rank != 0:
         return np.zeros((0, 3, 3)), np.zeros((0, 3, Vloc.shape[1]))

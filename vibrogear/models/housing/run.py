@@ -175,7 +175,8 @@ def _compute(cfg, comm, mesh_key, modes_key, cache) -> HousingModes:
             shutil.rmtree(work, ignore_errors=True)      # no half-built entry left behind
         raise
     res = dataclasses.replace(res, timings={"meshing": t_mesh, **res.timings}, cache_key=modes_key,
-                              source_info={"source": cfg.source, **mesh_info(cfg, hm)})
+                              source_info={"source": cfg.source, **mesh_info(cfg, hm),
+                                           **({"cell_type": hm.cell_type} if hm.cell_type != "tetrahedron" else {})})
     if rank == 0:
         save_modes(res, work)
         if cache:
