@@ -32,11 +32,14 @@ def test_silent_when_not_a_terminal_or_quiet():
     assert t.getvalue() == ""
 
 
-def test_cli_run_prints_nothing_on_stderr_when_quiet(tmp_path, capsys):
+def test_cli_run_prints_only_the_verdict_when_quiet(tmp_path, capsys):
+    """--quiet: no progress on stderr, one line on stdout: the findings' verdict."""
     code = main(["run", "configs/impact_pair.toml", "--quiet", "--out", str(tmp_path / "o"),
                  "--set", "scene.analyses=[\"sweep\"]", "--set", "sweep.n_points=3",
                  "--set", "sweep.transient_periods=5", "--set", "sweep.extra_transient_periods=0",
                  "--set", "sweep.record_periods=8"])
     assert code == 0
     captured = capsys.readouterr()
-    assert captured.err == "" and captured.out == ""
+    import json
+    verdict = json.loads((tmp_path / "o" / "summary.json").read_text())["findings"]["verdict"]
+    assert captured.err == "" and captured.out == verdict + "\n"
