@@ -166,7 +166,19 @@ def _main(argv: list[str] | None) -> int:
     if not args.quiet:
         print(f"wrote {out}/ ({', '.join(summary['analyses'])}; "
               f"{summary['wall_time_s']['total']:.2f} s)")
+        if "best" in summary["results"].get("optimize", {}):
+            print(_optimize_line(summary["results"]["optimize"]))
     return EXIT_FAILED if summary.get("status") == "failed" else EXIT_OK
+
+
+def _optimize_line(res: dict) -> str:
+    """``optimize``'s answer in one line: the best point, its objective, how it ended."""
+    b, o = res["best"], res["objective"]
+    point = ", ".join(f"{k} = {v:.6g}" for k, v in b["values"].items())
+    what = o["metric"] if o["analysis"] is None else f"{o['reduce']} {o['metric']}"
+    head = "best" if b["feasible"] else "no feasible point; least infeasible"
+    return (f"{head}: {point} ({o['sense']} {what} = {b['objective']:.6g}; "
+            f"evaluation {b['evaluation']} of {res['evaluations']}; {res['stop']})")
 
 
 if __name__ == "__main__":
