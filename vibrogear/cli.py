@@ -183,19 +183,31 @@ def _main(argv: list[str] | None) -> int:
 
 
 def _print_end(summary: dict, out: Path, quiet: bool) -> None:
-    """The run's last lines: what was written, then the findings (at most ~10 lines) and
-    where the report is; ``--quiet``: the verdict alone."""
+    """The run's last lines: what was written, optimize's best point, then the findings (at
+    most ~10 lines) and where the report is; ``--quiet``: the verdict alone."""
     from .pipeline.outcome import is_root_process
     findings = summary.get("findings")
     if not quiet:
         print(f"wrote {out}/ ({', '.join(summary['analyses'])}; computation "
               f"{summary.get('status', 'ok')}; {summary['wall_time_s']['total']:.3g} s)")
+        if "best" in summary["results"].get("optimize", {}):
+            print(_optimize_line(summary["results"]["optimize"]))
     if findings is not None and is_root_process():
         from .report.findings_report import console_lines
         for line in console_lines(findings, f"{out}/report.html", quiet=quiet):
             print(line)
     elif not quiet:
         print(f"open {out}/report.html")
+
+
+def _optimize_line(res: dict) -> str:
+    """``optimize``'s answer in one line: the best point, its objective, how it ended."""
+    b, o = res["best"], res["objective"]
+    point = ", ".join(f"{k} = {v:.6g}" for k, v in b["values"].items())
+    what = o["metric"] if o["analysis"] is None else f"{o['reduce']} {o['metric']}"
+    head = "best" if b["feasible"] else "no feasible point; least infeasible"
+    return (f"{head}: {point} ({o['sense']} {what} = {b['objective']:.6g}; "
+            f"evaluation {b['evaluation']} of {res['evaluations']}; {res['stop']})")
 
 
 if __name__ == "__main__":

@@ -102,6 +102,20 @@ def test_gear_pair_runs_every_analysis_without_fe_stack(gear_pair_run):
         _finite_csv(out / name)
 
 
+def test_gear_pair_sweep_csv_names_rpm_and_units(gear_pair_run):
+    """sweep.csv's header: the speed column is ``rpm`` (its values the npz's ``param``),
+    the deformations in metres, the impact energies in joules."""
+    out, _ = gear_pair_run
+    rows = _read_csv(out / "sweep.csv")
+    header = list(rows[0])
+    assert "param" not in header and "rpm" in header
+    assert {"qmin [m]", "qmax [m]", "impacts [1/period]", "rattle_G1 [J]",
+            "impact_velocity_rms_G1 [m/s]"} <= set(header)
+    with np.load(out / "sweep.npz") as z:
+        assert [float(r["rpm"]) for r in rows] == z["param"].tolist()
+        assert [float(r["qmin [m]"]) for r in rows] == z["qmin"].tolist()
+
+
 def test_gear_pair_sweep_and_branch_files(gear_pair_run):
     out, _ = gear_pair_run
     sw = _finite_npz(out / "sweep.npz")

@@ -163,3 +163,16 @@ def test_a_metric_the_analysis_lacks_fails_every_evaluation_exit_1(tmp_path, cap
     assert "no metric 'deformation_second_half.G1'" in err
     assert "deformation_second_half.clearance" in err          # what it has instead
     assert (out / "optimize.partial.jsonl").is_file()            # kept
+
+
+def test_optimize_prints_its_best_point(tmp_path, capsys):
+    """The console ends with the best point (the value in optimize.json, 6 digits)."""
+    out = tmp_path / "out"
+    text = LINEAR.replace("budget = 30", "budget = 4")
+    assert cli.main(["optimize", str(_scene(tmp_path, text)), "--out", str(out)]) == 0
+    doc = json.loads((out / "optimize.json").read_text())
+    best = doc["best"]
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last.startswith(f"best: impact_pair.kappa = {best['values']['impact_pair.kappa']:.6g} "
+                           f"(max max deformation_second_half.clearance = "
+                           f"{best['objective']:.6g}; evaluation {best['evaluation']} of 4;")

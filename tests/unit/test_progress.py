@@ -43,3 +43,33 @@ def test_cli_run_prints_only_the_verdict_when_quiet(tmp_path, capsys):
     import json
     verdict = json.loads((tmp_path / "o" / "summary.json").read_text())["findings"]["verdict"]
     assert captured.err == "" and captured.out == verdict + "\n"
+
+
+def _last_line(text: str) -> str:
+    return text.replace("\r", "\n").strip().splitlines()[-1]
+
+
+def test_finished_bar_ends_at_its_count_not_its_cap():
+    """A cap (continuation max_points = 12) reached at 6: the bar ends 6/6, drawn full;
+    one that overran an estimate ends at its count too."""
+    s = FakeTTY()
+    with Progress(12, "continuation", stream=s) as bar:
+        for _ in range(6):
+            bar.update(1)
+    last = _last_line(s.getvalue())
+    assert "6/6" in last and "/12" not in last and "#" * 5 in last
+    s = FakeTTY()
+    with Progress(3, "runup", stream=s) as bar:
+        bar.update(5)
+    assert "5/5" in _last_line(s.getvalue())
+
+
+def test_interrupted_bar_keeps_its_cap():
+    s = FakeTTY()
+    try:
+        with Progress(300, "continuation", stream=s) as bar:
+            bar.update(167)
+            raise KeyboardInterrupt
+    except KeyboardInterrupt:
+        pass
+    assert "167/300" in _last_line(s.getvalue())

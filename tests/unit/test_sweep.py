@@ -14,7 +14,7 @@ from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
-from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
+from vibrogear.report.sweep_io import csv_header, read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import classify_period, count_clusters, sweep
 from vibrogear.config.options import SweepOptions
@@ -266,10 +266,32 @@ def test_files_and_plot(tmp_path, hyst_result):
     assert set(z["direction"].tolist()) == {"up", "down"}
     assert np.array_equal(z["period_n"], hyst_result.period_n)
     assert not list(tmp_path.glob(".*.tmp"))            # atomic writes leave no temp files
+    rows = list(csv.DictReader(paths["csv"].open()))
+    assert [float(r["Omega"]) for r in rows] == z["param"].tolist()   # the npz keeps "param"
     out = plot_bifurcation(z, tmp_path / "bifurcation", bounds=(-1.0, 1.0))
     assert [p.suffix for p in out] == [".png", ".svg"]
     assert all(p.stat().st_size > 1000 for p in out)
     assert math.isfinite(float(hyst_result.wall_time))
+
+
+def test_csv_header_names_the_parameter_and_units():
+    cols = ["direction", "param", "qmin", "qmax_tol_err", "impacts", "status", "wall_time",
+            "lyapunov_lo", "transient_used", "impacts_back_G2", "impact_velocity_rms_G1_err",
+            "rattle_G2", "contact_fraction_G1", "unloaded_A", "period_n_G1", "tol_err_measured"]
+    gearbox = csv_header(cols, param_name="rpm", param_unit="rpm", length_unit="m",
+                         time_unit_s=2.5e-5)
+    assert gearbox == [
+        "direction", "rpm", "qmin [m]", "qmax_tol_err [m]", "impacts [1/period]", "status",
+        "wall_time [s]", "lyapunov_lo [1/(2.5e-05 s)]", "transient_used [periods]",
+        "impacts_back_G2 [1/period]", "impact_velocity_rms_G1_err [m/s]", "rattle_G2 [J]",
+        "contact_fraction_G1", "unloaded_A", "period_n_G1", "tol_err_measured"]
+    # the impact pair is nondimensional: its lengths, rates and times carry no unit
+    pair = csv_header(cols, param_name="Omega")
+    assert pair[:6] == ["direction", "Omega", "qmin", "qmax_tol_err", "impacts [1/period]",
+                        "status"]
+    assert pair[7] == "lyapunov_lo" and pair[10:12] == ["impact_velocity_rms_G1_err",
+                                                        "rattle_G2"]
+    assert csv_header(["param"], param_name="speed", param_unit="rpm") == ["speed [rpm]"]
 
 
 def test_resumable_sweep_helper(tmp_path):

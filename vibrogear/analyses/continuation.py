@@ -18,6 +18,12 @@ With ``from_sweep`` also a branch both ways from each distinct period-n window o
 (this run's sweep outcome, or an earlier run's ``sweep.npz`` in the output folder, which the
 runner loads: ``previous["sweep"]``), each half ending with its reason
 (:mod:`.sweep_branches`).
+
+The summary's status is ``ok`` only where every branch ended for a reason that belongs to
+the branch (it left the range, rejoined the period-1 branch, or reached a grazing orbit);
+a branch that stopped on the method (a step below ``ds_min``, the point limit, a failed
+switch) makes it ``partial``, and ``coverage`` says which branches ended where and which
+share of the parameter range the branches cover (:func:`coverage`).
 """
 from __future__ import annotations
 
@@ -35,7 +41,7 @@ from ..solvers.periodic.starting_orbit import starting_orbit
 from .study import Study, integration_options
 from ..config.options import ShootingOptions
 
-__all__ = ["ContinuationStudyResult", "run", "starting_orbit"]
+__all__ = ["ContinuationStudyResult", "run", "starting_orbit", "coverage"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -93,9 +99,11 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                 f"located_within_{study.param_name}":
                     float(branches[s.branch].points[s.index].located_within)}
                for s in res.special_points]
+    cover = coverage(branches, lo, hi)
     summary = {
-        "status": "ok",
-        "message": res.message,
+        "status": "partial" if cover["ended_early"] else "ok",
+        "message": _coverage_text(cover, study) + res.message,
+        "coverage": cover,
         "start": {study.param_name: p0, "n_periods": n_periods, "how": how},
         "branches": [{"n_periods": b.n_periods, "points": len(b.points),
                       "param_range": [float(min(p.param for p in b.points)),
@@ -114,6 +122,48 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                            "rtol": opts.rtol},
     }
     return AnalysisOutcome(summary=summary, result=ContinuationStudyResult(res, study))
+
+
+def coverage(branches, lo: float, hi: float) -> dict:
+    """How much of [lo, hi] the ``branches`` trace: ``fraction``, the share of the range
+    inside at least one branch's parameter interval; ``intervals``, those intervals merged;
+    ``ended_early``, the branches whose status is not a success (a step below ``ds_min``,
+    the point limit, a stop, a failed switch: the method stopped, not the branch), each
+    with its index, period, status and the parameter of its last point (None: no point)."""
+    spans = sorted((max(lo, min(p.param for p in b.points)),
+                    min(hi, max(p.param for p in b.points))) for b in branches if b.points)
+    merged: list[list[float]] = []
+    for a, b in spans:
+        if b < a:                           # wholly outside the range
+            continue
+        if merged and a <= merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    width = hi - lo
+    covered = sum(b - a for a, b in merged)
+    early = [{"branch": i, "n_periods": b.n_periods, "status": b.status.text,
+              "ended_at": float(b.points[-1].param) if b.points else None}
+             for i, b in enumerate(branches) if not b.status.success]
+    return {"fraction": float(covered / width) if width > 0 else 1.0,
+            "range": [float(lo), float(hi)], "intervals": [[float(a), float(b)] for a, b in merged],
+            "branches": len(branches), "ended_early": early}
+
+
+def _coverage_text(cover: dict, study) -> str:
+    """Which branches ended early and where, and the share of the range covered, as the
+    head of the summary's message ("" when every branch ended by itself over the range)."""
+    name, unit = study.param_name, f" {study.param_unit}" if study.param_unit else ""
+    lo, hi = cover["range"]
+    share = (f"the branches cover {100 * cover['fraction']:.0f} % of {name} = {lo:g}-{hi:g}"
+             f"{unit}; ")
+    early = cover["ended_early"]
+    if not early:
+        return share if cover["fraction"] < 0.995 else ""
+    how = ", ".join(e["status"] + ("" if e["ended_at"] is None else
+                                   f" at {name} = {e['ended_at']:.6g}{unit}") for e in early)
+    return (f"{len(early)} of {cover['branches']} branches stopped before the end of the "
+            f"range ({how}); " + share)
 
 
 def _least_period(model, w, method):

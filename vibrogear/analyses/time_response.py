@@ -4,6 +4,11 @@ Written once for every model: the study supplies the model, the start state, the
 parameter's name and the units.  The result holds the sampled states and, for every
 contact, its deformation, deformation rate and force in physical units (m, m/s, N for a
 gearbox; nondimensional for the impact pair).
+
+The summary counts, per mesh (or the impact pair's clearance), the contact losses over
+the second half of the run: the times its working (upper) flank leaves contact, read
+from the recorded samples (:func:`working_flank_losses`); a loss that closes again
+between two samples is not seen, so ``samples_per_period`` sets the resolution.
 """
 from __future__ import annotations
 
@@ -19,7 +24,7 @@ from ..solvers.integrator.rtol_limit import loosest_rtol
 from ..status import Status
 from .study import Study, integration_options
 
-__all__ = ["TimeResponseResult", "run"]
+__all__ = ["TimeResponseResult", "run", "working_flank_losses"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -36,6 +41,14 @@ class TimeResponseResult:
     @property
     def t_s(self) -> np.ndarray:
         return self.t * self.study.time_unit_s
+
+
+def working_flank_losses(delta, gap_hi: float, gap_lo: float) -> int:
+    """Times the working flank leaves contact in the sampled deformation ``delta`` (n,):
+    the samples where the flank mode (:func:`~vibrogear.models.contact_law.flank`) goes
+    from +1 (working flank in contact) to 0 or -1 at the next sample."""
+    on = flank(np.asarray(delta, dtype=float), gap_hi, gap_lo) > 0
+    return int(np.count_nonzero(on[:-1] & ~on[1:]))
 
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
@@ -63,8 +76,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     half = tr.t >= 0.5 * tr.t[-1]
     primary = study.contact_groups.get("mesh", study.contact_groups.get("clearance", []))
     ct = model.contacts
-    losses = {names[j]: int(np.sum(np.diff(flank(delta[j, half], ct.gap_hi[j], ct.gap_lo[j]) > 0)
-                                   .astype(int) < 0)) for j in primary}
+    losses = {names[j]: working_flank_losses(delta[j, half], ct.gap_hi[j], ct.gap_lo[j])
+              for j in primary}
     summary = {
         "status": "ok", study.param_name: param, "periods": cfg.periods,
         "excitation_frequency_hz": model.excitation_frequency(param) / (2 * np.pi)

@@ -1,4 +1,9 @@
-"""Atomic file writes: every output file appears whole or not at all."""
+"""Atomic file writes: every output file appears whole or not at all.
+
+A file is written to a temporary file beside it and renamed over it.  The temporary file
+is made by :func:`tempfile.mkstemp`, which creates it readable by its owner only (0600);
+it is given the mode a plain ``open()`` would have given a new file, 0666 less the umask
+(0644 under the usual umask 022), so colleagues and a web server can read the results."""
 from __future__ import annotations
 
 import csv
@@ -13,7 +18,7 @@ from typing import Any
 from ..config.base import ConfigError
 
 __all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "atomic_write_npz",
-           "finite_json",
+           "atomic_copy", "new_file_mode", "finite_json",
            "check_output_dir"]
 
 
@@ -24,11 +29,38 @@ def _write(fh, data: bytes) -> None:
     os.fsync(fh.fileno())
 
 
+def new_file_mode() -> int:
+    """The mode ``open()`` gives a new file: 0666 less the process's umask (read from
+    /proc, so that no other thread sees a changed umask; else set and restored)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return 0o666 & ~int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def _temporary_beside(path: Path) -> tuple[int, str]:
+    """A new temporary file in ``path``'s folder, with the mode of a new file."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        os.fchmod(fd, new_file_mode())
+    except BaseException:
+        os.close(fd)
+        os.unlink(tmp)
+        raise
+    return fd, tmp
+
+
 def atomic_write_bytes(path, data: bytes) -> Path:
     """Write ``data`` to ``path`` through a temporary file, fsync and an atomic rename."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = _temporary_beside(path)
     try:
         with os.fdopen(fd, "wb") as fh:
             _write(fh, data)
@@ -40,6 +72,24 @@ def atomic_write_bytes(path, data: bytes) -> Path:
             raise OSError(exc.errno, exc.strerror, str(path)) from exc   # name the file
         raise
     return path
+
+
+def atomic_copy(src, dst) -> Path:
+    """Copy the file ``src`` to ``dst`` atomically (temporary file beside ``dst`` + rename),
+    with the mode of a new file."""
+    import shutil
+
+    dst = Path(dst)
+    fd, tmp = _temporary_beside(dst)
+    os.close(fd)
+    try:
+        shutil.copyfile(src, tmp)
+        os.replace(tmp, dst)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return dst
 
 
 def atomic_write_text(path, text: str) -> Path:

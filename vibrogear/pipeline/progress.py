@@ -1,4 +1,9 @@
-"""Progress bars (tqdm) with rate and ETA, silent when not on a terminal or when quiet."""
+"""Progress bars (tqdm) with rate and ETA, silent when not on a terminal or when quiet.
+
+Many totals are caps (a continuation's ``max_points``, an optimiser's ``budget``, an
+estimate of a run-up's chunks): a bar that finishes (its ``with`` block ends without an
+exception) ends at the count it reached, drawn full (``167/167``), so a finished run never
+looks interrupted; an interrupted one keeps its cap (``167/300``)."""
 from __future__ import annotations
 
 import sys
@@ -28,8 +33,16 @@ class Progress:
     def __enter__(self) -> "Progress":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type, *exc) -> None:
+        if exc_type is None:
+            self.finish()
         self.close()
+
+    def finish(self) -> None:
+        """The work is done: the total becomes the count reached (the bar is drawn full)."""
+        if self._bar is not None and self._bar.total != self.done:
+            self._bar.total = self.done
+            self._bar.refresh()
 
     def update(self, n: int = 1, info: str = "") -> None:
         self.done += n

@@ -15,14 +15,11 @@
 """
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.files import atomic_write_csv, atomic_write_npz
+from ..pipeline.files import atomic_copy, atomic_write_csv, atomic_write_npz
 
 __all__ = ["write_modes", "write_sweep", "write_convergence", "write_modes_outputs"]
 
@@ -36,18 +33,6 @@ def _dominant(res) -> list[str]:
         else:
             out.append("")
     return out
-
-
-def _atomic_copy(src: Path, dst: Path) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp", dir=dst.parent)
-    os.close(fd)
-    try:
-        shutil.copyfile(src, tmp)
-        os.replace(tmp, dst)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def write_modes_outputs(res, out: Path, *, plot: bool = True,
@@ -76,7 +61,7 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True,
         for ext in (".xdmf", ".h5"):
             s = src.with_suffix(ext)
             if s.is_file():
-                _atomic_copy(s, out / f"mode_shapes{ext}")
+                atomic_copy(s, out / f"mode_shapes{ext}")
         files["shapes"] = "mode_shapes.xdmf"
     if plot and res.n_modes and getattr(res, "has_shapes", False):
         files.update(_shaded_modes(res, out, draw))

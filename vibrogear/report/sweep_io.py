@@ -25,7 +25,12 @@
   ~0; chaos: broadband, towards 0.56), and ``strob_peak_fraction``, the share of their power
   at nu, 2 nu, 3 nu (folded).  No NaN/inf is ever written:
   failed points carry 0 placeholders and ``ok = False`` / ``status < 0``.
-* ``sweep.csv`` repeats the per-point scalars; missing values are empty cells.
+* ``sweep.csv`` repeats the per-point scalars; missing values are empty cells.  Its header
+  names the parameter (``rpm`` for a gearbox, ``Omega`` for the impact pair; the npz key
+  stays ``param``) and gives each dimensional column its unit in brackets
+  (:func:`csv_header`): ``qmin [m]``, ``impact_velocity_rms_G1 [m/s]``, ``rattle_G2 [J]``,
+  ``impacts [1/period]`` (per excitation period), ``wall_time [s]``; a column without
+  brackets is a count, a code, a ratio or nondimensional (the impact pair's deformations).
 
 The partial file that makes a sweep resumable is the pipeline's
 (:mod:`vibrogear.pipeline.resume`, :func:`vibrogear.analyses.sweep.resumable_sweep`).
@@ -37,18 +42,51 @@ from __future__ import annotations
 import csv
 import io
 import math
+import re
 from pathlib import Path
 
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 
-__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz"]
+__all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "csv_header"]
 
 CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impacts",
                "clusters", "defect", "status", "message", "wall_time", "motion_class",
                "lyapunov", "lyapunov_lo", "lyapunov_hi", "transient_used", "settled_by",
                "base_f2_order", "strob_flatness", "strob_peak_fraction")
+
+
+#: (pattern of a column name less its ``_err`` / ``_tol_err`` companion suffix, unit); the
+#: units a model's length, time and energy units fill in
+_UNITS = ((r"qmin|qmax", "{length}"), (r"impact_velocity_(rms|max)_.+", "{length}/s"),
+          (r"rattle_.+", "{energy}"), (r"impacts(_drive_.+|_back_.+)?", "1/period"),
+          (r"lyapunov(_lo|_hi)?", "1/{time}"), (r"wall_time", "s"),
+          (r"transient_used", "periods"))
+
+
+def csv_header(columns, *, param_name: str = "param", param_unit: str = "",
+               length_unit: str = "", time_unit_s: float = 1.0) -> list[str]:
+    """``columns`` as the header of ``sweep.csv``: ``param`` becomes the parameter's name
+    (with its unit in brackets where the unit is not the name), and a dimensional column
+    gets its unit in brackets.  ``length_unit`` "" (a nondimensional model): the model's
+    lengths, rates, energies and times have no unit."""
+    dims = {"length": length_unit, "energy": "J" if length_unit == "m" else "",
+            "time": ("s" if time_unit_s == 1.0 else f"({time_unit_s:g} s)") if length_unit
+            else ""}
+    out = []
+    for c in columns:
+        if c == "param":
+            out.append(param_name if param_unit in ("", param_name)
+                       else f"{param_name} [{param_unit}]")
+            continue
+        base = re.sub(r"(_tol_err|_err)$", "", c)
+        unit = next((u for pat, u in _UNITS if re.fullmatch(pat, base)), "")
+        if "{" in unit:
+            need = re.findall(r"{(\w+)}", unit)
+            unit = unit.format(**dims) if all(dims[k] for k in need) else ""
+        out.append(f"{c} [{unit}]" if unit else c)
+    return out
 
 
 def _finite(a, fill=0.0) -> np.ndarray:
@@ -98,8 +136,10 @@ def sweep_arrays(result) -> dict:
     )
 
 
-def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
-    """Write ``stem.npz`` and ``stem.csv`` into ``out_dir``; returns {kind: path}."""
+def write_sweep(result, out_dir, *, stem: str = "sweep", param_unit: str = "",
+                length_unit: str = "", time_unit_s: float = 1.0) -> dict:
+    """Write ``stem.npz`` and ``stem.csv`` into ``out_dir``; returns {kind: path}.  The
+    units name the CSV's columns (:func:`csv_header`)."""
     out_dir = Path(out_dir)
     arrays = sweep_arrays(result)
     npz = atomic_write_npz(out_dir / f"{stem}.npz", arrays)
@@ -107,7 +147,9 @@ def write_sweep(result, out_dir, *, stem: str = "sweep") -> dict:
     w = csv.writer(text, lineterminator="\n")
     metrics = sorted(result.metrics)
     extra = result.motion_class is not None
-    w.writerow(CSV_COLUMNS + tuple(metrics) if extra else CSV_COLUMNS[:12])
+    w.writerow(csv_header(CSV_COLUMNS + tuple(metrics) if extra else CSV_COLUMNS[:12],
+                          param_name=result.param_name, param_unit=param_unit,
+                          length_unit=length_unit, time_unit_s=time_unit_s))
     spectral = result.spectral if extra else {}
     for k in range(result.param.size):
         row = [str(result.direction[k]), int(result.index[k]), float(result.param[k]),

@@ -16,7 +16,8 @@ __all__ = ["write", "display_arrays", "draw_bifurcation"]
 def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
     study = r.study
-    paths = write_sweep(r.sweep, out)
+    paths = write_sweep(r.sweep, out, param_unit=study.param_unit,
+                        length_unit=study.length_unit, time_unit_s=study.model.time_unit_s)
     data = display_arrays(read_sweep_npz(paths["npz"]), study.monitor.scale)
     rows = scene.figures.motion_rows_per_contact
     draw_bifurcation(data, study, Path(out) / "bifurcation", per_contact_rows=rows)
