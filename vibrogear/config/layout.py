@@ -223,7 +223,7 @@ def check_centre_distances(cfg, housing) -> tuple[dict, ErrorList]:
         errs.add(ConfigError(f"gearbox.meshes[{i}]", f"{ga.name!r} ({ga.teeth} teeth) and "
                              f"{gb.name!r} ({gb.teeth} teeth) at module {ga.module!r} need "
                              f"their axes {a:.6g} m apart (centre distance m_n (z_a + z_b) / "
-                             f"(2 cos beta){', profile-shifted' if m.profile_shift_a or m.profile_shift_b else ''}), "
+                             f"(2 cos beta){'; profile-shifted: on the working pitch circles, a cos(alpha_t) / cos(alpha_wt)' if m.profile_shift_a or m.profile_shift_b else ''}), "
                              f"they are {d:.6g} m apart: {what}"))
     return moved, errs
 
