@@ -12,7 +12,7 @@ import pytest
 
 from vibrogear.analyses.continuation import coverage
 from vibrogear.cli import main
-from vibrogear.solvers.status import Status
+from vibrogear.status import Status
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -27,12 +27,14 @@ share of the parameter range the branches cover (:func:`coverage`).
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..status import Status
 from ..solvers.periodic.continuation import (ContinuationResult, PeriodicOrbitProblem, PseudoArclength,
                                     SpecialPoint, continuation)
 from ..solvers.integrator.integrate import integrate
@@ -100,9 +102,13 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                     float(branches[s.branch].points[s.index].located_within)}
                for s in res.special_points]
     cover = coverage(branches, lo, hi)
+    # status, message, counters, wall time, error estimate: the runner's spine from this
+    # Outcome (partial where a branch ended for the method's reason before the range's end)
+    outcome = dataclasses.replace(res.outcome,
+                                  status=Status.PARTIAL if cover["ended_early"] else Status.OK,
+                                  message=_coverage_text(cover, study) + res.message,
+                                  wall_s=wall)
     summary = {
-        "status": "partial" if cover["ended_early"] else "ok",
-        "message": _coverage_text(cover, study) + res.message,
         "coverage": cover,
         "start": {study.param_name: p0, "n_periods": n_periods, "how": how},
         "branches": [{"n_periods": b.n_periods, "points": len(b.points),
@@ -115,13 +121,11 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                      for b in branches],
         "special_points": special,
         "folds": [s[study.param_name] for s in special if s["label"] == "LP" and s["branch"] == 0],
-        "counters": res.counters,
-        "solver_wall_s": wall,
         **({"from_sweep": from_sweep} if from_sweep is not None else {}),
-        "error_estimate": {**res.error_estimate, "shooting_tol": scene.shooting.tol,
-                           "rtol": opts.rtol},
+        "error_estimate": {"shooting_tol": scene.shooting.tol, "rtol": opts.rtol},
     }
-    return AnalysisOutcome(summary=summary, result=ContinuationStudyResult(res, study))
+    return AnalysisOutcome(summary=summary, result=ContinuationStudyResult(res, study),
+                           solver=outcome)
 
 
 def coverage(branches, lo: float, hi: float) -> dict:

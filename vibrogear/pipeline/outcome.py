@@ -69,8 +69,14 @@ class AnalysisOutcome:
     solver: Outcome | None = None
 
     def record(self) -> dict:
-        """The analysis's entry of ``summary.json``: the spine, then the domain entries."""
-        return {**spine(self.solver), **self.summary}
+        """The analysis's entry of ``summary.json``: the spine, then the domain entries; an
+        analysis's own ``error_estimate`` entries join the solver's."""
+        base = spine(self.solver)
+        out = {**base, **self.summary}
+        if isinstance(base.get("error_estimate"), dict) and \
+                isinstance(self.summary.get("error_estimate"), dict):
+            out["error_estimate"] = {**base["error_estimate"], **self.summary["error_estimate"]}
+        return out
 
 
 def spine(outcome: Outcome | None) -> dict:
