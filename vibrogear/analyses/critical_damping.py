@@ -196,7 +196,6 @@ def run_critical_damping(scene, ctx: RunContext) -> AnalysisOutcome:
 
     scans = [as_json(s) for s in res.scans]
     out = {
-        "status": "ok",
         "zeta_critical": res.zeta_critical,
         "bracket": list(res.bracket),
         "bracket_width": res.bracket[1] - res.bracket[0],

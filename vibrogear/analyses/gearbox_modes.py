@@ -110,7 +110,7 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
         mesh_names=tuple(c.name for c in gm.contacts if c.kind == "mesh"),
         mesh_teeth=gm.mesh_teeth, rpm=rpm, rpm_lo=lo, rpm_hi=hi,
         title=study.title + f", linearised at {rpm:g} rpm")
-    summary = {"status": "ok", "rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
+    summary = {"rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
             "resonance_speeds_rpm": crit, "wall_s": wall,
             "mesh_stiffness": gm.mesh_stiffness_summary(),

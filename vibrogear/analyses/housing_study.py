@@ -127,7 +127,6 @@ def run_convergence(scene, ctx) -> AnalysisOutcome:
     table = [{k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in r.items()
               if k not in ("freqs", "rel_errors")} for r in rows]
     summary = {
-        "status": "ok",
         "observed_order_p2": [float(x) if math.isfinite(x) else None for x in p],
         "order_used": p_common,
         "reference_hz": [float(x) for x in ref],

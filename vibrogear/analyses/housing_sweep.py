@@ -104,7 +104,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     if failures:
         raise NumericalFailure(f"housing_sweep: {len(failures)} point(s) failed, first: "
                                f"{opts.parameter}={failures[0]['value']:g}: {failures[0]['message']}")
-    summary = {"status": "ok", "parameter": opts.parameter, "values": [r["value"] for r in rows],
+    summary = {"parameter": opts.parameter, "values": [r["value"] for r in rows],
                "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
                "points_computed": len(todo), "points_resumed": len(values) - len(todo),
                "resume": store.note, "seconds": time.perf_counter() - t0}

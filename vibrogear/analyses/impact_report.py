@@ -187,7 +187,6 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
 
     err = wp["error"]
     summary = {
-        "status": "ok",
         "omega": omega, "periods": cfg.periods, "samples": int(t_eval.size),
         "repeats": cfg.repeats, "atol_per_rtol": ATOL_PER_RTOL,
         "start_state": u_start.tolist(),

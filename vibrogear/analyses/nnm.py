@@ -242,7 +242,7 @@ def _summary(r: NnmStudyResult, wall, opts, cfg, rigid, notes) -> dict:
             **br.counters, "wall_s": br.wall_time,
             "error_estimate": br.error_estimate,
         })
-    return {"status": "ok", "branches": brs, "free_coordinates": int(rigid.shape[1]),
+    return {"branches": brs, "free_coordinates": int(rigid.shape[1]),
             "rtol": opts.rtol, "tol": cfg.tol, "solver_wall_s": wall, "notes": notes,
             "error_estimate": {"max_periodicity_residual": max(
                 (b["error_estimate"]["max_periodicity_residual"] or 0.0) for b in brs),

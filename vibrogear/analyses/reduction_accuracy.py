@@ -359,7 +359,7 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
         title=f"{scene.scene.name}: reduction levels at {cfg.rpm:g} rpm")
     largest = rows[-1]
     strip = lambda r_: {k: v for k, v in r_.items() if k != "pairs"}  # noqa: E731
-    summary = {"status": "ok", "rpm": cfg.rpm, "f_max_hz": cfg.f_max_hz,
+    summary = {"rpm": cfg.rpm, "f_max_hz": cfg.f_max_hz,
             "levels": [strip(r_) for r_ in rows],
             "frequency_levels": [strip(r_) for r_ in extra],
             "full_model": full,

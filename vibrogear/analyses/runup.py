@@ -248,7 +248,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     runs = tuple(_one_run(study, cfg, k, r, rows, orders, teeth) for k, r in ramps.items())
     ct = model.contacts
     mesh_names = tuple(ct.names[j] if ct.names else f"c{j}" for j in rows)
-    summary = {"status": "ok", "directions": list(cfg.directions),
+    summary = {"directions": list(cfg.directions),
                "rpm_range": list(cfg.rpm_range), "meshes": list(mesh_names),
                "orders": dict(zip(names, map(float, orders))),
                "rtol": opts.rtol, "atol": opts.atol, "inertia_torque": cfg.inertia_torque,
