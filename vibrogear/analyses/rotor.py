@@ -60,7 +60,7 @@ def run_modes(scene, ctx) -> AnalysisOutcome:
                                   modal_energy_share(model, master.vectors), axis=1)),
                               title=f"{scene.scene.name}: mode shapes at {mc.speed_rpm:g} rpm")
     summary = {
-        "status": res.status, "message": res.message, "n_dofs": model.n_dofs,
+        "n_dofs": model.n_dofs,
         "n_elements": int(model.element_nodes.shape[0]), "speed_rpm": mc.speed_rpm,
         "frequencies_hz": res.natural_frequencies_hz.tolist(),
         "damped_frequencies_hz": res.frequencies_hz.tolist(), "whirl": list(res.whirl),
@@ -72,7 +72,7 @@ def run_modes(scene, ctx) -> AnalysisOutcome:
                             "reduction_relative_eigenvalue_error": res.error_estimate},
         "timings_s": {"build": t_build, **res.timings, "master_modes": t_master},
     }
-    return AnalysisOutcome(summary=summary, result=result)
+    return AnalysisOutcome(summary=summary, result=result, solver=res.outcome)
 
 
 def run_campbell(scene, ctx) -> AnalysisOutcome:
@@ -94,7 +94,7 @@ def run_campbell(scene, ctx) -> AnalysisOutcome:
     result = RotorCampbellResult(campbell=res,
                                  title=f"{scene.scene.name}: Campbell diagram")
     summary = {
-        "status": res.status, "message": res.message, "n_speeds": int(speeds.size),
+        "n_speeds": int(speeds.size),
         "orders": list(res.orders), "n_basis": res.n_basis,
         "critical_speeds": [{"order": c.order, "speed_rpm": c.speed_rpm, "frequency_hz":
                              c.frequency_hz, "whirl": c.whirl, "mode_type": c.mode_type}
@@ -103,4 +103,4 @@ def run_campbell(scene, ctx) -> AnalysisOutcome:
                             "reduction_relative_eigenvalue_error": res.error_estimate},
         "timings_s": {"build": t_build, **res.timings},
     }
-    return AnalysisOutcome(summary=summary, result=result)
+    return AnalysisOutcome(summary=summary, result=result, solver=res.outcome)
