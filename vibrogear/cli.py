@@ -192,11 +192,11 @@ def _print_end(summary: dict, out: Path, quiet: bool) -> None:
               f"{summary.get('status', 'ok')}; {summary['wall_time_s']['total']:.3g} s)")
         if "best" in summary["results"].get("optimize", {}):
             print(_optimize_line(summary["results"]["optimize"]))
-    if findings is not None and is_root_process():
+    if findings is not None and is_root_process() and (findings["checked"] or quiet):
         from .report.findings_report import console_lines
         for line in console_lines(findings, f"{out}/report.html", quiet=quiet):
             print(line)
-    elif not quiet:
+    elif not quiet:                  # nothing over speed to judge (modes, optimize, ...)
         print(f"open {out}/report.html")
 
 
