@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..pipeline.files import listed_paths
+
 from .findings_bands import Band, map_bands, sweep_bands
 from .findings_events import (branch_events, erp_findings, resonance_events, runup_findings,
                               states_findings)
@@ -44,7 +46,7 @@ def read_sources(results: dict) -> dict[str, dict[str, np.ndarray]]:
     for record in results.values():
         if not isinstance(record, dict):
             continue
-        for text in _strings(record.get("files")):
+        for text in listed_paths(record.get("files")):
             path = Path(text)
             if path.name not in SOURCE_FILES or path.name in found or not path.is_file():
                 continue
@@ -54,17 +56,6 @@ def read_sources(results: dict) -> dict[str, dict[str, np.ndarray]]:
             else:
                 found[path.name] = _read_csv(path)
     return found
-
-
-def _strings(value):
-    if isinstance(value, str):
-        yield value
-    elif isinstance(value, dict):
-        for v in value.values():
-            yield from _strings(v)
-    elif isinstance(value, (list, tuple)):
-        for v in value:
-            yield from _strings(v)
 
 
 def _read_csv(path) -> dict[str, np.ndarray]:

@@ -17,7 +17,7 @@ from typing import Any
 
 from ..config.base import ConfigError
 
-__all__ = ["atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "atomic_write_npz",
+__all__ = ["listed_paths", "atomic_write_bytes", "atomic_write_text", "atomic_write_csv", "atomic_write_npz",
            "atomic_copy", "new_file_mode", "finite_json",
            "check_output_dir"]
 
@@ -170,3 +170,16 @@ def check_output_dir(path, what: str = "--out") -> Path:
         raise ConfigError(what, f"cannot create folders in {probe}: "
                           f"{exc.strerror or os.strerror(errno.EACCES)}") from None
     return p
+
+
+def listed_paths(files):
+    """The paths in an analysis's ``files`` entry of ``summary.json`` (any nesting of dicts
+    and lists of strings or path-likes), in order."""
+    if isinstance(files, (str, os.PathLike)):
+        yield os.fspath(files)
+    elif isinstance(files, dict):
+        for v in files.values():
+            yield from listed_paths(v)
+    elif isinstance(files, (list, tuple)):
+        for v in files:
+            yield from listed_paths(v)

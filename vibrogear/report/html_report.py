@@ -15,11 +15,11 @@ import html
 import math
 import os
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
 from urllib.parse import quote
 
 from ..config.verbs import VERBS
-from ..pipeline.files import atomic_write_text
+from ..pipeline.files import atomic_write_text, listed_paths
 from ..pipeline.outcome import is_root_process
 from .captions import caption
 from .glossary import GLOSSARY, PAPER, SECTION_TITLES
@@ -362,22 +362,11 @@ def _record_files(out: Path, files) -> list[str]:
     """The paths in an analysis's ``files`` entry (any nesting of dicts and lists of
     strings), relative to ``out``; paths outside the folder are left out."""
     rels: list[str] = []
-    for text in _strings(files):
+    for text in listed_paths(files):
         rel = _relative(out, Path(text))
         if rel is not None and rel not in rels:
             rels.append(rel)
     return rels
-
-
-def _strings(value) -> Iterable[str]:
-    if isinstance(value, (str, os.PathLike)):
-        yield os.fspath(value)
-    elif isinstance(value, dict):
-        for v in value.values():
-            yield from _strings(v)
-    elif isinstance(value, (list, tuple)):
-        for v in value:
-            yield from _strings(v)
 
 
 def _relative(out: Path, path: Path) -> str | None:
