@@ -2,6 +2,7 @@
 plain words."""
 from __future__ import annotations
 
+from ..config.findings_section import PRIORITY, base_quantity, rank
 from ..config.numbers import fmt_param, merged_ranges, range_text
 
 __all__ = ["verdict_text", "ranges_text"]
@@ -12,11 +13,6 @@ def ranges_text(bands: list[dict], unit: str) -> str:
     return ", ".join(range_text(a, b, "") for a, b in spans) + (f" {unit}" if unit else "")
 
 
-#: the kinds of band, most telling first (the console and the verdict keep this order)
-PRIORITY = ("contact loss", "rattle", "double-sided impacts", "coexisting states",
-            "chaotic motion", "subharmonic motion", "quasi-periodic motion",
-            "motion not settled", "aperiodic motion", "hysteresis (up and down differ)",
-            "bearing unloading", "radiated power")
 #: quantity -> (singular, plural) phrase of the places ({w}) where it happens
 PHRASES = {"contact loss": ("{w} loses contact", "{w} lose contact"),
            "rattle": ("{w} rattles", "{w} rattle"),
@@ -25,22 +21,6 @@ PHRASES = {"contact loss": ("{w} loses contact", "{w} lose contact"),
            "hysteresis (up and down differ)": ("up and down sweeps differ (jumps)",) * 2,
            "radiated power": ("the housing radiates most",) * 2,
            "coexisting states": ("other states coexist",) * 2}
-_RUNS = (" in the run-up", " in the run-down")
-
-
-def base_quantity(quantity: str) -> str:
-    """The kind of a band, a run-up's or run-down's contact loss counted as contact loss."""
-    for suffix in _RUNS:
-        if quantity.endswith(suffix):
-            return quantity[:-len(suffix)]
-    return quantity
-
-
-def rank(quantity: str) -> int:
-    base = base_quantity(quantity)
-    return PRIORITY.index(base) if base in PRIORITY else len(PRIORITY)
-
-
 def _and(items: list[str]) -> str:
     return items[0] if len(items) == 1 else ", ".join(items[:-1]) + " and " + items[-1]
 

@@ -17,10 +17,29 @@ from dataclasses import asdict, dataclass
 
 from .base import spec
 
-__all__ = ["FindingsConfig", "SEVERITIES"]
+__all__ = ["FindingsConfig", "SEVERITIES", "PRIORITY", "base_quantity", "rank"]
 
 #: from least to most severe
 SEVERITIES = ("fine", "caution", "avoid")
+#: the kinds of band, most telling first (the console and the verdict keep this order)
+PRIORITY = ("contact loss", "rattle", "double-sided impacts", "coexisting states",
+            "chaotic motion", "subharmonic motion", "quasi-periodic motion",
+            "motion not settled", "aperiodic motion", "hysteresis (up and down differ)",
+            "bearing unloading", "radiated power")
+_RUNS = (" in the run-up", " in the run-down")
+
+
+def base_quantity(quantity: str) -> str:
+    """The kind of a band, a run-up's or run-down's contact loss counted as contact loss."""
+    for suffix in _RUNS:
+        if quantity.endswith(suffix):
+            return quantity[:-len(suffix)]
+    return quantity
+
+
+def rank(quantity: str) -> int:
+    base = base_quantity(quantity)
+    return PRIORITY.index(base) if base in PRIORITY else len(PRIORITY)
 
 
 def _severity(default: str, what: str):

@@ -9,6 +9,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
+from ..config.findings_section import base_quantity, rank
 from ..config.numbers import fmt, fmt_param, merged_ranges, range_text
 
 __all__ = ["console_lines", "plot_band_chart", "findings_html", "BAND_CHART"]
@@ -23,7 +24,6 @@ def _group(bands: list[dict], severities=("avoid", "caution")) -> list[tuple[str
                                                                              list[dict]]]:
     """(severity, where, kind, bands) per kind of band and place, most severe and most
     telling first; a run-up's or run-down's contact loss joins its mesh's contact loss."""
-    from ..analyses.findings_text import base_quantity, rank
     groups: dict[tuple[str, str, str], list[dict]] = {}
     for b in bands:
         if b["severity"] in severities:
