@@ -247,3 +247,19 @@ def test_coexisting_states_band_and_events():
     assert "G1 0.40 impacts per period" in rattle["evidence"]
     assert "25 % of the disturbances" in rattle["evidence"]
     assert "not on the sweep's path" in rattle["evidence"]
+
+
+def test_branch_events_state_the_stability_on_each_side():
+    """A period-1 branch stable up to a fold at 200 rpm, unstable after it, with a fold at
+    300 rpm where it turns stable again, and an NS inside the unstable part."""
+    arrays = {"param": np.array([100.0, 150.0, 200.0, 180.0, 250.0, 300.0, 350.0]),
+              "stable": np.array([True, True, True, False, False, False, True]),
+              "label": np.array(["", "", "LP", "", "NS", "LP", ""]),
+              "branch": np.zeros(7, int), "n_periods": np.ones(7, int),
+              "qmax": np.full(7, 1e-5)}
+    f = derive_findings({"branch.npz": arrays}, {}, FindingsConfig())
+    ev = {(e["kind"], e["at"]): e for e in f["events"]}
+    assert ev[("LP", 200.0)]["stability"] == "stable → unstable"
+    assert "jumps" in ev[("LP", 200.0)]["evidence"]
+    assert ev[("NS", 250.0)]["stability"] == "unstable → unstable"
+    assert ev[("LP", 300.0)]["stability"] == "unstable → stable"

@@ -156,8 +156,8 @@ def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_
 
 def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
     from vibrogear.config.scene import load_scene
-    from vibrogear.report.gearbox_plots import (mesh_orders_per_rpm, plot_resonance_map,
-                                                resonance_crossings)
+    from vibrogear.analyses.gearbox_modes import mesh_orders_per_rpm, resonance_crossings
+    from vibrogear.report.gearbox_plots import plot_resonance_map
     from pathlib import Path
 
     gb = load_scene(Path(__file__).resolve().parents[2] / "configs/two_stage.toml").gearbox
@@ -167,14 +167,14 @@ def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
     f = np.array([1000.0, 2000.0, 2500.0])
     mesh = np.array([[0.3, 0.0, 0.01], [0.0, 0.2, 0.01]])          # mode 2 has no share
     cross = resonance_crossings(f, mesh.max(axis=0), list(orders.items()), 1000.0, 3000.0)
-    got = {(c["mesh"], c["order"], round(c["rpm"], 6)) for c in cross}
+    got = {(c["mesh"], c["mesh_order"], round(c["rpm"], 6)) for c in cross}
     # rpm = 60 f / (h z): modes 0 and 1 (share > 5 %) with each mesh's 1x and 2x, in range
     want = {("G1", 1, 1500.0), ("G2", 1, round(1000 * 60 / 55, 6)),          # mode 0
             ("G1", 1, 3000.0), ("G1", 2, 1500.0), ("G2", 1, round(2000 * 60 / 55, 6)),
             ("G2", 2, round(2000 * 60 / 110, 6))}                            # mode 1
     assert got == want
     svg = plot_resonance_map(tmp_path / "r", f, mesh, 40, 1000.0, 3000.0,
-                             orders=list(orders.items()), formats=("svg",),
+                             orders=list(orders.items()), crossings=cross, formats=("svg",),
                              title="two_stage: m = 146 (21+25+100)")[0].read_text()
     assert "G2 1x mesh frequency" in svg and "G1 2x mesh frequency" in svg
     assert "1500 rpm" in svg and "2182 rpm" in svg and "m = 146" not in svg
@@ -221,21 +221,3 @@ def test_branch_waterfall_not_drawn_for_an_orbit_unstable_everywhere(tmp_path):
     scene, r = _branch_result([True, True, False, False])
     files = write_branch(scene, r, tmp_path, 3000.0, "two_stage")
     assert (tmp_path / "nvh_waterfall_branch_dte.png").stat().st_size > 10_000
-
-
-def test_resonance_crossings_of_the_first_mesh_are_the_modes_analysis_speeds():
-    """The figure marks, for the first mesh, exactly the speeds the modes analysis lists
-    (its rule: largest mesh share > 5 %, orders 1 and 2, inside the range)."""
-    from types import SimpleNamespace
-
-    from vibrogear.analyses.gearbox_modes import _resonance_speeds
-    from vibrogear.report.gearbox_plots import resonance_crossings
-
-    rng = np.random.default_rng(3)
-    f = np.sort(rng.uniform(200.0, 9000.0, 40))
-    mesh = rng.uniform(0.0, 0.12, (2, 40))
-    ref = _resonance_speeds(SimpleNamespace(mesh_teeth=40), f, mesh, 1500.0, 3000.0)
-    got = [c for c in resonance_crossings(f, mesh.max(axis=0), [("G1", 40 / 60.0)],
-                                          1500.0, 3000.0)]
-    assert sorted(round(c["rpm"], 9) for c in ref) == [round(c["rpm"], 9) for c in got]
-    assert len(got) > 3

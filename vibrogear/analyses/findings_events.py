@@ -14,7 +14,7 @@ __all__ = ["branch_events", "resonance_events", "erp_findings", "states_findings
 RUNUP_MERGE_PERIODS = 50
 
 #: what a special point of a branch means, in plain words
-LABELS = {"LP": "fold (LP): the branch turns back; a jump between coexisting responses",
+LABELS = {"LP": "fold (LP): the branch turns back",
           "PD": "period doubling (PD): a period-2 response branches off",
           "NS": "Neimark-Sacker (NS): a torus (quasi-periodic motion) branches off",
           "BP": "branch point (BP)", "GR": "grazing: a contact just touches"}
@@ -41,12 +41,15 @@ def branch_events(arrays: dict, *, param_unit: str, length_scale: float,
     out = []
     for i in np.flatnonzero(label != ""):
         kind = str(label[i])
+        stability = _stability(stable, i, branch)
+        what = LABELS.get(kind, kind)
+        if kind == "LP" and "stable" in stability.replace("unstable", ""):
+            what += "; the stable response ends here: it jumps to another"
         out.append({"kind": kind, "at": float(param[i]),
                     "where": f"branch {int(branch[i])} (period-{int(nper[i])})",
-                    "stability": _stability(stable, i, branch),
-                    "evidence": f"{LABELS.get(kind, kind)}; stability "
-                    f"{_stability(stable, i, branch)}; qmax {fmt(qmax[i] * length_scale, 3)} "
-                    f"{length_unit}".rstrip()})
+                    "stability": stability,
+                    "evidence": f"{what}; stability {stability}; qmax "
+                    f"{fmt(qmax[i] * length_scale, 3)} {length_unit}".rstrip()})
     return out
 
 
@@ -58,10 +61,11 @@ def resonance_events(resonances: list[dict], rules) -> list[dict]:
         share = float(r.get("mesh_energy_share", 0.0))
         if share <= rules.resonance_share_above:
             continue
+        mesh = f"{r['mesh']} " if r.get("mesh") else ""
         out.append({"kind": "resonance", "at": float(r["rpm"]),
                     "where": f"mode {int(r['mode']) + 1} ({fmt(r['frequency_hz'], 4)} Hz)",
                     "mesh_order": int(r.get("mesh_order", 1)),
-                    "evidence": f"mesh order {int(r.get('mesh_order', 1))} meets mode "
+                    "evidence": f"{mesh}mesh order {int(r.get('mesh_order', 1))} meets mode "
                     f"{int(r['mode']) + 1} at {fmt(r['frequency_hz'], 4)} Hz; "
                     f"{fmt(100 * share, 2)} % of its strain energy is in the meshes"})
     return out

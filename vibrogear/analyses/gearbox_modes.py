@@ -38,6 +38,8 @@ class GearboxModesResult:
     rpm_lo: float
     rpm_hi: float
     title: str
+    orders: tuple = ()              # (mesh name, mesh frequency per driving rpm [Hz/rpm])
+    resonances: tuple = ()          # the resonance speeds (dicts, as in the summary)
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
 RIGID_TOL = 1e-7
@@ -104,11 +106,14 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
         lo, hi = 0.5 * rpm, 1.5 * rpm
     else:            # at rest: the speeds up to the 1x resonance of the highest mode listed
         lo, hi = 0.0, 1.1 * 60.0 * float(f_hz.max(initial=1.0)) / gm.mesh_teeth
-    crit = _resonance_speeds(gm, f_hz, mesh, lo, hi)
+    orders = mesh_orders_per_rpm(scene.gearbox)
+    crit = resonance_crossings(f_hz, mesh.max(axis=0) if mesh.size else np.zeros_like(f_hz),
+                               orders, lo, hi)
     result = GearboxModesResult(
         f_hz=f_hz, fd_hz=fd_hz, zeta=zeta, names=tuple(names), shares=shares, mesh=mesh,
         mesh_names=tuple(c.name for c in gm.contacts if c.kind == "mesh"),
         mesh_teeth=gm.mesh_teeth, rpm=rpm, rpm_lo=lo, rpm_hi=hi,
+        orders=tuple(orders), resonances=tuple(crit),
         title=study.title + f", linearised at {rpm:g} rpm")
     summary = {"rpm": rpm, "modes": int(f_hz.size), "n_rigid": n_rigid,
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
@@ -152,15 +157,30 @@ def _mesh_energy(gm, model, lm, x0) -> np.ndarray:
     return share[:, nearest]
 
 
-def _resonance_speeds(gm, f_hz, mesh, lo, hi, threshold=0.05) -> list[dict]:
+def mesh_orders_per_rpm(gearbox) -> list[tuple[str, float]]:
+    """(mesh name, mesh frequency per driving-shaft rpm [Hz/rpm]) of every mesh of a
+    ``[gearbox]`` config: teeth x |spin of gear_a| / 60, the gears' spins from the speed
+    ratios of the fixed-gear chain (a free gear takes its fixed partner's)."""
+    _, gear_p = gearbox.speed_ratios()
     out = []
-    if mesh.size == 0:
-        return out
-    share = mesh.max(axis=0)
-    for i in np.flatnonzero(share > threshold):
-        for order in (1, 2):
-            rpm = 60.0 * f_hz[i] / (order * gm.mesh_teeth)
-            if lo <= rpm <= hi:
-                out.append({"mode": int(i), "frequency_hz": float(f_hz[i]), "mesh_order": order,
-                            "rpm": float(rpm), "mesh_energy_share": float(share[i])})
+    for m in gearbox.meshes:
+        a = gearbox.gear_index(m.gear_a, "")
+        out.append((m.name, abs(gear_p[a]) * gearbox.gears[a].teeth / 60.0))
     return out
+
+
+def resonance_crossings(f_hz, share, orders, rpm_lo, rpm_hi, *, threshold: float = 0.05,
+                        harmonics=(1, 2)) -> list[dict]:
+    """The resonance speeds: where an order h x f_mesh of a mesh (``orders``: [(mesh name,
+    Hz per rpm)]) meets a mode whose largest mesh strain-energy share ``share`` exceeds
+    ``threshold``, inside [rpm_lo, rpm_hi]; sorted by speed."""
+    out = []
+    for i in np.flatnonzero(np.asarray(share) > threshold):
+        for name, per_rpm in orders:
+            for h in harmonics:
+                rpm = float(f_hz[i]) / (h * per_rpm)
+                if rpm_lo <= rpm <= rpm_hi:
+                    out.append({"mode": int(i), "frequency_hz": float(f_hz[i]), "mesh": name,
+                                "mesh_order": h, "rpm": rpm,
+                                "mesh_energy_share": float(share[i])})
+    return sorted(out, key=lambda c: c["rpm"])

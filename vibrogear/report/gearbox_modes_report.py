@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .gearbox_plots import mesh_orders_per_rpm, plot_resonance_map, write_modes_csv
+from .gearbox_plots import plot_resonance_map, write_modes_csv
 
 __all__ = ["write"]
 
@@ -22,6 +22,6 @@ def write(scene, outcome, out, previous=None) -> dict:
                                         list(r.names), r.shares, r.mesh,
                                         list(r.mesh_names)))}
     plot_resonance_map(out / "resonance_map", r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo,
-                       r.rpm_hi, title=r.title, orders=mesh_orders_per_rpm(scene.gearbox))
+                       r.rpm_hi, title=r.title, orders=r.orders, crossings=r.resonances)
     files["png"] = str(out / "resonance_map.png")
     return files

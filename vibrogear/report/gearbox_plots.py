@@ -9,7 +9,7 @@ from .figure import new_figure, plain_title, save_figure
 from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response",
-           "mesh_orders_per_rpm", "resonance_crossings"]
+]
 
 
 def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) -> Path:
@@ -28,47 +28,19 @@ def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) ->
     return atomic_write_bytes(Path(path), ("\n".join(lines) + "\n").encode())
 
 
-def mesh_orders_per_rpm(gearbox) -> list[tuple[str, float]]:
-    """(mesh name, mesh frequency per driving-shaft rpm [Hz/rpm]) of every mesh of a
-    ``[gearbox]`` config: teeth x |spin of gear_a| / 60, the gears' spins from the speed
-    ratios of the fixed-gear chain (a free gear takes its fixed partner's)."""
-    _, gear_p = gearbox.speed_ratios()
-    out = []
-    for m in gearbox.meshes:
-        a = gearbox.gear_index(m.gear_a, "")
-        out.append((m.name, abs(gear_p[a]) * gearbox.gears[a].teeth / 60.0))
-    return out
-
-
-def resonance_crossings(f_hz, share, orders, rpm_lo, rpm_hi, *, threshold: float = 0.05,
-                        harmonics=(1, 2)) -> list[dict]:
-    """Speeds where an order h x f_mesh of a mesh meets a mode whose largest mesh
-    strain-energy share ``share`` exceeds ``threshold`` (the rule of the modes analysis'
-    ``resonance_speeds_rpm``), inside [rpm_lo, rpm_hi]."""
-    out = []
-    for i in np.flatnonzero(np.asarray(share) > threshold):
-        for name, per_rpm in orders:
-            for h in harmonics:
-                rpm = float(f_hz[i]) / (h * per_rpm)
-                if rpm_lo <= rpm <= rpm_hi:
-                    out.append({"mesh": name, "order": h, "rpm": rpm, "mode": int(i),
-                                "frequency_hz": float(f_hz[i]), "share": float(share[i])})
-    return sorted(out, key=lambda c: c["rpm"])
-
-
 def _grey(s: float):
     return (0.8 - 0.8 * min(1.0, 4 * s),) * 3
 
 
 def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: float, *,
                        title: str = "", f_max: float | None = None, orders=None,
-                       formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+                       crossings=(), formats=("png", "svg"), dpi: int = 150) -> list[Path]:
     """Natural frequencies (horizontal lines, darker = more mesh strain energy, with its
     scale) against the orders 1x and 2x of every mesh's frequency over the speed range; the
     crossings with modes of mesh strain-energy share > 5 % are the resonance speeds, marked
     and written on the speed axis.  ``orders``: [(mesh name, Hz per rpm)] (default: one
-    mesh of ``teeth`` teeth on the driving shaft).  Returns the paths; the crossings are
-    :func:`resonance_crossings`."""
+    mesh of ``teeth`` teeth on the driving shaft); ``crossings``: the resonance speeds of
+    the modes analysis (dicts with rpm, frequency_hz, mesh, mesh_order).  Returns the paths."""
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import LinearSegmentedColormap, Normalize
 
@@ -87,7 +59,7 @@ def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: floa
         for h, style in ((1, "-"), (2, "--")):
             ax.plot(rpm, h * per_rpm * rpm, style, color=f"C{(3 + j) % 10}", lw=1.5, zorder=2,
                     label=f"{name} {h}x mesh frequency")
-    cross = resonance_crossings(f_hz, share, orders, rpm_lo, rpm_hi)
+    cross = list(crossings)
     last = -np.inf
     lane = 0
     for c in cross:
@@ -97,7 +69,7 @@ def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: floa
         lane = (lane + 1) % 3 if close else 0
         last = c["rpm"]
         right = c["rpm"] > rpm_lo + 0.85 * (rpm_hi - rpm_lo)     # keep it inside the axes
-        ax.annotate(f"{c['rpm']:.0f} rpm\n{c['mesh']} {c['order']}x", (c["rpm"], 0.0),
+        ax.annotate(f"{c['rpm']:.0f} rpm\n{c['mesh']} {c['mesh_order']}x", (c["rpm"], 0.0),
                     xytext=(-2 if right else 2, 3 + 20 * lane), textcoords="offset points",
                     ha="right" if right else "left", fontsize=7,
                     zorder=5, bbox=dict(boxstyle="square,pad=0.1", fc="white", ec="none",
