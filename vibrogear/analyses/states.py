@@ -35,6 +35,7 @@ from ..config.options import SweepOptions
 from ..pipeline.executors import broadcast, run_units
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..pipeline.resume import PartialStore
+from ..solvers.sequential.motion import MOTION_LEGEND
 from ..solvers.sequential.sweep_point import PHASES, run_point
 from .states_cluster import cluster_point, interval_widths
 from .states_starts import draw_start, start_scales
@@ -64,6 +65,8 @@ class StatesResult:
     counters: dict = field(default_factory=dict)
     #: per settled start: grid index, start index, wall seconds, attractor index (-1: failed)
     starts: dict = field(default_factory=dict)
+    #: names of the motion-class codes of the attractors (the sweep's)
+    legend: tuple = MOTION_LEGEND
 
 
 def grid(cfg) -> np.ndarray:

@@ -11,32 +11,30 @@ the page: wide tables scroll inside their own box.
 """
 from __future__ import annotations
 
-import html
 import math
-import os
 from pathlib import Path
 from typing import Any
-from urllib.parse import quote
 
 from ..config.verbs import VERBS
-from ..pipeline.files import atomic_write_text, listed_paths
+from ..pipeline.files import atomic_write_text
 from ..pipeline.outcome import is_root_process
 from .captions import caption
 from .glossary import GLOSSARY, PAPER, SECTION_TITLES
+from .html_parts import REPORT_NAME
+from .html_parts import anchor as _anchor, esc as _esc, fmt as _fmt, folder_files as _folder_files
+from .html_parts import link as _link, list_text as _list_text
+from .html_parts import record_files as _record_files, records_table as _records_table
+from .html_parts import size as _size, status_badge as _status_badge, table as _table
+from .html_parts import url as _url
 
 __all__ = ["REPORT_NAME", "write_html_report", "render_html_report"]
 
-REPORT_NAME = "report.html"
 FIGURE_SUFFIX = ".png"
 #: the drawing of the gearbox and the speed-band chart (written by the runner)
 OVERVIEW_FIGURES = ("findings.png", "gearbox.png")
 #: summary entries shown in their own places, not in an analysis's table of values
 _OWN_PLACE = ("status", "message", "warnings", "files", "error_estimate")
-_MAX_LIST = 12          # lists of numbers up to this length are shown whole
-_MAX_ROWS = 60          # rows of a table of records
 _MAX_DEPTH = 4          # nested dicts are flattened to this depth
-_MAX_FILES = 5000       # files listed from the folder
-_DIGITS = 4             # significant digits of the numbers in tables
 
 _STYLE = """
 body { font-family: sans-serif; margin: 1.5em auto; max-width: 1100px; padding: 0 1em;
@@ -291,39 +289,6 @@ def _flatten(value, key: str, depth: int = 0) -> list[tuple[str, Any]]:
     return [(key, value)]
 
 
-def _list_text(values) -> str:
-    if not values:
-        return "[]"
-    if len(values) <= _MAX_LIST and all(_is_scalar(v) for v in values):
-        return ", ".join(_fmt(v) for v in values)
-    if all(_is_scalar(v) for v in values):
-        first, second, last = (_fmt(values[i]) for i in (0, 1, -1))
-        return f"{len(values)} values: {first}, {second}, ..., {last}"
-    if all(isinstance(v, dict) for v in values):
-        shown = "; ".join(", ".join(f"{k} = {_fmt(x)}" for k, x in v.items()
-                                    if _is_scalar(x)) for v in values[:6])
-        return shown + (f"; ... ({len(values)} in all, see summary.json)"
-                        if len(values) > 6 else "")
-    return f"{len(values)} entries (see summary.json)"
-
-
-def _records_table(items: list[dict]) -> str:
-    columns: list[str] = []
-    for item in items:
-        for k, v in item.items():
-            if k not in columns and (_is_scalar(v) or isinstance(v, (list, tuple))):
-                columns.append(k)
-    rows = [[_fmt_cell(item.get(c)) for c in columns] for item in items[:_MAX_ROWS]]
-    table = _table(columns, rows)
-    if len(items) > _MAX_ROWS:
-        table += f"<p>{len(items) - _MAX_ROWS} more rows in summary.json.</p>"
-    return table
-
-
-def _fmt_cell(value):
-    return _list_text(value) if isinstance(value, (list, tuple)) else value
-
-
 def _figure(rel: str, key: bool = False, title: str = "") -> str:
     """A figure with its caption; ``title``: the reduced model's study title, whose mode
     count (m = a+b+c) the caption states."""
@@ -333,125 +298,3 @@ def _figure(rel: str, key: bool = False, title: str = "") -> str:
     css = ' class="key"' if key else ""
     return (f'<figure{css}><a href="{url}"><img src="{url}" alt="{_esc(rel)}"></a>'
             f"<figcaption>{text}</figcaption></figure>")
-
-
-# ------------------------------------------------------------------ files
-
-def _folder_files(out: Path) -> dict[str, int]:
-    """Relative POSIX path -> size of every file under ``out`` (sorted; hidden and
-    temporary files and the report itself left out)."""
-    found: dict[str, int] = {}
-    if not out.is_dir():
-        return found
-    for root, dirs, files in os.walk(out):
-        dirs[:] = sorted(d for d in dirs if not d.startswith("."))
-        for fname in sorted(files):
-            if fname.startswith(".") or fname.endswith(".tmp"):
-                continue
-            path = Path(root) / fname
-            rel = path.relative_to(out).as_posix()
-            if rel == REPORT_NAME or not path.is_file():
-                continue
-            found[rel] = path.stat().st_size
-            if len(found) >= _MAX_FILES:
-                return found
-    return found
-
-
-def _record_files(out: Path, files) -> list[str]:
-    """The paths in an analysis's ``files`` entry (any nesting of dicts and lists of
-    strings), relative to ``out``; paths outside the folder are left out."""
-    rels: list[str] = []
-    for text in listed_paths(files):
-        rel = _relative(out, Path(text))
-        if rel is not None and rel not in rels:
-            rels.append(rel)
-    return rels
-
-
-def _relative(out: Path, path: Path) -> str | None:
-    base = out.resolve()
-    for candidate in (path, out / path):
-        try:
-            rel = candidate.resolve().relative_to(base)
-        except (ValueError, OSError):
-            continue
-        if rel.parts:
-            return rel.as_posix()
-    return None
-
-
-# ------------------------------------------------------------------ HTML pieces
-
-def _table(header: list[str], rows, raw: bool = False) -> str:
-    """An HTML table; cells are formatted and escaped unless ``raw`` (already HTML)."""
-    if not rows:
-        return "<p>None.</p>"
-    out = ['<div class="scroll"><table>', "<tr>" + "".join(f"<th>{_esc(h)}</th>" for h in header) + "</tr>"]
-    for row in rows:
-        cells = []
-        for cell in row:
-            if raw:
-                cells.append(f"<td>{cell}</td>")
-            elif _is_number(cell):
-                cells.append(f'<td class="num">{_esc(_fmt(cell))}</td>')
-            else:
-                cells.append(f"<td>{_esc(_fmt(cell))}</td>")
-        out.append("<tr>" + "".join(cells) + "</tr>")
-    out.append("</table></div>")
-    return "\n".join(out)
-
-
-def _status_badge(status: str) -> str:
-    css = "status-" + "".join(c if c.isalnum() else "-" for c in status.lower())
-    return f'<span class="status {css}">{_esc(status)}</span>'
-
-
-def _link(rel: str) -> str:
-    return f'<a href="{_url(rel)}">{_esc(rel)}</a>'
-
-
-def _url(rel: str) -> str:
-    return _esc(quote(rel))
-
-
-def _anchor(name: str) -> str:
-    return "a-" + "".join(c if c.isalnum() or c in "-_" else "-" for c in str(name))
-
-
-def _size(n: int) -> str:
-    for unit in ("B", "kB", "MB", "GB"):
-        if n < 1024 or unit == "GB":
-            return f"{n} {unit}" if unit == "B" else f"{n:.1f} {unit}"
-        n /= 1024
-    return f"{n} B"
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) or \
-        (hasattr(value, "dtype") and hasattr(value, "item"))
-
-
-def _is_scalar(value) -> bool:
-    return value is None or isinstance(value, (str, bool, int, float)) or _is_number(value)
-
-
-def _fmt(value, digits: int = _DIGITS) -> str:
-    if hasattr(value, "dtype") and hasattr(value, "item"):
-        try:
-            value = value.item()
-        except (ValueError, TypeError):
-            return str(value)
-    if value is None:
-        return "n/a"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.{digits}g}" if math.isfinite(value) else str(value)
-    if isinstance(value, (list, tuple)):
-        return _list_text(value)
-    return str(value)
-
-
-def _esc(value) -> str:
-    return html.escape(str(value), quote=True)

@@ -52,8 +52,6 @@ def _fin(a) -> np.ndarray:
 
 def states_arrays(res) -> dict:
     """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.StatesResult`."""
-    from ..solvers.sequential.motion import MOTION_LEGEND
-
     atts = res.attractors
     meshes = sorted({g for a in atts for g in a.metrics})
     ci = np.array([a.ci for a in atts], dtype=float).reshape(-1, 2)
@@ -62,7 +60,7 @@ def states_arrays(res) -> dict:
         "n_failed": np.asarray(res.n_failed, int),
         "attractor_param": np.array([a.param for a in atts], float),
         "attractor_class": np.array([a.motion_class for a in atts], int),
-        "attractor_class_legend": np.asarray(MOTION_LEGEND),
+        "attractor_class_legend": np.asarray(res.legend),
         "attractor_period_n": np.array([a.period_n for a in atts], int),
         "attractor_qmin": _fin([a.qmin for a in atts]),
         "attractor_qmax": _fin([a.qmax for a in atts]),
