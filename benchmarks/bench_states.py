@@ -69,6 +69,7 @@ def main(argv=None) -> dict:
             "states.settle_window=16")
     scene = load_scene(ROOT / "configs" / "two_stage.toml", sets)
     out = Path(a.out)
+    load_before = os.getloadavg()
     t0 = time.perf_counter()
     summary = run_scene(scene, RunContext(out=out, quiet=True))
     wall = time.perf_counter() - t0
@@ -85,10 +86,12 @@ def main(argv=None) -> dict:
     units = [float(np.sum(sample[k:k + a.batch])) for k in range(0, full, a.batch)]
     serial = split.get("clustering", 0.0) + split.get("orbits", 0.0)
     res = {
-        "case": f"two_stage states, measured subset {a.speeds} speeds x {a.starts} starts "
-                f"(1500-3000 rpm), 2 worker processes, branches off",
-        "conditions": "shared 2-core machine, other jobs running: indicative (measured under "
-                      "load)",
+        "case": f"two_stage states, measured {a.speeds} speeds x {a.starts} starts "
+                f"(1500-3000 rpm), 2 worker processes, branches off"
+                + (" (the issue's full size)" if n == full else " (a subset)"),
+        "conditions": f"2-core machine, load average {load_before[0]:.2f} at the start and "
+                      f"{os.getloadavg()[0]:.2f} at the end (1-minute; 2.0 = both cores busy "
+                      f"with this run alone)",
         "python": platform.python_version(),
         "measured": {
             "starts": n, "census_wall_s": split.get("census_wall"),
@@ -111,8 +114,10 @@ def main(argv=None) -> dict:
             "two_cores_wall_s": split.get("census_wall") * full / n + serial,
             "mpi_64_ranks_wall_s": _lpt_makespan(units, RANKS) + serial,
             "mpi_64_ranks_units": len(units),
-            "note": "projections from the measured subset, not measurements; 64 ranks: "
-                    "longest-first units of the resampled start times + the serial part",
+            "note": ("2 cores: measured at full size (the census wall time); " if n == full
+                     else "2 cores: projected from the measured subset; ")
+                    + "64 ranks: a projection, not a measurement (longest-first units of the "
+                      "resampled start times + the serial part)",
         },
     }
     path = ROOT / "benchmarks" / "results" / "bench_states.json"
