@@ -4,8 +4,9 @@ bearing (Harris & Mindel 1973, Fig. 15) and Harris's table of the dimensionless 
 
 Source.  T. A. Harris and M. H. Mindel, "Rolling element bearing dynamics", Wear 23 (1973)
 311-337, Fig. 15: the printed sample output of SKF's bearing program for an angular-contact
-ball bearing (values as transcribed, with the figure's page and a re-read of the scan, in a
-public Rust bearing solver on GitHub, tests/contact_level_b3.rs).
+ball bearing (values as transcribed, with the figure's pages 330-331 and a re-read of the
+scan, in a public Rust bearing solver: github.com/CHOICHOI-KIMM/AI_Seminar,
+BB-main/src-tauri/tests/contact_level_b3.rs).
 
 Printed inputs: Z = 21 balls of D = 0.8125 in on a pitch diameter of 6.2008 in, groove
 conformities f_i = f_o = 0.5200, ring modulus 2.96e7 psi, Poisson's ratio 0.25 (the ball's
@@ -150,7 +151,8 @@ def test_contact_constant_of_the_inner_contact():
 
 # Harris & Kotzalas, Rolling Bearing Analysis, 5th ed. (Essential Concepts of Bearing
 # Technology, 2007), Table 6.1, p. 128: F(rho), a*, b*, delta* as printed (the row F = 1,
-# a* infinite, left out); transcribed in the same public repository, tests/contact_level_b.rs.
+# a* infinite, left out); transcribed in the same public repository,
+# BB-main/src-tauri/tests/contact_level_b.rs.
 HARRIS_TABLE_6_1 = """
 0.1075 1.0760 0.9318 0.9974 | 0.3204 1.2623 0.8114 0.9761 | 0.4795 1.4556 0.7278 0.9429
 0.5916 1.6440 0.6687 0.9077 | 0.6716 1.8258 0.6245 0.8733 | 0.7332 2.011 0.5881 0.8394
