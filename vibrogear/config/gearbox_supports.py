@@ -206,7 +206,7 @@ class ExternalCouplingConfig:
                              "at which power is given (with power only)")
     damping: float = spec(0.0, ge=0.0, doc="torsional damping [N m s/rad]")
     torque_orders: tuple[tuple[float, ...], ...] = spec(
-        (), max_len=MAX_TORQUE_ORDERS, doc="torque fluctuation by orders of this coupling's "
+        (), doc=f"at most {MAX_TORQUE_ORDERS} entries: torque fluctuation by orders of this coupling's "
         "shaft speed (engine torsionals): [[order, amplitude N m], ...] or [[order, "
         "amplitude N m, phase deg], ...]; order > 0, a ratio of integers with a "
         f"denominator <= {MAX_ORDER_DENOMINATOR} (0.5, 1, 1.5, 2, ...)")
@@ -248,6 +248,9 @@ class ExternalCouplingConfig:
             raise ConfigError(f"{path}.{'rpm' if self.power is not None else 'power'}",
                               "power [kW] and rpm [rpm] go together (torque = power / "
                               "(2 pi rpm / 60))")
+        if len(self.torque_orders) > MAX_TORQUE_ORDERS:
+            raise ConfigError(f"{path}.torque_orders", f"allows at most {MAX_TORQUE_ORDERS} "
+                              f"entries, got {len(self.torque_orders)}")
         for i, term in enumerate(self.torque_orders):
             _check_order(term, f"{path}.torque_orders[{i}]")
         tw = self.static_twist
