@@ -182,3 +182,14 @@ def test_constant_speed_ramp_continues_the_fractional_phase():
     exact = (X * np.exp(1j * w * r.t)).real
     assert r.t.size >= 100
     assert np.max(np.abs(r.delta[0] - exact)) < 1e-8 * abs(X)
+
+
+def test_an_excitation_period_too_long_is_refused_naming_the_coupling():
+    """Order 1/11 of the 40-tooth pinion's shaft is 1/440 of the mesh frequency, order
+    1/7 of the 80-tooth wheel's 1/560 (p = 1/2): together lcm(440, 560) = 6160 mesh periods
+    > 1000."""
+    with pytest.raises(ConfigError) as exc:
+        load_scene(SCENE, ("gearbox.couplings[0].torque_orders=[[0.09090909090909091, 1.0]]",
+                           "gearbox.couplings[1].torque_orders=[[0.14285714285714285, 1.0]]"))
+    assert exc.value.path == "gearbox.couplings[1].torque_orders"
+    assert "6160 mesh periods" in str(exc.value)

@@ -11,10 +11,12 @@ from .base import ConfigError, spec
 from .bearing_catalogue import ElementSet, boundary_dimensions, element_set
 
 __all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS",
-           "MAX_TORQUE_ORDERS", "MAX_ORDER_DENOMINATOR", "torque_order_ratios"]
+           "MAX_TORQUE_ORDERS", "MAX_ORDER_DENOMINATOR", "MAX_ORDER_PERIOD",
+           "torque_order_ratios"]
 
-#: torque orders per coupling, and the largest denominator of an order (0.5: 2, 1/3: 3, ...)
-MAX_TORQUE_ORDERS, MAX_ORDER_DENOMINATOR = 20, 12
+#: torque orders per coupling, the largest denominator of an order (0.5: 2, 1/3: 3, ...),
+#: and the longest whole excitation period the orders may make, in mesh periods
+MAX_TORQUE_ORDERS, MAX_ORDER_DENOMINATOR, MAX_ORDER_PERIOD = 20, 12, 1000
 
 
 def _check_order(term, path: str) -> None:

@@ -24,7 +24,8 @@ both.  The state is u = [x, x'] (length 2m).
 
 The harmonic orders n_h (``harmonic_orders``) are 1, 2, ..., H unless given: a gearbox's
 engine-order torque fluctuation adds slots at rational multiples of the mesh frequency
-(order k of a shaft turning at p_s times the driving speed: n = k p_s / (z p_a)).  The
+(order k of a shaft turning at p_s times the driving speed, W = z x the driving speed:
+n = k p_s / z).  The
 excitation is then periodic with period_multiple = P base periods, P the least common
 denominator of the n_h, and ``excitation_period`` is that whole period P 2 pi / W: the
 solvers that sample, shoot or settle over "a period" use the period of the forcing.
@@ -40,9 +41,9 @@ import numpy as np
 __all__ = ["ReducedModel", "ContactSet", "LinearCoupling", "Forcing", "period_multiple",
            "MAX_PERIOD_MULTIPLE"]
 
-#: the longest excitation period accepted, in base periods (a torque order whose ratio to
-#: the mesh frequency needs a larger denominator is refused by the configuration)
-MAX_PERIOD_MULTIPLE = 1000
+#: the longest excitation period a model accepts, in base periods (a gearbox scene's own
+#: limit, config.gearbox_supports.MAX_ORDER_PERIOD, is lower and named in its error)
+MAX_PERIOD_MULTIPLE = 10_000
 
 
 def period_multiple(orders) -> int:
