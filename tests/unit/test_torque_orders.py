@@ -193,3 +193,25 @@ def test_an_excitation_period_too_long_is_refused_naming_the_coupling():
                            "gearbox.couplings[1].torque_orders=[[0.14285714285714285, 1.0]]"))
     assert exc.value.path == "gearbox.couplings[1].torque_orders"
     assert "6160 mesh periods" in str(exc.value)
+
+
+def test_divergence_scale_bounds_the_order_response():
+    """A torque order drives the shafts' rigid rotations (held by the coupling springs in
+    the low-rank part, no modal stiffness of their own): the integrator's divergence scale
+    stays finite and bounds the mesh's linear response to the order at every speed of
+    the gear pair's range (its resonances included, 500-8000 rpm)."""
+    from vibrogear.solvers.integrator.trust import deformation_scale
+    A = 20.0
+    r = build_gearbox(load_scene(SCENE, (f"gearbox.couplings[0].torque_orders=[[2.0, {A}]]",))
+                      ).reduced
+    scale = deformation_scale(r)
+    assert np.all(np.isfinite(scale))
+    st = static_equilibrium(r, 0.0)
+    c = r.contacts.directions[0]
+    worst = 0.0
+    for rpm in np.linspace(500.0, 8000.0, 301):
+        K, D = tangent_matrices(r, st.u0, rpm)
+        w = r.harmonic_orders[-1] * r.excitation_frequency(rpm)
+        X = np.linalg.solve(K - w * w * np.eye(r.n_modes) + 1j * w * D, r.forcing.Fc[-1])
+        worst = max(worst, abs(c @ X))
+    assert worst > 0.0 and worst <= scale[0]
