@@ -1,7 +1,8 @@
 """A general ReducedModel (low-rank coupling with spin-dependent gyroscopic/circulatory terms,
 harmonic forcing, a dead-zone contact with transmission error and mesh-stiffness modulation,
 a Hertzian one-sided contact) against an independent dense numpy right-hand side, and its
-variational equations against finite differences."""
+variational equations against finite differences; each with integer harmonic orders (1, 2)
+and with fractional ones (1/2, 4/3: a torque order's slots, period 6 base periods)."""
 from __future__ import annotations
 
 import numpy as np
@@ -17,7 +18,7 @@ from vibrogear.solvers.static import static_equilibrium
 M, R, H = 4, 2, 2
 
 
-def _model() -> ReducedModel:
+def _model(orders=None) -> ReducedModel:
     rng = np.random.default_rng(3)
     P = rng.standard_normal((R, M))
     S = rng.standard_normal((R, R))
@@ -37,7 +38,8 @@ def _model() -> ReducedModel:
         error_sin=np.array([[0.0, 0.015], [0.0, 0.0]]))
     return ReducedModel(omega2=np.array([1.0, 2.5, 4.0, 9.0]), damping=np.array([0.04, 0.05, 0.06, 0.1]),
                         coupling=coupling, forcing=forcing, contacts=contacts,
-                        omega_per_param=2.0, spin_per_param=0.5, monitor=0)
+                        omega_per_param=2.0, spin_per_param=0.5, monitor=0,
+                        harmonic_orders=orders)
 
 
 def _dense_rhs(model: ReducedModel, param: float):
@@ -46,7 +48,7 @@ def _dense_rhs(model: ReducedModel, param: float):
     W, s = model.omega_per_param * param, model.spin_per_param * param
     Klin = np.diag(model.omega2) + cp.P.T @ (cp.Kc0 + s * cp.Kc1) @ cp.P
     Blin = np.diag(model.damping) + cp.P.T @ (cp.Bc0 + s * cp.Bc1) @ cp.P
-    h = np.arange(1, H + 1)
+    h = model.harmonic_orders
 
     def f(t, u):
         x, v = u[:M], u[M:]
@@ -66,9 +68,18 @@ def _dense_rhs(model: ReducedModel, param: float):
     return f
 
 
-@pytest.fixture(scope="module")
-def model():
-    return _model()
+@pytest.fixture(scope="module", params=[None, (0.5, 4.0 / 3.0)], ids=["orders-1-2", "orders-1/2-4/3"])
+def model(request):
+    return _model(request.param)
+
+
+def test_period_multiple_is_the_least_common_denominator():
+    assert _model().period_multiple == 1
+    m = _model((0.5, 4.0 / 3.0))
+    assert m.period_multiple == 6
+    assert m.excitation_period(1.3) == pytest.approx(6 * 2 * np.pi / (2.0 * 1.3), rel=1e-15)
+    with pytest.raises(ValueError, match="ratio of integers"):
+        _model((0.5, np.sqrt(2.0)))
 
 
 def test_trajectory_matches_dense_reference(model):
@@ -96,7 +107,8 @@ def test_static_equilibrium_balances_the_mean_load(model):
                              "stiffness_sin": 0 * model.contacts.stiffness_sin,
                              "error_cos": 0 * model.contacts.error_cos,
                              "error_sin": 0 * model.contacts.error_sin}),
-                      omega_per_param=model.omega_per_param, spin_per_param=model.spin_per_param)
+                      omega_per_param=model.omega_per_param, spin_per_param=model.spin_per_param,
+                      harmonic_orders=model.harmonic_orders)
     a = _dense_rhs(m2, 1.3)(0.0, st.u0)[M:]
     assert np.max(np.abs(a)) < 1e-10
 

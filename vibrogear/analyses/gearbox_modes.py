@@ -119,6 +119,8 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
             "first_frequencies_hz": [float(f) for f in f_hz[:12]],
             "resonance_speeds_rpm": crit, "wall_s": wall,
             "mesh_stiffness": gm.mesh_stiffness_summary(),
+            "torque_orders": list(gm.torque_orders),
+            "excitation_period_mesh_periods": gm.reduced.period_multiple,
             "build_timings_s": gm.timings,
             "error_estimate": {"note": "linearised reduced model; see reduction_accuracy"}}
     return AnalysisOutcome(summary=summary, result=result)

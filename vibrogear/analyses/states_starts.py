@@ -70,7 +70,7 @@ def forced_velocity(model, x_static, param: float) -> np.ndarray:
             F += ct.directions.T @ (k * E)
         if not np.any(F):
             continue
-        w = h * W
+        w = model.harmonic_orders[h - 1] * W
         try:
             out[h - 1] = 1j * w * np.linalg.solve(K - w * w * np.eye(m) + 1j * w * D, F)
         except np.linalg.LinAlgError:
@@ -119,9 +119,9 @@ def draw_start(scales: StartScales, model, seed: int, point: int, start: int) ->
         C = model.contacts.directions[rows]
         now = C @ x - scales.mesh_e0
         x = x + np.linalg.lstsq(C, target - now, rcond=None)[0]
-    phi = rng.uniform(0.0, 2.0 * np.pi)
+    phi = rng.uniform(0.0, 2.0 * np.pi * model.period_multiple)
     c = rng.uniform(-scales.b, scales.b)
     H = scales.v_harmonics.shape[0]
-    v = c * np.real(np.exp(1j * phi * np.arange(1, H + 1)) @ scales.v_harmonics) if H \
+    v = c * np.real(np.exp(1j * phi * model.harmonic_orders[:H]) @ scales.v_harmonics) if H \
         else np.zeros(m)
     return np.concatenate([x, v])

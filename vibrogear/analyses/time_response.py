@@ -55,7 +55,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.time_response
     model = study.model
     param = float(cfg.param if hasattr(cfg, "param") else cfg.omega)
-    T = model.excitation_period(param)
+    T = model.base_period(param)     # periods count mesh periods, also with torque orders
     n = int(round(cfg.periods * cfg.samples_per_period))
     t_eval = np.linspace(0.0, cfg.periods * T, n + 1)
     opts = integration_options(scene, record=True, study=study)

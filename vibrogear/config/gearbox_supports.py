@@ -5,11 +5,56 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 
 from .base import ConfigError, spec
 from .bearing_catalogue import ElementSet, boundary_dimensions, element_set
 
-__all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS"]
+__all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS",
+           "MAX_TORQUE_ORDERS", "MAX_ORDER_DENOMINATOR", "MAX_ORDER_PERIOD",
+           "torque_order_ratios"]
+
+#: torque orders per coupling, the largest denominator of an order (0.5: 2, 1/3: 3, ...),
+#: and the longest whole excitation period the orders may make, in mesh periods
+MAX_TORQUE_ORDERS, MAX_ORDER_DENOMINATOR, MAX_ORDER_PERIOD = 20, 12, 1000
+
+
+def _check_order(term, path: str) -> None:
+    """One [order, amplitude N m(, phase deg)] entry of torque_orders; ConfigError naming it."""
+    if len(term) not in (2, 3):
+        raise ConfigError(path, f"expected [order, amplitude N m] or [order, amplitude N m, "
+                          f"phase deg], got {len(term)} numbers")
+    order, amp = term[0], term[1]
+    if not (math.isfinite(order) and 0.0 < order <= 1000.0):
+        raise ConfigError(f"{path}[0]", f"order must be a number > 0 and <= 1000, got {order!r}")
+    f = Fraction(order).limit_denominator(MAX_ORDER_DENOMINATOR)
+    if abs(float(f) - order) > 1e-9 * order:
+        raise ConfigError(f"{path}[0]", f"order {order!r} must be a ratio of integers with a "
+                          f"denominator <= {MAX_ORDER_DENOMINATOR} (e.g. 0.5, 1.5, 2): the "
+                          "excitation must repeat after a whole number of mesh periods")
+    if not (math.isfinite(amp) and 0.0 <= amp <= 1e8):
+        raise ConfigError(f"{path}[1]", f"amplitude must be a number >= 0 and <= 1e8 N m, got "
+                          f"{amp!r}")
+    if len(term) == 3 and not math.isfinite(term[2]):
+        raise ConfigError(f"{path}[2]", f"phase must be a finite number [deg], got {term[2]!r}")
+
+
+def torque_order_ratios(gearbox) -> tuple[tuple, ...]:
+    """(coupling index, order, amplitude N m, phase deg, n) per torque order of the scene's
+    couplings: n = order p_s / z, the order's frequency over the mesh frequency of the
+    driving speed (z the teeth of meshes[0].gear_a, p_s the coupling shaft's speed ratio),
+    an exact fraction; the excitation repeats after lcm(denominators of n) mesh periods."""
+    if not any(c.torque_orders for c in gearbox.couplings):
+        return ()
+    shaft_p, _ = gearbox.speed_ratios()
+    m0 = gearbox.meshes[0] if gearbox.meshes else None
+    z = gearbox.gears[gearbox.gear_index(m0.gear_a, "")].teeth if m0 else 1
+    out = []
+    for i, c in enumerate(gearbox.couplings):
+        p_s = Fraction(abs(shaft_p[gearbox.shaft_index(c.shaft, "")])).limit_denominator(10 ** 6)
+        out += [(i, order, amp, phase, order * p_s / z) for order, amp, phase in c.order_terms()]
+    return tuple(out)
+
 
 #: contact-law exponent of each bearing type ("spring" has no contacts)
 BEARING_EXPONENTS = {"ball": 1.5, "roller": 10.0 / 9.0, "linear": 1.0}
@@ -162,6 +207,16 @@ class ExternalCouplingConfig:
     rpm: float | None = spec(None, gt=0.0, le=1e6, doc="speed of this coupling's shaft [rpm] "
                              "at which power is given (with power only)")
     damping: float = spec(0.0, ge=0.0, doc="torsional damping [N m s/rad]")
+    torque_orders: tuple[tuple[float, ...], ...] = spec(
+        (), doc=f"at most {MAX_TORQUE_ORDERS} entries: torque fluctuation by orders of this coupling's "
+        "shaft speed (engine torsionals): [[order, amplitude N m], ...] or [[order, "
+        "amplitude N m, phase deg], ...]; order > 0, a ratio of integers with a "
+        f"denominator <= {MAX_ORDER_DENOMINATOR} (0.5, 1, 1.5, 2, ...)")
+
+    def order_terms(self) -> tuple[tuple[Fraction, float, float], ...]:
+        """(order as an exact fraction, amplitude [N m], phase [deg]) of each torque order."""
+        return tuple((Fraction(t[0]).limit_denominator(MAX_ORDER_DENOMINATOR), float(t[1]),
+                      float(t[2]) if len(t) > 2 else 0.0) for t in self.torque_orders)
 
     @property
     def static_torque(self) -> float:
@@ -195,6 +250,11 @@ class ExternalCouplingConfig:
             raise ConfigError(f"{path}.{'rpm' if self.power is not None else 'power'}",
                               "power [kW] and rpm [rpm] go together (torque = power / "
                               "(2 pi rpm / 60))")
+        if len(self.torque_orders) > MAX_TORQUE_ORDERS:
+            raise ConfigError(f"{path}.torque_orders", f"allows at most {MAX_TORQUE_ORDERS} "
+                              f"entries, got {len(self.torque_orders)}")
+        for i, term in enumerate(self.torque_orders):
+            _check_order(term, f"{path}.torque_orders[{i}]")
         tw = self.static_twist
         if not tw < 1.0:
             raise ConfigError(f"{path}.{given[0]}", f"implies a twist of {tw:.4g} rad = "

@@ -154,8 +154,10 @@ def flank(delta, gap_hi, gap_lo) -> np.ndarray:
                     exponent=1.0).mode
 
 
-def harmonic_series(amp_cos, amp_sin, frequency, t) -> tuple[np.ndarray, np.ndarray]:
-    """s(t) = sum_h a_h cos(h W t) + b_h sin(h W t) and s'(t), h = 1..H.
+def harmonic_series(amp_cos, amp_sin, frequency, t, *, orders=None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """s(t) = sum_h a_h cos(n_h W t) + b_h sin(n_h W t) and s'(t), n_h = h = 1..H, or the
+    first H of ``orders`` (a model's harmonic_orders).
 
     ``amp_cos``, ``amp_sin``: (..., H) (the shorter is zero-padded); ``t``: (n,) or a
     scalar.  Returns two arrays (..., n) (the transmission error e(t) and its rate, or
@@ -165,7 +167,8 @@ def harmonic_series(amp_cos, amp_sin, frequency, t) -> tuple[np.ndarray, np.ndar
     H = max(a.shape[-1], b.shape[-1])
     a = np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, H - a.shape[-1])])
     b = np.pad(b, [(0, 0)] * (b.ndim - 1) + [(0, H - b.shape[-1])])
-    hW = np.arange(1, H + 1) * float(frequency)
+    n = np.arange(1.0, H + 1.0) if orders is None else np.asarray(orders, float)[:H]
+    hW = n * float(frequency)
     phase = np.multiply.outer(hW, np.atleast_1d(np.asarray(t, dtype=float)))   # (H, n)
     cos, sin = np.cos(phase), np.sin(phase)
     return a @ cos + b @ sin, (b * hW) @ cos - (a * hW) @ sin

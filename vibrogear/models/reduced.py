@@ -16,19 +16,50 @@ an upper gap g_hi and a lower gap g_lo (g_lo = -inf: one-sided):
     f_j = -k_lo(t) (g_lo - delta)^p + c delta'        delta < g_lo   (mode -1)
 
 with p = 1 (piecewise linear), 3/2 (Hertz, balls) or 10/9 (rollers) and
-k(t) = k (1 + sum_h a_h cos(h W t) + b_h sin(h W t)) (periodic mesh stiffness).
-Forcing F(t) = F0 + sum_h Fc_h cos(h W t) + Fs_h sin(h W t), with the base excitation
+k(t) = k (1 + sum_h a_h cos(n_h W t) + b_h sin(n_h W t)) (periodic mesh stiffness).
+Forcing F(t) = F0 + sum_h Fc_h cos(n_h W t) + Fs_h sin(n_h W t), with the base excitation
 frequency W = omega_per_param * param and the spin s = spin_per_param * param, so one
 scalar param (Omega for the impact pair, driving speed in rpm for a gearbox) moves
 both.  The state is u = [x, x'] (length 2m).
+
+The harmonic orders n_h (``harmonic_orders``) are 1, 2, ..., H unless given: a gearbox's
+engine-order torque fluctuation adds slots at rational multiples of the mesh frequency
+(order k of a shaft turning at p_s times the driving speed, W = z x the driving speed:
+n = k p_s / z).  The
+excitation is then periodic with period_multiple = P base periods, P the least common
+denominator of the n_h, and ``excitation_period`` is that whole period P 2 pi / W: the
+solvers that sample, shoot or settle over "a period" use the period of the forcing.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
-__all__ = ["ReducedModel", "ContactSet", "LinearCoupling", "Forcing"]
+__all__ = ["ReducedModel", "ContactSet", "LinearCoupling", "Forcing", "period_multiple",
+           "MAX_PERIOD_MULTIPLE"]
+
+#: the longest excitation period a model accepts, in base periods (a gearbox scene's own
+#: limit, config.gearbox_supports.MAX_ORDER_PERIOD, is lower and named in its error)
+MAX_PERIOD_MULTIPLE = 10_000
+
+
+def period_multiple(orders) -> int:
+    """P: the least common denominator of the harmonic orders (each a ratio of integers
+    with a denominator <= MAX_PERIOD_MULTIPLE, to 1e-9 relative); ValueError otherwise."""
+    P = 1
+    for n in np.asarray(orders, dtype=float).ravel():
+        f = Fraction(float(n)).limit_denominator(MAX_PERIOD_MULTIPLE)
+        if not (n > 0 and abs(float(f) - n) <= 1e-9 * n):
+            raise ValueError(f"harmonic order {n!r} is not a positive ratio of integers with "
+                             f"a denominator <= {MAX_PERIOD_MULTIPLE}")
+        P = P * f.denominator // math.gcd(P, f.denominator)
+    if P > MAX_PERIOD_MULTIPLE:
+        raise ValueError(f"the harmonic orders repeat only after {P} base periods "
+                         f"(> {MAX_PERIOD_MULTIPLE})")
+    return P
 
 
 def _arr(a, shape=None, dtype=float) -> np.ndarray:
@@ -108,9 +139,16 @@ class ReducedModel:
     time_unit_s: float = 1.0
     force_unit_n: float = 1.0
     length_unit: str = ""
+    #: (H,) multiple of W of each harmonic slot (None: 1, 2, ..., H)
+    harmonic_orders: np.ndarray | None = None
 
     def __post_init__(self):
         m = self.omega2.shape[0]
+        H0 = self.forcing.Fc.shape[0]
+        orders = np.arange(1.0, H0 + 1.0) if self.harmonic_orders is None \
+            else self.harmonic_orders
+        object.__setattr__(self, "harmonic_orders", _arr(orders, (H0,)))
+        object.__setattr__(self, "_period_multiple", period_multiple(self.harmonic_orders))
         object.__setattr__(self, "omega2", _arr(self.omega2, (m,)))
         object.__setattr__(self, "damping", _arr(self.damping, (m,)))
         H = self.forcing.Fc.shape[0]
@@ -142,5 +180,17 @@ class ReducedModel:
     def excitation_frequency(self, param: float) -> float:
         return self.omega_per_param * param
 
-    def excitation_period(self, param: float) -> float:
+    @property
+    def period_multiple(self) -> int:
+        """Base periods 2 pi / W in one period of the excitation (1 unless some harmonic
+        order is fractional)."""
+        return self._period_multiple
+
+    def base_period(self, param: float) -> float:
+        """2 pi / W: the mesh period of a gearbox (the excitation period unless a harmonic
+        order is fractional)."""
         return 2.0 * np.pi / self.excitation_frequency(param)
+
+    def excitation_period(self, param: float) -> float:
+        """The period of the excitation: period_multiple base periods 2 pi / W."""
+        return 2.0 * np.pi * self.period_multiple / self.excitation_frequency(param)

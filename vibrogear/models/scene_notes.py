@@ -1,8 +1,13 @@
 """What a scene derives from what its author wrote, in words: the static twist of each
-coupling loaded by ``torque`` or ``power``, and the Hertz contact constant of each bearing
+coupling loaded by ``torque`` or ``power``, its torque orders as fractions of the mesh
+frequency (and the period of the whole excitation), and the Hertz contact constant of each bearing
 given by designation, boundary dimensions or element set (with the element set and the
 formula).  ``vibrogear check`` and ``vibrogear import`` print these lines."""
 from __future__ import annotations
+
+import math
+
+from ..config.gearbox_supports import torque_order_ratios
 
 __all__ = ["derived_lines"]
 
@@ -21,6 +26,7 @@ def derived_lines(scene) -> list[str]:
             out.append(f"gearbox.couplings[{i}] {c.name!r}: power {c.power:g} kW at {c.rpm:g} "
                        f"rpm -> torque {c.static_torque:.6g} N m -> twist "
                        f"{c.static_twist:.6g} rad")
+    out += _order_lines(cfg)
     for i, b in enumerate(cfg.bearings):
         es = b.element_set(f"gearbox.bearings[{i}]")
         if es is None or b.stiffness is not None:
@@ -35,4 +41,26 @@ def derived_lines(scene) -> list[str]:
                    + f" -> contact constant {k.stiffness:.4g} {unit} per element ({k.method})"
                    + (f"; assumed by the element-set rule: {', '.join(es.assumed)}"
                       if es.assumed else ""))
+    return out
+
+
+def _order_lines(cfg) -> list[str]:
+    """Each coupling's torque orders as fractions of the mesh frequency, and the period
+    after which the whole excitation repeats (what the sweep and shooting then span)."""
+    terms = torque_order_ratios(cfg)
+    if not terms:
+        return []
+    out = []
+    for i in sorted({t[0] for t in terms}):
+        c = cfg.couplings[i]
+        parts = [f"order {float(o):g} ({a:g} N m" + (f", {ph:g} deg" if ph else "")
+                 + f") = {n.numerator}/{n.denominator} of the mesh frequency"
+                 for j, o, a, ph, n in terms if j == i]
+        out.append(f"gearbox.couplings[{i}] {c.name!r}: torque " + "; ".join(parts))
+    P = math.lcm(*(t[4].denominator for t in terms))
+    if P > 1:
+        out.append(f"torque orders: the excitation repeats every {P} mesh periods; a sweep, "
+                   f"states and continuation period is that whole period ({P} mesh periods: "
+                   f"their transient and record periods cost {P}x), time response and run-up "
+                   "count mesh periods")
     return out

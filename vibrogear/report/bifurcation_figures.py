@@ -52,7 +52,7 @@ def plot_branch_figures(result, out, sweep=None, sweep_data=None) -> list[Path]:
     ``sweep_data``: its arrays in display units)."""
     study = result.study
     mon = study.monitor
-    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+    arrays = display_arrays(branch_arrays(result.branches),
                             mon.scale, ("qmin", "qmax"))
     sw = sweep_data if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
     lines = tuple(mon.lines)
@@ -73,7 +73,7 @@ def plot_combined(result, out, sweep_data: dict, *, per_contact_rows: bool = Fal
     """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
     branches of ``result`` overlaid."""
     study = result.study
-    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+    arrays = display_arrays(branch_arrays(result.branches),
                             study.monitor.scale, ("qmin", "qmax"))
     return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
                             branches=arrays, per_contact_rows=per_contact_rows)

@@ -20,21 +20,21 @@ CSV_COLUMNS = ("branch", "n_periods", "param", "period", "stable", "label", "qmi
                "impacts", "max_abs_multiplier", "residual", "neutral")
 
 
-def branch_arrays(branches, omega_per_param: float) -> dict:
+def branch_arrays(branches) -> dict:
     """Concatenate the points of all branches (period-1 first) into flat arrays."""
     rows = [(b_i, b, p) for b_i, b in enumerate(branches) for p in b.points]
     n = rows[0][2].u0.size if rows else 0
     param = np.array([p.param for _, _, p in rows], dtype=float)
-    nper = np.array([b.n_periods for _, b, _ in rows], dtype=np.int64)
+    scale = np.array([b.period_scale for _, b, _ in rows], dtype=float)
     return {
         "param": param,
-        "period": 2 * np.pi * nper / (omega_per_param * param) if rows else np.zeros(0),
+        "period": scale / param if rows else np.zeros(0),
         "u0": np.array([p.u0 for _, _, p in rows]).reshape(len(rows), n),
         "floquet": np.array([p.floquet for _, _, p in rows], dtype=complex).reshape(len(rows), n),
         "stable": np.array([p.stable for _, _, p in rows], dtype=bool),
         "label": np.array([p.label for _, _, p in rows], dtype="<U2"),
         "branch": np.array([i for i, _, _ in rows], dtype=np.int64),
-        "n_periods": nper,
+        "n_periods": np.array([b.n_periods for _, b, _ in rows], dtype=np.int64),
         "qmin": np.array([p.qmin for _, _, p in rows], dtype=float),
         "qmax": np.array([p.qmax for _, _, p in rows], dtype=float),
         "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
@@ -50,8 +50,8 @@ def _cell(x) -> str:
     return str(x)
 
 
-def write_branches(branches, omega_per_param: float, out_dir) -> dict:
-    arrays = branch_arrays(branches, omega_per_param)
+def write_branches(branches, out_dir) -> dict:
+    arrays = branch_arrays(branches)
     for key, a in arrays.items():
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
             raise ValueError(f"branch array {key!r} holds non-finite values")

@@ -91,7 +91,7 @@ def write_fig2(result, out, sweep_data: dict, *, per_contact_rows: bool = False)
     ``sweep_data`` (display units) of the same study."""
     study = result.study
     mon = study.monitor
-    arrays = display_arrays(branch_arrays(result.branches, study.model.omega_per_param),
+    arrays = display_arrays(branch_arrays(result.branches),
                             mon.scale, ("qmin", "qmax"))
     below = " (below 0: the teeth lose contact)" if mon.zero_line else ""
     title = (f"{plain_title(study.title)}: response against speed{below}\nsweep minima / "

@@ -94,7 +94,7 @@ def _forced(previous, out, study, name: str, file: str):
     if got is not None and got.result is not None:
         if name == "continuation":
             from .branch_io import branch_arrays
-            return branch_arrays(got.result.branches, study.model.omega_per_param)
+            return branch_arrays(got.result.branches)
         from .sweep_io import sweep_arrays
         return sweep_arrays(got.result.sweep)
     path = Path(out) / file

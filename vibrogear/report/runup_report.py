@@ -84,8 +84,7 @@ def steady_state(previous, out, study) -> tuple[dict | None, dict | None]:
     elif (Path(out) / "sweep.npz").is_file():
         sweep = read_sweep_npz(Path(out) / "sweep.npz")
     if previous.get("continuation") is not None:
-        branch = branch_arrays(previous["continuation"].result.result.branches,
-                               study.model.omega_per_param)
+        branch = branch_arrays(previous["continuation"].result.result.branches)
     elif (Path(out) / "branch.npz").is_file():
         with np.load(Path(out) / "branch.npz", allow_pickle=False) as z:
             branch = {k: z[k] for k in z.files}

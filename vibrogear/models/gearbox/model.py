@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...config.base import ConfigError
+from ...config.gearbox_supports import torque_order_ratios
 from ...config.options import RPM as RPM_PARAMETER
 from ...config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
@@ -75,6 +76,9 @@ class GearboxModel:
     #: DOF, the speed ratios elsewhere, a free gear its own; 0 on the housing): an
     #: acceleration alpha [rad/s^2] of the driving shaft adds the force -rigid_inertia alpha
     rigid_inertia: np.ndarray | None = None
+    #: per torque order of a coupling: coupling, order, amplitude_Nm, phase_deg and its
+    #: frequency over the mesh frequency (the reduced model's harmonic slot)
+    torque_orders: tuple = ()
 
     @property
     def time_unit_s(self) -> float:
@@ -201,6 +205,8 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     contacts += bc
     links += bl
     cl, forces = external_couplings(cfg, rotors, shaft_p)
+    teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
+    orders = torque_order_forcing(cfg, rotors, shaft_p)
     forces += gravity_load(cfg.gravity, rotors)
     links += cl
     for k, g in enumerate(cfg.gears):
@@ -229,10 +235,10 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
         subsystems.append(housing_sub)
     t_modes = time.perf_counter() - t_couple
     inertia = _rigid_inertia(cfg, subsystems, rotors, shaft_p, gear_p, free_dof)
-    teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
-                         monitor=0, name=cfg.name, param_name=RPM_PARAMETER.name, blocks=blocks)
+                         monitor=0, name=cfg.name, param_name=RPM_PARAMETER.name, blocks=blocks,
+                         order_forcing=[o[:3] for o in orders])
     t_end = time.perf_counter()
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
@@ -241,7 +247,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
                                              "housing_s": t_housing - t_shafts,
                                              "synthesis_s": t_end - t_housing - t_modes},
                         blocks=tuple(blocks), mesh_stiffness=tuple(records),
-                        rigid_inertia=inertia)
+                        rigid_inertia=inertia, torque_orders=tuple(o[3] for o in orders))
 
 
 def _rigid_inertia(cfg, subsystems, rotors, shaft_p, gear_p, free_dof) -> np.ndarray:
@@ -343,3 +349,24 @@ def external_couplings(cfg, rotors, shaft_p):
                                 c.damping))
         forces.append((s, [dof], [c.stiffness * disc_angle]))
     return links, forces
+
+
+def torque_order_forcing(cfg, rotors, shaft_p) -> tuple:
+    """The couplings' torque orders as harmonic slots of the excitation: (n, cos force,
+    sin force, record) each, n = order p_s / z (:func:`torque_order_ratios`), the forces
+    PhysicalVectors on the coupling's torsional DOF: A cos(n W t + phi) = A cos(phi)
+    cos(n W t) - A sin(phi) sin(n W t), in the sense of the coupling's static torque (a
+    motor drives, a load brakes)."""
+    out = []
+    for i, order, amp, phase_deg, n in torque_order_ratios(cfg):
+        c = cfg.couplings[i]
+        s = cfg.shaft_index(c.shaft, "")
+        dof = rotors[s].dof(rotors[s].node_at(c.position), "psi")
+        sign = (1.0 if shaft_p[s] > 0 else -1.0) * (1.0 if c.role == "motor" else -1.0)
+        phi = math.radians(phase_deg)
+        out.append((float(n), PhysicalVector.of((s, [dof], [sign * amp * math.cos(phi)])),
+                    PhysicalVector.of((s, [dof], [-sign * amp * math.sin(phi)])),
+                    {"coupling": c.name, "order": float(order), "amplitude_Nm": amp,
+                     "phase_deg": phase_deg, "per_mesh_frequency": float(n),
+                     "fraction_of_mesh_frequency": f"{n.numerator}/{n.denominator}"}))
+    return tuple(out)

@@ -24,8 +24,10 @@ def contact_kinematics(model: ReducedModel, param: float, t, states, rows=None):
     ct, m = model.contacts, model.n_modes
     rows = np.arange(ct.count) if rows is None else np.asarray(rows, dtype=int)
     W = model.excitation_frequency(param)
-    e, e_dot = harmonic_series(ct.error_cos[rows], ct.error_sin[rows], W, t)
-    mu = 1.0 + harmonic_series(ct.stiffness_cos[rows], ct.stiffness_sin[rows], W, t)[0]
+    e, e_dot = harmonic_series(ct.error_cos[rows], ct.error_sin[rows], W, t,
+                               orders=model.harmonic_orders)
+    mu = 1.0 + harmonic_series(ct.stiffness_cos[rows], ct.stiffness_sin[rows], W, t,
+                               orders=model.harmonic_orders)[0]
     delta = ct.directions[rows] @ states[:, :m].T - e
     delta_dot = ct.directions[rows] @ states[:, m:].T - e_dot
     return delta, delta_dot, mu

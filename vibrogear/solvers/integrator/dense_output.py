@@ -40,7 +40,7 @@ def dense_projection(theta, h, p0, pk, b):
 def contact_delta(A, j, t, Om, cx, cs, sn):
     if A.eharm[j] == 0.0:       # no kinematic error: no harmonics to evaluate
         return cx
-    harmonics(t, Om, cs, sn)
+    harmonics(A.hmul, t, Om, cs, sn)
     e, ed = error_and_rate(A, j, Om, cs, sn)
     return cx - e
 
@@ -135,7 +135,7 @@ def _rate_zero(A, mon, t, h, Om, v0, qk, cs, sn, bw, lo, hi, f_lo, f_hi):
         mid = (lo * f_hi - hi * f_lo) / (f_hi - f_lo)
         if not lo < mid < hi:
             mid = 0.5 * (lo + hi)
-        harmonics(t + mid * h, Om, cs, sn)
+        harmonics(A.hmul, t + mid * h, Om, cs, sn)
         _, ed = error_and_rate(A, mon, Om, cs, sn)
         rm = dense_projection(mid, h, v0, qk, bw) - ed
         if rm == 0.0:
@@ -170,7 +170,7 @@ def monitor_extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, 
     prev_th = th_lo
     for s in range(0, N_SAMPLES + 1):
         th = th_lo + (1.0 - th_lo) * s / N_SAMPLES
-        harmonics(t + th * h_used, Om, cs, sn)
+        harmonics(A.hmul, t + th * h_used, Om, cs, sn)
         e, ed = error_and_rate(A, mon, Om, cs, sn)
         d = dense_projection(th, h_used, x0, pk, bw) - e
         rate = dense_projection(th, h_used, v0, qk, bw) - ed
@@ -181,7 +181,7 @@ def monitor_extrema(A, t, h_used, rec_t0, mon, Om, K, CxS, CvS, cs, sn, bw, pk, 
         if s > 0 and prev_rate * rate < 0.0:
             mid = _rate_zero(A, mon, t, h_used, Om, v0, qk, cs, sn, bw, prev_th, th,
                              prev_rate, rate)
-            harmonics(t + mid * h_used, Om, cs, sn)
+            harmonics(A.hmul, t + mid * h_used, Om, cs, sn)
             e, ed = error_and_rate(A, mon, Om, cs, sn)
             d = dense_projection(mid, h_used, x0, pk, bw) - e
             if d < ext[0]:

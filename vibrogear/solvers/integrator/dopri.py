@@ -270,7 +270,7 @@ def dopri_loop(A, y0, t_eval, fin, iin):
                 break
             j = j_ev
             newm = m_ev
-            harmonics(t, Om, cs, sn)
+            harmonics(A.hmul, t, Om, cs, sn)
             e, ed = error_and_rate(A, j, Om, cs, sn)
             rate = range_dot(A.G, j, A.glo[j], A.ghi[j], y[m:]) - ed
             if nev < ev_cap:

@@ -186,7 +186,7 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
         for h in range(H):
             if A.fharm[h] == 0.0:
                 continue
-            w = (h + 1) * t * dOm
+            w = A.hmul[h] * t * dOm
             Fc = A.Fc[h]
             Fs = A.Fs[h]
             c_ = cs[h]
@@ -214,7 +214,7 @@ def accel_dparam(t, y, mode, A, Om, dOm, dspin, cs, sn, kd, cd, out, tmp):
         ded = 0.0    # d e' / d Om
         dmod = 0.0   # d mod / d Om
         for h in range(H):
-            n = h + 1
+            n = A.hmul[h]
             w = n * Om
             s_ = -A.ec[j, h] * sn[h] + A.es[j, h] * cs[h]
             c_ = -A.ec[j, h] * cs[h] - A.es[j, h] * sn[h]

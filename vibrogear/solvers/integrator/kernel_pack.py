@@ -24,6 +24,8 @@ ModelArrays = namedtuple("ModelArrays", [
     "w2", "damp", "P", "Kc", "Bc", "Kc1", "Bc1", "F0", "Fc", "Fs",
     "C", "k_hi", "k_lo", "g_hi", "g_lo", "expo", "cdamp", "kmc", "kms", "ec", "es", "smooth",
     "harm", "eharm", "kharm", "fharm",
+    # hmul[h]: the order n_h of harmonic slot h (cs[h] = cos(n_h Om t))
+    "hmul",
     # Structure, detected at pack time (see _pack).  G = [C; dense rows of P], with the
     # nonzero column range [glo, ghi) of each row and gdst its output slot (contact j, or
     # the row of P).  Row k of P is row pg[k] of G (pg[k] >= 0, k in pdk) or has at most
@@ -130,6 +132,7 @@ def _pack(model) -> tuple:
         harm=flags(ct.stiffness_cos, ct.stiffness_sin, ct.error_cos, ct.error_sin),
         eharm=flags(ct.error_cos, ct.error_sin), kharm=flags(ct.stiffness_cos, ct.stiffness_sin),
         fharm=flags(f64(fo.Fc), f64(fo.Fs)),   # forcing harmonics present
+        hmul=f64(model.harmonic_orders),
         G=G, glo=glo, ghi=ghi,
         gdst=i64(np.concatenate([np.arange(nc), dense])), pg=pg, pcol=i64(pcol),
         pval=f64(pval), pdk=i64(dense),

@@ -27,10 +27,11 @@ FAST = {"reassoc", "contract", "arcp", "nsz"}
 
 
 @njit(cache=True, inline="always", _nrt=False)
-def harmonics(t, Om, cs, sn):
-    """cs[h] = cos((h+1) Om t), sn[h] = sin((h+1) Om t)."""
+def harmonics(hmul, t, Om, cs, sn):
+    """cs[h] = cos(n_h Om t), sn[h] = sin(n_h Om t), n_h = hmul[h] (the model's harmonic
+    orders: 1, 2, ..., H unless an order is fractional)."""
     for h in range(cs.shape[0]):
-        a = (h + 1) * Om * t
+        a = hmul[h] * Om * t
         cs[h] = np.cos(a)
         sn[h] = np.sin(a)
 
@@ -41,7 +42,7 @@ def error_and_rate(A, j, Om, cs, sn):
     e = 0.0
     ed = 0.0
     for h in range(cs.shape[0]):
-        w = (h + 1) * Om
+        w = A.hmul[h] * Om
         e += A.ec[j, h] * cs[h] + A.es[j, h] * sn[h]
         ed += w * (-A.ec[j, h] * sn[h] + A.es[j, h] * cs[h])
     return e, ed
@@ -159,7 +160,7 @@ def contact_modes(A, t, Om, x, mode):
     H = A.Fc.shape[0]
     cs = np.empty(H)
     sn = np.empty(H)
-    harmonics(t, Om, cs, sn)
+    harmonics(A.hmul, t, Om, cs, sn)
     m = A.w2.shape[0]
     for j in range(A.C.shape[0]):
         d = 0.0
@@ -178,7 +179,7 @@ def accel(t, y, mode, A, Om, cs, sn, out, Cx, Cv, kd, cd, tmp):
     ``tmp``: workspace of at least 2 r entries (r = rows of P).
     """
     m = A.w2.shape[0]
-    harmonics(t, Om, cs, sn)    # once per call, shared by forcing and every contact
+    harmonics(A.hmul, t, Om, cs, sn)    # once per call, shared by forcing and every contact
     H = cs.shape[0]
     x = y[:m]
     v = y[m:2 * m]

@@ -34,12 +34,13 @@ from __future__ import annotations
 
 import math
 import weakref
+from dataclasses import replace
 
 import numpy as np
 
 from ...config.options import IntegrationOptions
 from ...models.contact_law import evaluate_set
-from ...models.reduced import ReducedModel
+from ...models.reduced import Forcing, ReducedModel
 from ...status import Status
 
 __all__ = ["assess", "deformation_scale", "mechanical_energy", "is_undriven"]
@@ -76,14 +77,49 @@ def deformation_scale(model: ReducedModel) -> np.ndarray:
 
 def _resonant(model: ReducedModel) -> np.ndarray:
     """(nc,) the largest deformation the harmonic forcing can drive through each contact
-    if every master mode resonated at once: sum_i |c_ji| |F_i| / (d_i w_i) (inf where an
-    undamped or rigid mode is forced: no bound)."""
+    if every master mode resonated at once: sum_i |c_ji| |F_i| / (d_i w_i) over the damped
+    elastic modes (inf where an undamped elastic mode is forced: no bound); where the
+    forcing also drives a mode without modal stiffness (a shaft's rigid rotation, held by
+    a coupling spring in the low-rank part: a torque order), the static response to each
+    forcing vector through the whole model, amplified by 1 / (2 zeta_min) of the damped
+    modes."""
     ct, f = model.contacts, model.forcing
+    if not ct.count:
+        return np.zeros(0)
     amp = np.sum(np.abs(f.Fc), axis=0) + np.sum(np.abs(f.Fs), axis=0)
     w = np.sqrt(np.maximum(model.omega2, 0.0))
+    damped = (w > 0.0) & (model.damping > 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        per_mode = np.where(amp > 0.0, amp / (model.damping * w), 0.0)
-    return np.abs(ct.directions) @ per_mode if ct.count else np.zeros(0)
+        per_mode = np.where((amp > 0.0) & damped, amp / (model.damping * w), 0.0)
+    out = np.abs(ct.directions) @ per_mode
+    forced = amp > 0.0
+    if np.any(forced & (w > 0.0) & ~damped) or (np.any(forced & (w == 0.0)) and not damped.any()):
+        return np.full(ct.count, np.inf)        # an undamped forced mode: no bound
+    if np.any(forced & (w == 0.0)):
+        zeta = np.min(model.damping[damped] / (2.0 * w[damped]))
+        out = out + _static_response(model) / (2.0 * min(zeta, 0.5))
+    return out
+
+
+def _static_response(model: ReducedModel) -> np.ndarray:
+    """(nc,) sum over the forcing vectors (each Fc_h, Fs_h) of |c_j . (x(F0 + F) - x(F0))|,
+    the static equilibria at rest (inf where one does not converge)."""
+    from ..static import static_equilibrium     # local: static imports this layer's status
+
+    f, ct = model.forcing, model.contacts
+    base = static_equilibrium(model, 0.0)
+    if not base.converged:
+        return np.full(ct.count, np.inf)
+    out = np.zeros(ct.count)
+    for vec in (*f.Fc, *f.Fs):
+        if not np.any(vec):
+            continue
+        loaded = replace(model, forcing=Forcing(f.F0 + vec, 0.0 * f.Fc, 0.0 * f.Fs))
+        st = static_equilibrium(loaded, 0.0, x0=base.x)
+        if not st.converged:
+            return np.full(ct.count, np.inf)
+        out += np.abs(ct.directions @ (st.x - base.x))
+    return out
 
 
 def is_undriven(model: ReducedModel, param: float) -> bool:

@@ -56,7 +56,7 @@ def variational_step(A, t, h_used, Om, dOm, dspin, mode, Phi, KP, Ph, Ys, kdS, c
             jac_times(Ph, mode, A, kdS[s], cdS[s], KP[s], W)
         if pcol >= 0:
             ts = t + DP_C[s] * h_used
-            harmonics(ts, Om, cs, sn)
+            harmonics(A.hmul, ts, Om, cs, sn)
             accel_dparam(ts, Ys[s], mode, A, Om, dOm, dspin, cs, sn, kdS[s], cdS[s], dfp,
                          tmp)
             for i in range(n):
@@ -77,11 +77,11 @@ def saltation(A, j, t, Om, dOm, rate, f_new, f_old, Phi, cs, sn, pcol):
     m = A.w2.shape[0]
     n = Phi.shape[0]
     ncol = Phi.shape[1]
-    harmonics(t, Om, cs, sn)
+    harmonics(A.hmul, t, Om, cs, sn)
     # d h / d param at fixed (t, x)
     dh = 0.0
     for hh in range(cs.shape[0]):
-        nn = hh + 1
+        nn = A.hmul[hh]
         dh -= nn * t * (-A.ec[j, hh] * sn[hh] + A.es[j, hh] * cs[hh])
     dh *= dOm
     for c in range(ncol):

@@ -105,7 +105,7 @@ class Branch:
     status: Status          # LEFT_RANGE / REJOINED / GRAZING_END when done, else
     #                         why it stopped
     message: str
-    period_scale: float     # period of the orbit = n_periods * 2 pi / (omega_per_param * param)
+    period_scale: float     # period of the orbit = period_scale / param (n_periods excitation periods)
     counters: dict = field(default_factory=dict)
     wall_time: float = 0.0
 

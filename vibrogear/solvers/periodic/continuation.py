@@ -102,7 +102,7 @@ def _continuation(problem, method, options, callback, split) -> ContinuationResu
                options=method.integration, split=split,
                shooting=ShootingOptions(tol=method.tol, max_iter=method.start_max_iter
                                         or 3 * options.max_corrector_iter))
-    period_scale = 2 * np.pi * n_periods / model.omega_per_param
+    period_scale = n_periods * model.excitation_period(1.0)
     if not sh.converged:
         msg = f"{Status.NO_START.message}: {sh.message}"
         branches = (Branch((), n_periods, Status.NO_START, msg, period_scale,
@@ -163,7 +163,7 @@ def _run_branch(model, z0, t_hint, method, options, n_periods, callback,
         message = f"{status.message} after {len(pts)} points"
     message += stability_notes(pts, model.param_name)
     return Branch(tuple(pts), n_periods, status, message,
-                  2 * np.pi * n_periods / model.omega_per_param,
+                  n_periods * model.excitation_period(1.0),
                   counters={"flows": prob.flows, "plain_flows": prob.plain_flows,
                             "rhs_calls": prob.rhs_calls,
                             "rejected_angle": prob.rejected["angle"],
@@ -362,5 +362,5 @@ def _switch_period_doubling(model, pd: BranchPoint, method, options, callback,
             return br
     return Branch((), 2 * n_periods, Status.SWITCH_FAILED,
                   f"{Status.SWITCH_FAILED.message} at param = {pd.param:.6g}",
-                  2 * np.pi * 2 * n_periods / model.omega_per_param,
+                  2 * n_periods * model.excitation_period(1.0),
                   counters={"flows": prob.flows, "rhs_calls": prob.rhs_calls})

@@ -23,8 +23,9 @@ Contact metrics over a record window of P excitation periods, from the integrato
 located contact events (exact switch times) and the contact law's modes:
 
 * ``impacts_drive_<g>`` / ``impacts_back_<g>``: contact onsets on the upper (drive,
-  delta > gap_hi) / lower (back, delta < gap_lo) flank per excitation period (a
-  gearbox's: the mesh period of its first mesh; other meshes are counted per that
+  delta > gap_hi) / lower (back, delta < gap_lo) flank per base excitation period
+  2 pi / W (a gearbox's: the mesh period of its first mesh, also where a torque order
+  makes the excitation period a multiple of it; other meshes are counted per that
   period too);
 * ``impact_velocity_rms_<g>`` / ``impact_velocity_max_<g>``: RMS and largest normal
   approach speed |delta'| at those onsets, in the model's length unit per second (m/s for
@@ -128,10 +129,12 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
     """The metrics (module docstring) over [t0, t1]: ``mode0`` (nc,) the modes at t0,
     ``events`` (t, contact, new mode) of the window in time order, ``onset_speed`` (len
     events,) |delta'| at each event (NaN where not needed); ``empty``: the approach
-    speeds of a mesh without impacts."""
+    speeds of a mesh without impacts.  Counts and energies are per base period 2 pi / W
+    (``period`` / model.period_multiple: the mesh period of a gearbox even where a
+    torque order makes the excitation period longer)."""
     t, j, md = events
     speed = np.asarray(onset_speed, dtype=float)
-    P = (t1 - t0) / period
+    P = (t1 - t0) / period * model.period_multiple
     out = {}
     c2 = np.sum(model.contacts.directions ** 2, axis=1)
     per_s = 1.0 / model.time_unit_s          # approach speeds per second, not per model time
@@ -246,7 +249,7 @@ def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.nd
         return states[:, 0].copy()
     ct, j = model.contacts, model.monitor      # delta alone (not its rate, not mu)
     e = harmonic_series(ct.error_cos[j], ct.error_sin[j], model.excitation_frequency(param),
-                        t)[0]
+                        t, orders=model.harmonic_orders)[0]
     return states[:, :model.n_modes] @ ct.directions[j] - e
 
 

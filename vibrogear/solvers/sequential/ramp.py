@@ -6,8 +6,9 @@ call.  A speed profile param(t) is followed by chunks that each advance the exci
 phase by dphi = 2 pi / chunks_per_period at a constant parameter p_k:
 
 * chunk k starts at the accumulated phase phi_k = k dphi and lasts dt_k = dphi / W_k; it is
-  integrated over the model's local time [t0, t0 + dt_k] with t0 = (phi_k mod 2 pi) / W_k,
-  so the excitation cos(h W_k t) continues the phase of the chunk before (the state is
+  integrated over the model's local time [t0, t0 + dt_k] with t0 = (phi_k mod 2 pi P) / W_k
+  (P = the model's period_multiple: 2 pi P is the excitation's whole period in phase),
+  so the excitation cos(n_h W_k t) continues the phase of the chunk before (the state is
   carried over unchanged);
 * ``midpoint=True`` (default): W_k = W(t_k + dt_k / 2), the speed at the chunk's midpoint
   (predicted with dt = dphi / W(t_k)): the applied phase departs from the exact integral of
@@ -155,7 +156,8 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
          rows=None, callback=None, inertia_force=None) -> RampResult:
     """Integrate ``model`` from ``u0`` along ``profile`` (see the module docstring).
 
-    ``settle_periods``: excitation periods integrated first at the start speed (not
+    ``settle_periods``: base (mesh) periods integrated first at the start speed, rounded up
+    to whole excitation periods (not
     sampled; they end at phase 0).  ``rows``: contacts whose deformation is sampled
     (default all).  ``callback(t, param)`` after each chunk; returning False stops the run
     (status STOPPED_BY_CALLBACK, what was done is returned).  ``inertia_force``: (m,)
@@ -174,7 +176,9 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
     a_W = model.omega_per_param
     if settle_periods > 0:
         p0 = float(profile.params[0])
-        tr = integrate(model, p0, run.u, 0.0, settle_periods * model.excitation_period(p0),
+        # whole excitation periods, so that the chunks continue its phase from 0
+        whole = -(-settle_periods // model.period_multiple)
+        tr = integrate(model, p0, run.u, 0.0, whole * model.excitation_period(p0),
                        options=options)
         run.settle_steps = tr.steps
         run.add(tr)
@@ -202,7 +206,7 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
             W = a_W * float(profile.at(t + 0.5 * dt)) if midpoint else W
             n = min(spc, int(np.floor(W * dt / dphi_s * (1 - 1e-12))) + 1)
         p = W / a_W
-        t0 = (k % chunks_per_period) * dphi / W
+        t0 = (k % (chunks_per_period * model.period_multiple)) * dphi / W
         t_eval = t0 + np.arange(n) * dphi_s / W
         chunk_model = model if inertia_force is None else _with_inertia(
             model, inertia_force, _chunk_slope(profile, slopes, t, dt), accelerated)
@@ -292,7 +296,9 @@ def _result(model, profile, rows, run: _Run, sps, cpp, midpoint, wall) -> RampRe
     # the excitation's own phase is W_k t_local = phase mod 2 pi: e(t) from it directly,
     # e'(t) = W_k de/dphase
     W = held * model.omega_per_param
-    e, de = harmonic_series(ct.error_cos[rows], ct.error_sin[rows], 1.0, np.mod(phase, 2 * np.pi))
+    e, de = harmonic_series(ct.error_cos[rows], ct.error_sin[rows], 1.0,
+                            np.mod(phase, 2 * np.pi * model.period_multiple),
+                            orders=model.harmonic_orders)
     delta = cx - e
     delta_dot = cv - de * W
     ch = np.array(chunk, dtype=float).reshape(-1, 5)

@@ -89,7 +89,7 @@ class PointRecord:
     qmax: float
     poincare: np.ndarray         # (R,) monitored deformation at the period multiples
     period_n: int                # 1..max_period, 0 = not periodic (or failed)
-    impacts: float               # contact losses of the monitored contact per period
+    impacts: float               # contact losses of the monitored contact per base period
     defect: float                # max_k |P_{k+n} - P_k| / scale (periodic points), else NaN
     clusters: int                # distinct Poincare clusters (0 if failed)
     status: int                  # Status: OK, or the integrator's failure (< 0)
@@ -316,7 +316,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     delta = monitored_deformation(model, param, np.zeros(R), states)
     qmin, qmax = record_extrema(model, param, rec, has_monitor)
     return PointRecord(direction, int(index), float(param), qmin, qmax, delta, int(n),
-                       losses / R, defect, count_clusters(states, cluster_tol, split=m), 0,
+                       losses / (R * model.period_multiple), defect, count_clusters(states, cluster_tol, split=m), 0,
                        msg, seed.copy(), steps=int(counts[0]), rejected=int(counts[1]),
                        rhs_calls=int(counts[2]), events=int(counts[3]),
                        wall_time=time.perf_counter() - wall,
