@@ -12,6 +12,8 @@ Parametric coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y
 ``[[housing.bores]]`` entry is one shaft: a pair of coaxial bearing bosses through the two
 walls normal to y (the *front* wall at y = 0 and the *back* wall at y = width), with the shaft
 axis parallel to y at (x, z).  Bosses protrude ``boss_length`` outwards from the wall.
+``inner_walls`` adds walls parallel to those, each shaft axis bored through every wall
+(:mod:`vibrogear.config.housing_walls`: their rules and the bores' numbering).
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, spec
+from .housing_walls import check_inner_walls
 from .housing_mesh import (DEFAULT_SIZE_PER_WALL, ELEMENTS, MAX_SIZE_PER_WALL, HexMeshRule,
                            HousingMeshConfig, hex_blocks, hex_rule)
 
@@ -162,6 +165,9 @@ class HousingConfig:
     height: float | None = spec(None, gt=0.0, doc="outer box height (z), m")
     wall_thickness: float | None = spec(None, gt=0.0, doc="wall thickness, m")
     bores: tuple[BoreConfig, ...] = spec((), max_len=16, doc="one bearing-boss pair (or bore line) per shaft")
+    inner_walls: tuple[float, ...] = spec((), max_len=8, gt=0.0, doc="middle plane y of each inner wall "
+                                          "(parallel to front and back, full height and length, bored "
+                                          "at every shaft axis), ascending, m")
     base: str = spec("plate", choices=("plate", "feet", "none"), doc="what the housing stands on")
     base_thickness: float = spec(0.02, gt=0.0, doc="thickness of the base plate or feet, m")
     base_overhang: float = spec(0.03, ge=0.0, doc="plate overhang beyond the box, m")
@@ -222,6 +228,8 @@ class HousingConfig:
 
         d = dataclasses.asdict(self)
         d["modes"].pop("plot")               # what is drawn, not what is solved
+        if not self.inner_walls:             # keys of scenes without inner walls unchanged
+            d.pop("inner_walls")
         # the edge grading enters the keys only where it is on (keys of ungraded scenes unchanged),
         # resolved and at the top level, so that the mesh entry's key (which replaces "mesh") has it
         for k in ("edge_size", "edge_distance", "element"):
@@ -247,6 +255,7 @@ class HousingConfig:
     def validate(self, path: str) -> None:
         p = path or "housing"
         if self.source != "parametric":
+            check_inner_walls(self, p)
             if self.mesh.element != "tet":
                 raise ConfigError(f"{p}.mesh.element", f"'hex' only for the parametric housing (its "
                                   f"walls are known); a {self.source!r} housing is meshed with 'tet'")
@@ -283,6 +292,7 @@ class HousingConfig:
             raise ConfigError(f"{p}.foot_size", f"must be < half of min(length, width) = "
                               f"{0.5 * min(self.length, self.width):g}, got {self.foot_size:g}")
         self._validate_bores(p)
+        check_inner_walls(self, p)
         if self.mesh.element == "hex":
             hex_rule(self.mesh, t, f"{p}.mesh")
             hex_blocks(self)                   # a layout the structured grid cannot take: refused
