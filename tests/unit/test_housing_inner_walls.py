@@ -96,6 +96,26 @@ def test_bad_inner_walls_name_the_field(kw, field, text):
     assert exc.value.path == field and text in str(exc.value)
 
 
+def test_coupling_points_per_wall():
+    d = as_data(load_scene(SMALL).housing)
+    d["inner_walls"] = [0.08]
+    d["bores"][1]["wall_rolling_elements"] = [10, 25, 12]
+    cfg = build(HousingConfig, d, "housing")
+    n = {g.name: g.n_points for g in bore_layout(cfg)}
+    assert n == {"input/front": 8, "input/inner1": 8, "input/back": 8,
+                 "output/front": 10, "output/inner1": 25, "output/back": 12}
+    assert len(bore_layout(cfg)[4].points()) == 25
+    assert "wall_rolling_elements" not in cfg.key_data()["bores"][0]
+    d["bores"][1]["wall_rolling_elements"] = [10, 25]
+    with pytest.raises(ConfigError) as exc:
+        build(HousingConfig, d, "housing")
+    assert exc.value.path == "housing.bores[1].wall_rolling_elements" and "3 entries" in str(exc.value)
+    d["bores"][1]["wall_rolling_elements"] = [10, 2, 12]
+    with pytest.raises(ConfigError) as exc:
+        build(HousingConfig, d, "housing")
+    assert exc.value.path == "housing.bores[1].wall_rolling_elements[1]"
+
+
 def test_bad_inner_wall_through_the_cli_exits_2(tmp_path):
     import contextlib
     import io

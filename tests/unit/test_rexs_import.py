@@ -224,6 +224,10 @@ def test_box_housing_puts_an_inner_wall_at_the_middle_bearing(tmp_path, capsys):
     h = data["housing"]
     assert h["inner_walls"] == pytest.approx([0.118], abs=1e-12)
     assert h["width"] == pytest.approx(0.255, abs=1e-12)
+    # coupling points per wall of the coaxial axis: the 6210's 10 balls (front), the 33014's
+    # and 33012's 25 rollers each (the element-set rule, as the derived lines say)
+    axis = next(b for b in h["bores"] if b["name"] == data["gearbox"]["shafts"][0]["bore"])
+    assert axis["wall_rolling_elements"] == [10, 25, 25]
     assert "inner wall 1 at y = 0.118 m" in out.read_text()          # the TOML header too
     assert main(["check", str(out)]) == 0
     sc = load_scene(out)
@@ -238,6 +242,7 @@ def test_box_housing_puts_an_inner_wall_at_the_middle_bearing(tmp_path, capsys):
                                              shafts[b.shaft].y0 + b.position)]
            for b in sc.gearbox.bearings if not b.outer_shaft}
     a, i = shafts["shaft12"].bore, shafts["shaft13"].bore
+    assert [g.n_points for g in layout if g.name.startswith(a + "/")] == [10, 25, 25]
     assert got == {"bearing33": f"{a}/front", "bearing34": f"{a}/inner1", "bearing35": f"{a}/back",
                    "bearing37": f"{i}/front", "bearing38": f"{i}/back"}
 

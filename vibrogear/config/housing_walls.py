@@ -24,22 +24,35 @@ import math
 
 from .base import ConfigError
 
-__all__ = ["bore_walls", "check_inner_walls", "MIN_GAP_WALLS"]
+__all__ = ["bore_walls", "check_inner_walls", "check_wall_counts", "MIN_GAP_WALLS"]
 
 #: neighbouring walls must leave a cavity at least this many wall thicknesses wide
 MIN_GAP_WALLS = 1.0
 
 
-def bore_walls(housing, bore) -> list[tuple[str, tuple[float, float], float]]:
-    """(side, housing-frame y span of the bore, outward axis sign along y) of each wall of
-    ``bore``, front to back: ``front``, ``inner1`` .. ``innerN``, ``back``.  Inner bores get
-    the axis sign +1 (towards the back: an inner wall has no outside)."""
+def bore_walls(housing, bore) -> list[tuple[str, tuple[float, float], float, int]]:
+    """(side, housing-frame y span of the bore, outward axis sign along y, coupling points) of
+    each wall of ``bore``, front to back: ``front``, ``inner1`` .. ``innerN``, ``back``.
+    Inner bores get the axis sign +1 (towards the back: an inner wall has no outside).  The
+    points: ``bore.wall_rolling_elements`` (one per wall) where given, else
+    ``bore.rolling_elements``."""
     t, W = housing.wall_thickness, housing.width
-    out = [("front", (-bore.boss_length, t), -1.0)]
+    spans = [("front", (-bore.boss_length, t), -1.0)]
     for k, y in enumerate(housing.inner_walls):
-        out.append((f"inner{k + 1}", (y - 0.5 * t, y + 0.5 * t), 1.0))
-    out.append(("back", (W - t, W + bore.boss_length), 1.0))
-    return out
+        spans.append((f"inner{k + 1}", (y - 0.5 * t, y + 0.5 * t), 1.0))
+    spans.append(("back", (W - t, W + bore.boss_length), 1.0))
+    counts = bore.wall_rolling_elements or (bore.rolling_elements,) * len(spans)
+    return [(*s, n) for s, n in zip(spans, counts)]
+
+
+def check_wall_counts(housing, path: str) -> None:
+    """``bores[i].wall_rolling_elements``: empty or one count per wall (front, inner, back)."""
+    n = len(housing.inner_walls) + 2
+    for i, b in enumerate(housing.bores):
+        if b.wall_rolling_elements and len(b.wall_rolling_elements) != n:
+            raise ConfigError(f"{path}.bores[{i}].wall_rolling_elements", f"needs one count per wall "
+                              f"(front, {len(housing.inner_walls)} inner, back): {n} entries, got "
+                              f"{len(b.wall_rolling_elements)}")
 
 
 def check_inner_walls(housing, path: str) -> None:

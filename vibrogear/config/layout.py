@@ -27,7 +27,7 @@ MAX_TIME_RESPONSE_BYTES = 4 * 2**30
 def bore_spans(housing, bore) -> dict[str, tuple[float, float]]:
     """The housing-frame y range of each bore of ``bore``: front, inner walls, back
     (:func:`~vibrogear.config.housing_walls.bore_walls`)."""
-    return {side: span for side, span, _ in bore_walls(housing, bore)}
+    return {side: span for side, span, _, _ in bore_walls(housing, bore)}
 
 
 def gear_tip_radius(gear) -> float:
@@ -121,11 +121,11 @@ def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
                                  "bearing per bore"))
             continue
         used[(sh.bore, side)] = i
-        if b.elements is not None and b.elements != bore.rolling_elements:
-            errs.add(ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
-                                 f"{bore.rolling_elements} coupling points (housing.bores "
-                                 f"rolling_elements); give {bore.rolling_elements} or leave "
-                                 f"elements out, got {b.elements}"))
+        points = {w: n for w, _, _, n in bore_walls(housing, bore)}[side]
+        if b.elements is not None and b.elements != points:
+            errs.add(ConfigError(f"{p}.elements", f"the {side} bore of {sh.bore!r} has "
+                                 f"{points} coupling points (housing.bores rolling_elements); "
+                                 f"give {points} or leave elements out, got {b.elements}"))
     L, W, H = housing.length, housing.width, housing.height
     for k, g in enumerate(cfg.gears):
         p = f"gearbox.gears[{k}]"

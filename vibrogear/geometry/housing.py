@@ -91,10 +91,10 @@ def bore_layout(cfg: HousingConfig) -> tuple[BoreGeometry, ...]:
     out = []
     for i, b in enumerate(cfg.bores):
         label = b.name or f"shaft{i}"
-        for side, (y0, y1), ay in bore_walls(cfg, b):
+        for side, (y0, y1), ay, n in bore_walls(cfg, b):
             out.append(BoreGeometry(name=f"{label}/{side}", center=(b.x, 0.5 * (y0 + y1), b.z),
                                     axis=(0.0, ay, 0.0), radius=b.bore_radius, y_range=(y0, y1),
-                                    n_points=b.rolling_elements))
+                                    n_points=n))
     return tuple(out)
 
 

@@ -77,10 +77,14 @@ def box_housing(model, data: dict, report) -> None:
                 D = 1.8 * max(sec["outer_diameter"] for sec in s["sections"])
                 report.assumed.append(f"housing bore {axes[key]!r}: radius {0.5 * D:.4g} m "
                                       "(1.8 x the shaft's largest radius)")
+            counts = _wall_counts(mine, ys, [front] + [y for y, _ in walls] + [back])
+            default = n or next((c for c in counts if c), 8)
             bores.append({"name": axes[key], "x": round(s["x"] - min(xs) + margin, 9),
                           "z": round(s["z"] - min(zs) + margin, 9),
                           "bore_radius": round(0.5 * D, 9), "boss_radius": round(0.75 * D, 9),
-                          "boss_length": WALL, "rolling_elements": n or 8})
+                          "boss_length": WALL, "rolling_elements": default})
+            if len({c or default for c in counts}) > 1:
+                bores[-1]["wall_rolling_elements"] = [c or default for c in counts]
         s["bore"] = axes[key]
         s.pop("x")
         s.pop("z")
@@ -98,8 +102,10 @@ def box_housing(model, data: dict, report) -> None:
         f"gear_casing: a generated steel box {data['housing']['length']:.4g} x "
         f"{width:.4g} x {data['housing']['height']:.4g} m (walls {WALL:g} m, gear tips "
         f"{CLEARANCE:g} m from the walls), bores at the {len(bores)} shaft axes, base plate "
-        "clamped, 20 housing modes; each bore's coupling points = its front bearing's "
-        "rolling elements")
+        "clamped, 20 housing modes; each axis's bore radius = half its front bearing's outside "
+        "diameter in every wall; each wall's bore has one coupling point per rolling element of "
+        "the bearing it carries (wall_rolling_elements where they differ), the axis's first "
+        "counted bearing's elements (or 8) where it carries none")
     for k, (y, names) in enumerate(walls):
         ids = ", ".join(n.removeprefix("bearing") for n in names)
         report.assumed.append(
@@ -107,6 +113,16 @@ def box_housing(model, data: dict, report) -> None:
             f"(housing.inner_walls[{k}], {WALL:g} m thick, the box's full height and length, "
             f"bored at every shaft axis) for the casing bearing{'s' if ',' in ids else ''} "
             f"{ids} between the front and the back wall")
+
+
+def _wall_counts(mine, ys, planes) -> list[int | None]:
+    """The rolling-element count of the bearing in each wall plane (None: no counted bearing
+    there), each bearing in the plane nearest to it."""
+    counts: list[int | None] = [None] * len(planes)
+    for b in mine:
+        j = min(range(len(planes)), key=lambda k: abs(ys[b["name"]] - planes[k]))
+        counts[j] = counts[j] or _outer_diameter_and_count(b)[1]
+    return counts
 
 
 def _inner_walls(model, gb, shafts, casing, ys, front, back) -> list[tuple[float, list[str]]]:
