@@ -125,3 +125,36 @@ def test_bad_inner_wall_through_the_cli_exits_2(tmp_path):
     with contextlib.redirect_stderr(err):
         rc = main(["check", str(SMALL), "--set", "housing.inner_walls=[0.3]"])
     assert rc == 2 and "housing.inner_walls[0]" in err.getvalue()
+
+
+def test_regions_of_an_inner_wall_and_its_bores():
+    """Pure geometry of the pictures' regions: a point nearer the inner wall's middle plane
+    than any outer wall plane is the inner wall's (region 6 + B), an inner bore's boss point
+    is the bore's, and the labels group an inner bore with its inner wall (no opposite)."""
+    from types import SimpleNamespace
+
+    from vibrogear.models.housing.surface_mesh import classify_points, mode_labels, region_names
+
+    planes = np.array([0.0, 0.3, 0.0, 0.2, 0.0, 0.2])
+    bores = [SimpleNamespace(name=f"a/{s}", center=(0.1, y, 0.1), axis=(0.0, ax, 0.0), radius=0.02,
+                             y_range=(y - 0.01, y + 0.01)) for s, y, ax in
+             (("front", 0.005, -1.0), ("inner1", 0.08, 1.0), ("back", 0.195, 1.0))]
+    pts = np.array([[0.2, 0.075, 0.15],      # on the inner wall, away from its bore
+                    [0.1, 0.08, 0.125],      # in the inner bore's ring
+                    [0.2, 0.085, 0.2],       # the top wall's outer face beside the inner wall
+                    [0.2, 0.03, 0.1]])       # cavity side of the front wall: nearer the front
+    assert classify_points(pts, planes, bores).tolist() == [9, 7, 5, 2]
+    names = region_names(bores)
+    assert names[-1] == "inner wall 1" and len(names) == 10
+    normals = np.vstack([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1],
+                         [0, -1, 0], [0, 1, 0], [0, 1, 0], [0, 1, 0]]).astype(float)
+    verts = np.array([[0.2, 0.075, 0.15], [0.25, 0.075, 0.1], [0.2, 0.075, 0.05]])
+    values = np.zeros((3, 3, 2))
+    values[:, 1, :] = 1.0                                   # along y: normal to the inner wall
+    region = np.array([9, 9, 9])
+    energy = np.array([[0.05, 0.05, 0.1, 0.15, 0, 0.1, 0.05, 0.2, 0.05, 0.25],   # wall .25 + bore .2
+                       [0.1, 0.1, 0.3, 0.3, 0, 0.05, 0.05, 0.02, 0.05, 0.03]])
+    labels, where = mode_labels(energy, names, normals, verts, values, region)
+    assert labels[0] == "inner wall 1 with bore 2 bending (45 % of KE)" and where[0] == 9
+    # front .3 + bore 1 .05, back .3 + bore 3 .05 (the inner bore 2 goes with the inner wall)
+    assert labels[1].startswith("front and back walls") and labels[1].endswith("(70 % of KE)")
