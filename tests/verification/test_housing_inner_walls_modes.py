@@ -12,7 +12,7 @@ the y modes up.  Measured (P2, 6 modes, under load on 2 cores):
                       wall:    1885.7 2859.3 3505.8 3977.2 4040.0 4843.3 Hz (136,239 DOF)
 
 The first x mode (bore centres 89-90 % along x) rises 14.5 % (coarse) and 14.7 % (refined);
-the first mode (80-85 % along y, the walls normal to y bending) falls 2.3 % / 2.6 %: the
+the first mode (bores 80-85 % along y; top wall 37 % of the kinetic energy) falls 2.3 % / 2.6 %: the
 lowest frequency does not rise with the wall, and the test does not claim it does.  The
 pictures' regions know the inner wall: with it, modes 5 and 6 are "inner wall 1 with bores 2,
 5 bending" (44 %, 47 % of the kinetic energy, coarse mesh).  Refining
