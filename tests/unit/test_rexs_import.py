@@ -260,6 +260,22 @@ def test_box_housing_refuses_an_inner_wall_through_a_gear(tmp_path, capsys):
     assert "bearing component(s) 34" in err and "gear 18" in err and not out.exists()
 
 
+def test_box_housing_refuses_a_wall_crowding_its_neighbour(tmp_path, capsys):
+    """Bearing 38 moved to u = 225 mm on shaft 13 (housing y 45 + 225 = 270 mm): 30 mm before
+    the back plane (300 mm), more than one 20 mm wall from it, so it needs an inner wall at
+    270 mm, whose face would leave 300 - 10 - 280 = 10 mm of cavity to the back wall: exit 2
+    naming it, nothing written."""
+    root = _xml_root()
+    b = _component(root, "38")
+    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "225"
+    src = _write_xml(root, tmp_path / "crowded.rexs")
+    out = tmp_path / "s.toml"
+    assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "bearing component(s) 38" in err and "10 mm of cavity to the back wall" in err
+    assert not out.exists()
+
+
 def test_box_housing_encloses_the_shafts(tmp_path, capsys):
     """Without bearing 34 every casing bearing sits in the front or back plane: the box is
     generated, coaxial shafts 12 and 14 share one bore pair, and the scene checks (every gear

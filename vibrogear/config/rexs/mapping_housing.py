@@ -140,27 +140,30 @@ def _inner_walls(model, gb, shafts, casing, ys, front, back) -> list[tuple[float
         else:
             groups.append([(y, name)])
     walls = [(0.5 * (g[0][0] + g[-1][0]), [n for _, n in g]) for g in groups]
-    faces = [(front - 0.5 * WALL, "the front wall")] + \
-        [(y, f"the inner wall of bearing component(s) {', '.join(n.removeprefix('bearing') for n in ns)}")
-         for y, ns in walls] + [(back, "the back wall")]
+
+    def wall_of(ns):
+        return "the inner wall for bearing component(s) " + ", ".join(n.removeprefix("bearing") for n in ns)
+
+    planes = ([(front, "the front wall", False)] + [(y, wall_of(ns), True) for y, ns in walls]
+              + [(back, "the back wall", False)])
     gap = MIN_GAP_WALLS * WALL
-    for (y0, what0), (y1, what1) in zip(faces, faces[1:]):
-        if y1 - y0 - WALL < gap - 1e-12:
-            raise ConfigError(model.source, f"--housing box: {what1} (middle plane "
-                              f"{(y1 - front) * 1e3:.4g} mm from the front bearings' plane) would "
-                              f"leave {(y1 - y0 - WALL) * 1e3:.3g} mm of cavity to {what0}; at least "
-                              f"{gap * 1e3:.3g} mm (one {WALL * 1e3:g} mm wall) is needed: import "
-                              "without --housing (bearings to rigid ground)")
+    for lo, hi in zip(planes, planes[1:]):
+        room = hi[0] - lo[0] - WALL
+        if room < gap - 1e-12:
+            (y, what, _), other = (lo, hi[1]) if lo[2] else (hi, lo[1])
+            raise ConfigError(model.source, f"--housing box: {what} ({(y - front) * 1e3:.4g} mm "
+                              f"from the front bearings' plane, {WALL * 1e3:g} mm thick) would "
+                              f"leave {room * 1e3:.3g} mm of cavity to {other}; at least "
+                              f"{gap * 1e3:.3g} mm (one wall) is needed: import without --housing "
+                              "(bearings to rigid ground)")
     for y, names in walls:
         cut = [f"gear {g['name'].removeprefix('gear')} ({(yg - front) * 1e3:.4g} mm, "
                f"{g['width'] * 1e3:.4g} mm wide)" for g in gb["gears"]
                for yg in [shafts[g["shaft"]]["y0"] + g["position"]]
                if abs(yg - y) < 0.5 * (g["width"] + WALL)]
         if cut:
-            ids = ", ".join(n.removeprefix("bearing") for n in names)
-            raise ConfigError(model.source, f"--housing box: the inner wall for bearing "
-                              f"component(s) {ids} ({(y - front) * 1e3:.4g} mm from the front "
-                              f"bearings' plane, {WALL * 1e3:g} mm thick) would cut the face of "
+            raise ConfigError(model.source, f"--housing box: {wall_of(names)} ({(y - front) * 1e3:.4g} "
+                              f"mm from the front bearings' plane, {WALL * 1e3:g} mm thick) would cut the face of "
                               f"{' and '.join(cut)}: import without --housing (bearings to rigid "
                               "ground)")
     return walls
