@@ -84,6 +84,13 @@ def _check_pair(plain, walled, walls):
     assert walled.region_names[-1] == "inner wall 1" and len(walled.region_names) == 6 + 6 + 1
     np.testing.assert_allclose(walled.region_energy.sum(axis=1), 1.0, rtol=1e-9)
     assert any(lab.startswith("inner wall 1 with bores 2, 5") for lab in walled.mode_motion()[0])
+    # the radiating skin (ERP) is the outside only: none of the inner wall's faces is on it
+    from vibrogear.models.housing.surface_mesh import outer_skin
+    v, tri = walled.shape_vertices, walled.shape_triangles
+    c, t = v[tri].mean(axis=1), cfg.wall_thickness
+    on_wall = np.all((c > t + 1e-6) & (c < np.array([cfg.length, cfg.width, cfg.height]) - t - 1e-6),
+                     axis=1) & (np.abs(c[:, 1] - walls[0]) <= t / 2 + 1e-6)
+    assert on_wall.sum() > 100 and not np.any(outer_skin(v, tri, walled.shape_facet_tag)[on_wall])
     # the first mode moves the bores along y (normal to the walls) in both
     assert _direction_share(plain)[0, 1] > 0.7 and _direction_share(walled)[0, 1] > 0.7
 
