@@ -13,9 +13,11 @@ wall (coaxial shafts share one axis).  The box is sized from the model:
   naming the bearings that need it;
 * length and height: the shaft axes' extent plus, on each side, the largest gear tip radius
   (pitch radius + module), one wall and :data:`CLEARANCE`;
-* each bore: radius = half the outside diameter of its front bearing (from its designation
-  or boundary dimensions; else 1.8 x the shaft radius there), boss radius 1.5 x the bore,
-  boss length one wall, one coupling point per rolling element of its front bearing.
+* each bore axis: radius = half the outside diameter of its front bearing (from its
+  designation or boundary dimensions; else 1.8 x the shaft radius there) in every wall, boss
+  radius 1.5 x the bore, boss length one wall; in each wall one coupling point per rolling
+  element of the bearing that wall carries (``wall_rolling_elements`` where the walls'
+  bearings differ), the axis's first counted bearing's count (or 8) in a wall without one.
 Every sized value is reported as assumed.
 """
 from __future__ import annotations
