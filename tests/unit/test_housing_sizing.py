@@ -3,6 +3,9 @@ filled, what it gives is kept."""
 import copy
 import math
 
+import pytest
+
+from vibrogear.config import ConfigError
 from vibrogear.config.base import read_toml_file
 from vibrogear.config.layout import gear_tip_radius
 from vibrogear.config.scene import Scene, scene_from_dict
@@ -54,3 +57,24 @@ def test_bores_created_from_the_shafts():
     assert [b.name for b in sc.housing.bores] == ["input", "output"]
     # ball bearings without a designation: 8 coupling points and 1.8 x the journal radius
     assert sc.housing.bores[0].rolling_elements == 8
+
+
+def test_wall_counts_filled_with_inner_walls():
+    """single_stage with an inner wall at housing y = 0.04 m and a third bearing of 12
+    elements on the driving shaft there (position 0.08 m + y0 -0.04 m): the input axis's bore
+    gets [8, 12, 8] coupling points (front, inner, back: rolling_elements 8 where no bearing
+    says otherwise), the output axis keeps 10 everywhere, and the scene passes every check
+    (bearing elements = its wall's coupling points)."""
+    data = _data()
+    data["housing"]["inner_walls"] = [0.04]
+    data["gearbox"]["bearings"].append({"name": "A mid", "shaft": "driving", "position": 0.08,
+                                        "stiffness": 6.0e9, "elements": 12})
+    sc = scene_from_dict(copy.deepcopy(data))
+    validate_scene(sc)
+    inp, out = sc.housing.bores
+    assert inp.wall_rolling_elements == (8, 12, 8) and out.wall_rolling_elements == ()
+    data["housing"]["bores"][0]["wall_rolling_elements"] = [8, 8, 8]      # given: kept
+    with pytest.raises(ConfigError) as exc:
+        validate_scene(scene_from_dict(data))
+    assert "gearbox.bearings[4].elements" in str(exc.value)
+    assert "inner1 bore of 'input' has 8" in str(exc.value)

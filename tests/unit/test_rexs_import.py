@@ -204,13 +204,76 @@ def test_unknown_designation_without_dimensions_exits_2(tmp_path, capsys):
     assert "component 34" in err and "'catalogue_designation'" in err
 
 
-def test_box_housing_refuses_a_middle_bearing(tmp_path, capsys):
-    """The FVA output shaft's 33014 (component 34) sits 108 mm behind the front wall plane:
-    a two-wall box cannot hold it."""
-    out = tmp_path / "s.toml"
-    assert main(["import", str(XML), "--housing", "box", "-o", str(out)]) == 2
+def test_box_housing_puts_an_inner_wall_at_the_middle_bearing(tmp_path, capsys):
+    """The FVA output shaft's 33014 (component 34) sits between the front and the back
+    bearing planes: the generated box gets an inner wall there.  By hand from the file: the
+    front plane is bearing 33's (shaft 12 at u = 65 mm), bearing 34 is at shaft 14's
+    u0 + 13 mm = 160 + 13 = 173 mm, bearing 35 (back) at 160 + 140 = 300 mm and bearing 38
+    (shaft 13: 45 + 250 = 295 mm) within one 20 mm wall of it.  Housing y = model y - 65 mm
+    + half a wall: the inner wall at 173 - 65 + 10 = 118 mm, width 300 - 65 + 20 = 255 mm.
+    Every casing bearing is carried by the bore of its own wall."""
+    from vibrogear.geometry.housing import bore_layout
+    from vibrogear.models.gearbox.supports import _bore_of
+
+    out = tmp_path / "box.toml"
+    assert main(["import", str(XML), "--housing", "box", "-o", str(out)]) == 0
     err = capsys.readouterr().err
-    assert "bearing component 34" in err and not out.exists()
+    assert re.search(r"inner wall 1 at y = 0\.118 m \(housing\.inner_walls\[0\].*casing "
+                     r"bearing 34 between", err)
+    data = tomllib.loads(out.read_text())
+    h = data["housing"]
+    assert h["inner_walls"] == pytest.approx([0.118], abs=1e-12)
+    assert h["width"] == pytest.approx(0.255, abs=1e-12)
+    # coupling points per wall of the coaxial axis: the 6210's 10 balls (front), the 33014's
+    # and 33012's 25 rollers each (the element-set rule, as the derived lines say)
+    axis = next(b for b in h["bores"] if b["name"] == data["gearbox"]["shafts"][0]["bore"])
+    assert axis["wall_rolling_elements"] == [10, 25, 25]
+    assert "inner wall 1 at y = 0.118 m" in out.read_text()          # the TOML header too
+    assert main(["check", str(out)]) == 0
+    sc = load_scene(out)
+    layout = bore_layout(sc.housing)
+
+    class Bores:                        # what the bearing-to-bore assignment reads
+        bore_names = [g.name for g in layout]
+        bore_centers = __import__("numpy").array([g.center for g in layout])
+
+    shafts = {s.name: s for s in sc.gearbox.shafts}
+    got = {b.name: Bores.bore_names[_bore_of(Bores, shafts[b.shaft].bore,
+                                             shafts[b.shaft].y0 + b.position)]
+           for b in sc.gearbox.bearings if not b.outer_shaft}
+    a, i = shafts["shaft12"].bore, shafts["shaft13"].bore
+    assert [g.n_points for g in layout if g.name.startswith(a + "/")] == [10, 25, 25]
+    assert got == {"bearing33": f"{a}/front", "bearing34": f"{a}/inner1", "bearing35": f"{a}/back",
+                   "bearing37": f"{i}/front", "bearing38": f"{i}/back"}
+
+
+def test_box_housing_refuses_an_inner_wall_through_a_gear(tmp_path, capsys):
+    """Bearing 34 moved onto gear 18's middle (u = 65 mm on shaft 14): its wall would cut the
+    gear; exit 2 naming both, nothing written."""
+    root = _xml_root()
+    b = _component(root, "34")
+    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "65"
+    src = _write_xml(root, tmp_path / "onto_gear.rexs")
+    out = tmp_path / "s.toml"
+    assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "bearing component(s) 34" in err and "gear 18" in err and not out.exists()
+
+
+def test_box_housing_refuses_a_wall_crowding_its_neighbour(tmp_path, capsys):
+    """Bearing 38 moved to u = 225 mm on shaft 13 (housing y 45 + 225 = 270 mm): 30 mm before
+    the back plane (300 mm), more than one 20 mm wall from it, so it needs an inner wall at
+    270 mm, whose face would leave 300 - 10 - 280 = 10 mm of cavity to the back wall: exit 2
+    naming it, nothing written."""
+    root = _xml_root()
+    b = _component(root, "38")
+    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "225"
+    src = _write_xml(root, tmp_path / "crowded.rexs")
+    out = tmp_path / "s.toml"
+    assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "bearing component(s) 38" in err and "10 mm of cavity to the back wall" in err
+    assert not out.exists()
 
 
 def test_box_housing_encloses_the_shafts(tmp_path, capsys):

@@ -12,6 +12,8 @@ Parametric coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y
 ``[[housing.bores]]`` entry is one shaft: a pair of coaxial bearing bosses through the two
 walls normal to y (the *front* wall at y = 0 and the *back* wall at y = width), with the shaft
 axis parallel to y at (x, z).  Bosses protrude ``boss_length`` outwards from the wall.
+``inner_walls`` adds walls parallel to those, each shaft axis bored through every wall
+(:mod:`vibrogear.config.housing_walls`: their rules and the bores' numbering).
 """
 from __future__ import annotations
 
@@ -22,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from .base import ConfigError, spec
+from .housing_walls import check_inner_walls, check_wall_counts
 from .housing_mesh import (DEFAULT_SIZE_PER_WALL, ELEMENTS, MAX_SIZE_PER_WALL, HexMeshRule,
                            HousingMeshConfig, hex_blocks, hex_rule)
 
@@ -63,6 +66,10 @@ class BoreConfig:
     boss_radius: float | None = spec(None, gt=0.0, doc="outer radius of the boss, m (parametric)")
     boss_length: float = spec(0.02, ge=0.0, doc="protrusion of the boss outside the wall, m")
     rolling_elements: int = spec(ge=3, le=200, doc="coupling points per bore (one per rolling element)")
+    wall_rolling_elements: tuple[int, ...] = spec((), ge=3, le=200, max_len=10,
+                                                  doc="coupling points of this axis's bore in each wall, "
+                                                      "front, inner walls, back (parametric; default: "
+                                                      "rolling_elements in every wall)")
     name: str = spec("", doc="label, e.g. 'input shaft'")
 
     def __post_init__(self) -> None:
@@ -99,9 +106,10 @@ class BoreConfig:
         if not (math.isfinite(n) and n > 1e-12):
             raise ConfigError(f"{path}.axis", f"must be a non-zero finite vector (length > 1e-12), got "
                               f"{list(self.axis)} of length {n:g}")
-        if self.boss_radius is not None:
-            raise ConfigError(f"{path}.boss_radius", "only for the parametric housing (bores given by "
-                              "x and z); an imported housing's bosses are in its geometry")
+        for k in ("boss_radius", "wall_rolling_elements"):
+            if getattr(self, k):
+                raise ConfigError(f"{path}.{k}", "only for the parametric housing (bores given by x "
+                                  "and z); an imported housing's bores are in its file")
         ax = self.unit_axis
         if self.x is not None and self.z is not None and math.hypot(ax[0], ax[2]) <= 1e-12 and (
                 abs(self.x - self.center[0]) > 1e-12 * max(1.0, abs(self.x))
@@ -162,6 +170,9 @@ class HousingConfig:
     height: float | None = spec(None, gt=0.0, doc="outer box height (z), m")
     wall_thickness: float | None = spec(None, gt=0.0, doc="wall thickness, m")
     bores: tuple[BoreConfig, ...] = spec((), max_len=16, doc="one bearing-boss pair (or bore line) per shaft")
+    inner_walls: tuple[float, ...] = spec((), max_len=8, gt=0.0, doc="middle plane y of each inner wall "
+                                          "(parallel to front and back, full height and length, bored "
+                                          "at every shaft axis), ascending, m")
     base: str = spec("plate", choices=("plate", "feet", "none"), doc="what the housing stands on")
     base_thickness: float = spec(0.02, gt=0.0, doc="thickness of the base plate or feet, m")
     base_overhang: float = spec(0.03, ge=0.0, doc="plate overhang beyond the box, m")
@@ -222,6 +233,11 @@ class HousingConfig:
 
         d = dataclasses.asdict(self)
         d["modes"].pop("plot")               # what is drawn, not what is solved
+        if not self.inner_walls:             # keys of scenes without inner walls unchanged
+            d.pop("inner_walls")
+        for b in d["bores"]:
+            if not b["wall_rolling_elements"]:
+                b.pop("wall_rolling_elements")
         # the edge grading enters the keys only where it is on (keys of ungraded scenes unchanged),
         # resolved and at the top level, so that the mesh entry's key (which replaces "mesh") has it
         for k in ("edge_size", "edge_distance", "element"):
@@ -247,6 +263,7 @@ class HousingConfig:
     def validate(self, path: str) -> None:
         p = path or "housing"
         if self.source != "parametric":
+            check_inner_walls(self, p)
             if self.mesh.element != "tet":
                 raise ConfigError(f"{p}.mesh.element", f"'hex' only for the parametric housing (its "
                                   f"walls are known); a {self.source!r} housing is meshed with 'tet'")
@@ -283,6 +300,8 @@ class HousingConfig:
             raise ConfigError(f"{p}.foot_size", f"must be < half of min(length, width) = "
                               f"{0.5 * min(self.length, self.width):g}, got {self.foot_size:g}")
         self._validate_bores(p)
+        check_inner_walls(self, p)
+        check_wall_counts(self, p)
         if self.mesh.element == "hex":
             hex_rule(self.mesh, t, f"{p}.mesh")
             hex_blocks(self)                   # a layout the structured grid cannot take: refused

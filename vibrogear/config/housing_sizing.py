@@ -14,6 +14,10 @@ filled from the gearbox before the scene is built (the keys it gives are kept).
   smallest x and z sit that far in.
 * **width**: the back bearings' housing y plus half a wall (their bore's middle), at least
   the front bearings' y plus one wall.
+* **wall_rolling_elements** (only with ``inner_walls`` given): where the bearings of one
+  bore axis sit in walls (front, inner, back: the nearest wall plane) with different element
+  counts (``elements``, designation or boundary dimensions), one count per wall, the bore's
+  ``rolling_elements`` for a wall without such a bearing.
 """
 from __future__ import annotations
 
@@ -139,3 +143,29 @@ def _fill(h: dict, gb: dict) -> None:
           if s["name"] == b.get("shaft") and _num(s.get("y0", 0.0)) and _num(b.get("position"))]
     if ys:
         h.setdefault("width", round(max(max(ys) + 0.5 * t, min(ys) + 2 * t), 9))
+    _fill_wall_counts(h, gb, shafts, names, given, t)
+
+
+def _fill_wall_counts(h: dict, gb: dict, shafts: list, names: list, given: dict, t: float) -> None:
+    walls = h.get("inner_walls")
+    if not (isinstance(walls, list) and walls and all(_num(y) for y in walls) and _num(h.get("width"))):
+        return
+    planes = [0.5 * t] + list(walls) + [h["width"] - 0.5 * t]
+    y0 = {s["name"]: s.get("y0", 0.0) for s in shafts}
+    bore_of = {s["name"]: s.get("bore") for s in shafts}
+    for n in names:
+        b = given[n]
+        if "wall_rolling_elements" in b or not isinstance(b.get("rolling_elements"), int):
+            continue
+        counts: list[int | None] = [None] * len(planes)
+        for x in gb.get("bearings", []):
+            if not isinstance(x, dict) or x.get("outer_shaft") or bore_of.get(x.get("shaft")) != n \
+                    or not _num(x.get("position")) or not _num(y0.get(x["shaft"])):
+                continue
+            y = y0[x["shaft"]] + x["position"]
+            j = min(range(len(planes)), key=lambda k: abs(y - planes[k]))
+            count = x["elements"] if isinstance(x.get("elements"), int) else _bearing_size(x)[1]
+            counts[j] = counts[j] or count
+        per = [c or b["rolling_elements"] for c in counts]
+        if len(set(per)) > 1:
+            b["wall_rolling_elements"] = per

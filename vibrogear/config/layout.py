@@ -5,13 +5,15 @@ check`` reports them before any output exists).
 Housing frame as in :mod:`vibrogear.config.housing`: the box is ``0..length`` (x),
 ``0..width`` (y, along the shafts), ``0..height`` (z); the cavity is the box less one wall
 thickness on every side.  A bore pair's front bore spans ``y = -boss_length .. wall`` and
-its back bore ``y = width - wall .. width + boss_length``.
+its back bore ``y = width - wall .. width + boss_length``; an inner wall's bore spans the
+wall (:mod:`~vibrogear.config.housing_walls`).
 """
 from __future__ import annotations
 
 import math
 
 from .base import ConfigError, ErrorList
+from .housing_walls import bore_walls
 
 __all__ = ["check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
            "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
@@ -23,9 +25,9 @@ MAX_TIME_RESPONSE_BYTES = 4 * 2**30
 
 
 def bore_spans(housing, bore) -> dict[str, tuple[float, float]]:
-    """The housing-frame y range of the front and back bore of ``bore``."""
-    t, W = housing.wall_thickness, housing.width
-    return {"front": (-bore.boss_length, t), "back": (W - t, W + bore.boss_length)}
+    """The housing-frame y range of each bore of ``bore``: front, inner walls, back
+    (:func:`~vibrogear.config.housing_walls.bore_walls`)."""
+    return {side: span for side, span, _, _ in bore_walls(housing, bore)}
 
 
 def gear_tip_radius(gear) -> float:
@@ -119,11 +121,11 @@ def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
                                  "bearing per bore"))
             continue
         used[(sh.bore, side)] = i
-        if b.elements is not None and b.elements != bore.rolling_elements:
-            errs.add(ConfigError(f"{p}.elements", f"the bore {sh.bore!r} has "
-                                 f"{bore.rolling_elements} coupling points (housing.bores "
-                                 f"rolling_elements); give {bore.rolling_elements} or leave "
-                                 f"elements out, got {b.elements}"))
+        points = {w: n for w, _, _, n in bore_walls(housing, bore)}[side]
+        if b.elements is not None and b.elements != points:
+            errs.add(ConfigError(f"{p}.elements", f"the {side} bore of {sh.bore!r} has "
+                                 f"{points} coupling points (housing.bores rolling_elements); "
+                                 f"give {points} or leave elements out, got {b.elements}"))
     L, W, H = housing.length, housing.width, housing.height
     for k, g in enumerate(cfg.gears):
         p = f"gearbox.gears[{k}]"
@@ -163,6 +165,12 @@ def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
                                  f"{t + half - cfg.shafts[s].y0:.6g} and "
                                  f"{W - t - half - cfg.shafts[s].y0:.6g} m or move the shaft's "
                                  "y0"))
+        for w, yw in enumerate(housing.inner_walls):
+            if y - half < yw + 0.5 * t and y + half > yw - 0.5 * t:
+                errs.add(ConfigError(f"{p}.position", f"gear face (housing y = {y - half:.6g}.."
+                                     f"{y + half:.6g} m) cuts housing.inner_walls[{w}] (y = "
+                                     f"{yw - 0.5 * t:.6g}..{yw + 0.5 * t:.6g} m): move the gear "
+                                     "or the wall"))
     errs.raise_if()
 
 

@@ -5,8 +5,11 @@ The only module that imports gmsh (inside the functions).  The contract with the
 surface.  :func:`bore_layout` gives the bearing coupling points from the config alone (pure
 geometry, no gmsh), so the FE model and the gearbox synthesis agree on them.
 
-Coordinates: see :mod:`vibrogear.config.housing`.  Bores are ordered shaft by shaft, front wall
-(y = 0) before back wall (y = width): bore ``2 i`` and ``2 i + 1`` belong to ``bores[i]``.
+Coordinates: see :mod:`vibrogear.config.housing`.  Bores are ordered shaft by shaft, and per
+shaft wall by wall from the front wall (y = 0) to the back wall (y = width): without inner
+walls bore ``2 i`` and ``2 i + 1`` belong to ``bores[i]``; with n inner walls bore
+``i (n + 2) + j`` (j = 0 front, 1..n the inner walls, n + 1 back), see
+:mod:`vibrogear.config.housing_walls`.
 """
 from __future__ import annotations
 
@@ -21,6 +24,7 @@ import numpy as np
 
 from ..config.base import ConfigError
 from ..config.housing import HousingConfig
+from ..config.housing_walls import bore_walls
 from .mesh_size import _size_field, junction_curves, size_field  # noqa: F401  (housing_import, tests)
 
 __all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",
@@ -85,21 +89,23 @@ def ring_frame(axis) -> tuple[np.ndarray, np.ndarray]:
 def bore_layout(cfg: HousingConfig) -> tuple[BoreGeometry, ...]:
     """The bore surfaces and their coupling points, from the config alone."""
     out = []
-    t, W = cfg.wall_thickness, cfg.width
     for i, b in enumerate(cfg.bores):
         label = b.name or f"shaft{i}"
-        for side, (y0, y1), ay in (("front", (-b.boss_length, t), -1.0),
-                                   ("back", (W - t, W + b.boss_length), 1.0)):
+        for side, (y0, y1), ay, n in bore_walls(cfg, b):
             out.append(BoreGeometry(name=f"{label}/{side}", center=(b.x, 0.5 * (y0 + y1), b.z),
                                     axis=(0.0, ay, 0.0), radius=b.bore_radius, y_range=(y0, y1),
-                                    n_points=b.rolling_elements))
+                                    n_points=n))
     return tuple(out)
 
 
 def housing_volume(cfg: HousingConfig) -> float:
-    """Closed-form solid volume of the housing (box shell + base + bosses + ribs - bores)."""
+    """Closed-form solid volume of the housing (box shell + inner walls + base + bosses + ribs
+    - bores); each inner wall is a (length - 2 t) x t x (height - 2 t) plate less one bore
+    cylinder (radius r, length t) per shaft."""
     L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
     v = L * W * H - (L - 2 * t) * (W - 2 * t) * (H - 2 * t)
+    for _ in cfg.inner_walls:
+        v += (L - 2 * t) * t * (H - 2 * t) - sum(math.pi * b.bore_radius ** 2 * t for b in cfg.bores)
     if cfg.base == "plate":
         v += (L + 2 * cfg.base_overhang) * (W + 2 * cfg.base_overhang) * cfg.base_thickness
     elif cfg.base == "feet":
@@ -176,7 +182,7 @@ def _housing_solid(gmsh, cfg: HousingConfig, scale: float = 1.0) -> None:
     outer = occ.addBox(0, 0, 0, L, W, H)
     inner = occ.addBox(t, t, t, L - 2 * t, W - 2 * t, H - 2 * t)
     shell, _ = occ.cut([(3, outer)], [(3, inner)])
-    parts = []
+    parts = [(3, occ.addBox(t, k * y - t / 2, t, L - 2 * t, t, H - 2 * t)) for y in cfg.inner_walls]
     if cfg.base == "plate":
         o = k * cfg.base_overhang
         parts.append((3, occ.addBox(-o, -o, -tb, L + 2 * o, W + 2 * o, tb)))

@@ -211,18 +211,22 @@ def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float =
     fig.suptitle(title or (f"housing mode shapes (P{res.degree}, {res.n_dofs:,} DOF): largest "
                            f"displacement drawn as {100 * fraction:.0f} % of the box "
                            f"({span:.3g} m); numbered rings: bores; hatched: supported faces\n"
-                           + _wall_key(res.region_normals)), fontsize=10)
+                           + _wall_key(res.region_normals, getattr(res, "region_names", ()))), fontsize=10)
     write_figure(fig, path, dpi=100)
     plt.close(fig)
     return path
 
 
-def _wall_key(normals) -> str:
-    """Where the named walls are and which bores sit in them."""
+def _wall_key(normals, names=()) -> str:
+    """Where the named walls are and which bores sit in them (an inner wall's bores, named
+    ``.../inner<k>)``, and the inner-wall regions after the bores, in none of them)."""
     normals = np.asarray(normals, float)
     if len(normals) < 6:
         return ""
     owner = np.argmax(normals[6:] @ normals[:6].T, axis=1) if len(normals) > 6 else np.zeros(0, int)
+    for j, n in enumerate(names[6:]):
+        if not n.startswith("bore ") or "/inner" in n:
+            owner[j] = -1
     parts = []
     for k, (name, where) in enumerate(zip(("left end", "right end", "front", "back"),
                                           ("x min", "x max", "y min", "y max"))):

@@ -46,8 +46,8 @@ KNOWN_IGNORED = {
     "gear_unit": "only its load_duration_fraction per load case is read (the load case "
                  "taken is the longest)",
     "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
-                   "(`vibrogear import --housing box` generates a box housing where the "
-                   "casing bearings sit in two walls)",
+                   "(`vibrogear import --housing box` generates a box housing with "
+                   "its walls at the casing bearings' planes)",
     "lubricant": "oil data do not enter the dynamic model",
     "cylindrical_stage_gear_data": "read through the stage's gears",
     "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",

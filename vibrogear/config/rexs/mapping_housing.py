@@ -1,17 +1,23 @@
 """A generated box housing for an imported gearbox (``vibrogear import --housing box``).
 
-The parametric housing of ``[housing]`` is a box with a front and a back wall, one bore pair
-per shaft axis (coaxial shafts share one).  The box is sized from the model:
+The parametric housing of ``[housing]`` is a box with a front and a back wall and, where the
+casing bearings need them, inner walls (``inner_walls``), each shaft axis bored through every
+wall (coaxial shafts share one axis).  The box is sized from the model:
 
-* the walls: the bearings in the casing must sit in two planes along the shafts (front and
-  back, each bearing within one wall thickness of its plane; a bearing elsewhere exits 2
-  naming it, since the box has no middle wall);  the wall thickness is
-  :data:`WALL`; width = back - front + one wall, so each plane is a wall's middle;
+* the walls: the casing bearings' planes along the shafts.  The first bearing plane is the
+  front wall's middle, the last the back wall's; the bearings between are grouped from the
+  front, a bearing within one wall thickness (:data:`WALL`) of a group's first bearing joining
+  it, and each group gets an inner wall in the middle of its bearings' span (so each sits
+  within half a wall of its plane).  Width = back - front + one wall.  An inner wall that
+  would cut a gear's face or leave less than one wall of cavity to its neighbour exits 2
+  naming the bearings that need it;
 * length and height: the shaft axes' extent plus, on each side, the largest gear tip radius
   (pitch radius + module), one wall and :data:`CLEARANCE`;
-* each bore: radius = half the outside diameter of its front bearing (from its designation
-  or boundary dimensions; else 1.8 x the shaft radius there), boss radius 1.5 x the bore,
-  boss length one wall, one coupling point per rolling element of its front bearing.
+* each bore axis: radius = half the outside diameter of its front bearing (from its
+  designation or boundary dimensions; else 1.8 x the shaft radius there) in every wall, boss
+  radius 1.5 x the bore, boss length one wall; in each wall one coupling point per rolling
+  element of the bearing that wall carries (``wall_rolling_elements`` where the walls'
+  bearings differ), the axis's first counted bearing's count (or 8) in a wall without one.
 Every sized value is reported as assumed.
 """
 from __future__ import annotations
@@ -20,6 +26,7 @@ import math
 
 from ..base import ConfigError
 from ..bearing_catalogue import boundary_dimensions, element_set
+from ..housing_walls import MIN_GAP_WALLS
 
 __all__ = ["box_housing", "WALL", "CLEARANCE"]
 
@@ -51,15 +58,7 @@ def box_housing(model, data: dict, report) -> None:
         raise ConfigError(model.source, "--housing box: no bearing sits in the gear_casing")
     ys = {b["name"]: shafts[b["shaft"]]["y0"] + b["position"] for b in casing}
     front, back = min(ys.values()), max(ys.values())
-    for b in casing:
-        y = ys[b["name"]]
-        if min(abs(y - front), abs(y - back)) > WALL:
-            cid = b["name"].removeprefix("bearing")
-            raise ConfigError(model.source, f"--housing box: bearing component {cid} sits at "
-                              f"{(y - front) * 1e3:.4g} mm from the front wall, between the "
-                              f"walls (front at 0, back at {(back - front) * 1e3:.4g} mm): the "
-                              "generated box has only a front and a back wall; import without "
-                              "--housing (bearings to rigid ground) or give a STEP housing")
+    walls = _inner_walls(model, gb, shafts, casing, ys, front, back)
     width = back - front + WALL
     tip = max(0.5 * g["module"] * g["teeth"] / math.cos(math.radians(g["helix_angle"]))
               + g["module"] for g in gb["gears"])
@@ -80,10 +79,14 @@ def box_housing(model, data: dict, report) -> None:
                 D = 1.8 * max(sec["outer_diameter"] for sec in s["sections"])
                 report.assumed.append(f"housing bore {axes[key]!r}: radius {0.5 * D:.4g} m "
                                       "(1.8 x the shaft's largest radius)")
+            counts = _wall_counts(mine, ys, [front] + [y for y, _ in walls] + [back])
+            default = n or next((c for c in counts if c), 8)
             bores.append({"name": axes[key], "x": round(s["x"] - min(xs) + margin, 9),
                           "z": round(s["z"] - min(zs) + margin, 9),
                           "bore_radius": round(0.5 * D, 9), "boss_radius": round(0.75 * D, 9),
-                          "boss_length": WALL, "rolling_elements": n or 8})
+                          "boss_length": WALL, "rolling_elements": default})
+            if len({c or default for c in counts}) > 1:
+                bores[-1]["wall_rolling_elements"] = [c or default for c in counts]
         s["bore"] = axes[key]
         s.pop("x")
         s.pop("z")
@@ -93,6 +96,7 @@ def box_housing(model, data: dict, report) -> None:
     data["housing"] = {
         "length": round(max(xs) - min(xs) + 2 * margin, 9), "width": round(width, 9),
         "height": round(max(zs) - min(zs) + 2 * margin, 9), "wall_thickness": WALL,
+        **({"inner_walls": [round(y - front + 0.5 * WALL, 9) for y, _ in walls]} if walls else {}),
         "base": "plate", "support": "fixed", "bores": bores,
         "material": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 1e-6},
         "modes": {"count": 20, "shapes": 0}}
@@ -100,5 +104,68 @@ def box_housing(model, data: dict, report) -> None:
         f"gear_casing: a generated steel box {data['housing']['length']:.4g} x "
         f"{width:.4g} x {data['housing']['height']:.4g} m (walls {WALL:g} m, gear tips "
         f"{CLEARANCE:g} m from the walls), bores at the {len(bores)} shaft axes, base plate "
-        "clamped, 20 housing modes; each bore's coupling points = its front bearing's "
-        "rolling elements")
+        "clamped, 20 housing modes; each axis's bore radius = half its front bearing's outside "
+        "diameter in every wall; each wall's bore has one coupling point per rolling element of "
+        "the bearing it carries (wall_rolling_elements where they differ), the axis's first "
+        "counted bearing's elements (or 8) where it carries none")
+    for k, (y, names) in enumerate(walls):
+        ids = ", ".join(n.removeprefix("bearing") for n in names)
+        report.assumed.append(
+            f"gear_casing: inner wall {k + 1} at y = {y - front + 0.5 * WALL:.4g} m "
+            f"(housing.inner_walls[{k}], {WALL:g} m thick, the box's full height and length, "
+            f"bored at every shaft axis) for the casing bearing{'s' if ',' in ids else ''} "
+            f"{ids} between the front and the back wall")
+
+
+def _wall_counts(mine, ys, planes) -> list[int | None]:
+    """The rolling-element count of the bearing in each wall plane (None: no counted bearing
+    there), each bearing in the plane nearest to it."""
+    counts: list[int | None] = [None] * len(planes)
+    for b in mine:
+        j = min(range(len(planes)), key=lambda k: abs(ys[b["name"]] - planes[k]))
+        counts[j] = counts[j] or _outer_diameter_and_count(b)[1]
+    return counts
+
+
+def _inner_walls(model, gb, shafts, casing, ys, front, back) -> list[tuple[float, list[str]]]:
+    """(middle plane y in the model frame, names of its bearings) of each inner wall: the
+    casing bearings more than one wall from the front and back planes, grouped from the front
+    (a bearing within :data:`WALL` of its group's first bearing joins it), each wall in the
+    middle of its group's span.  ConfigError where a wall cuts a gear face or crowds a
+    neighbouring wall (less than one wall of cavity between)."""
+    inner = sorted((ys[b["name"]], b["name"]) for b in casing
+                   if min(abs(ys[b["name"]] - front), abs(ys[b["name"]] - back)) > WALL)
+    groups: list[list[tuple[float, str]]] = []
+    for y, name in inner:
+        if groups and y - groups[-1][0][0] <= WALL:
+            groups[-1].append((y, name))
+        else:
+            groups.append([(y, name)])
+    walls = [(0.5 * (g[0][0] + g[-1][0]), [n for _, n in g]) for g in groups]
+
+    def wall_of(ns):
+        return "the inner wall for bearing component(s) " + ", ".join(n.removeprefix("bearing") for n in ns)
+
+    planes = ([(front, "the front wall", False)] + [(y, wall_of(ns), True) for y, ns in walls]
+              + [(back, "the back wall", False)])
+    gap = MIN_GAP_WALLS * WALL
+    for lo, hi in zip(planes, planes[1:]):
+        room = hi[0] - lo[0] - WALL
+        if room < gap - 1e-12:
+            (y, what, _), other = (lo, hi[1]) if lo[2] else (hi, lo[1])
+            raise ConfigError(model.source, f"--housing box: {what} ({(y - front) * 1e3:.4g} mm "
+                              f"from the front bearings' plane, {WALL * 1e3:g} mm thick) would "
+                              f"leave {room * 1e3:.3g} mm of cavity to {other}; at least "
+                              f"{gap * 1e3:.3g} mm (one wall) is needed: import without --housing "
+                              "(bearings to rigid ground)")
+    for y, names in walls:
+        cut = [f"gear {g['name'].removeprefix('gear')} ({(yg - front) * 1e3:.4g} mm, "
+               f"{g['width'] * 1e3:.4g} mm wide)" for g in gb["gears"]
+               for yg in [shafts[g["shaft"]]["y0"] + g["position"]]
+               if abs(yg - y) < 0.5 * (g["width"] + WALL)]
+        if cut:
+            raise ConfigError(model.source, f"--housing box: {wall_of(names)} ({(y - front) * 1e3:.4g} "
+                              f"mm from the front bearings' plane, {WALL * 1e3:g} mm thick) would cut the face of "
+                              f"{' and '.join(cut)}: import without --housing (bearings to rigid "
+                              "ground)")
+    return walls

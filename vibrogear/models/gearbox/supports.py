@@ -11,6 +11,7 @@ and Y when diagonal: exactly the isotropic bearing's two links), its skew part
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 
@@ -44,9 +45,11 @@ def gravity_load(gravity, rotors) -> list:
     return out
 
 
-def _bore_of(hm, shaft_bore_names, y) -> int:
-    """Index of the bore (front or back) of this shaft nearest to housing y."""
-    cand = [b for b, n in enumerate(hm.bore_names) if n in shaft_bore_names]
+def _bore_of(hm, bore: str, y) -> int:
+    """Index of the bore of the shaft axis ``bore`` nearest to housing y: among its front,
+    inner-wall (``<bore>/inner<k>``) and back bores."""
+    cand = [b for b, n in enumerate(hm.bore_names) if n.rpartition("/")[0] == bore
+            and re.fullmatch(r"front|back|inner\d+", n.rpartition("/")[2])]
     return min(cand, key=lambda b: abs(hm.bore_centers[b, 1] - y))
 
 
@@ -108,8 +111,7 @@ def bearings(scene, cfg, rotors, hm):
                                   "its number of rolling elements (3..200) or its geometry")
             angles = math.radians(b.angle_offset) + 2 * np.pi * np.arange(n) / max(n, 1)
         elif hm is not None:
-            names = {f"{sh.bore}/front", f"{sh.bore}/back"}
-            bore = _bore_of(hm, names, sh.y0 + b.position)
+            bore = _bore_of(hm, sh.bore, sh.y0 + b.position)
             if bore in used:
                 raise ConfigError(f"{path}.position", f"bore {hm.bore_names[bore]!r} already "
                                   f"carries bearing {used[bore]!r}")

@@ -19,12 +19,15 @@ each mode's dominant motion.  Fields carried by :class:`~.result.HousingModes`:
 - ``region_normals``    (R, 3)      outward normal of each region (wall plane / bore axis)
 - ``region_energy``     (m, R)      integral of rho |phi_i|^2 over each region (sums to 1 over
                                     the regions for mass-normalised modes)
-- meta: ``region_names`` (R,): the six walls, then "bore b (name)"
+- meta: ``region_names`` (R,): the six walls, then "bore b (name)", then "inner wall k" for
+  each inner wall of a parametric housing (known from its bores ``<name>/inner<k>``)
 
 :func:`mode_labels` names each mode from these ("front wall bending (71 % of KE)") and gives
 the region its picture should face.
 """
 from __future__ import annotations
+
+import re
 
 import numpy as np
 
@@ -118,16 +121,31 @@ def wall_planes(verts: np.ndarray, tris: np.ndarray, tags: np.ndarray) -> np.nda
     return out
 
 
+def inner_wall_planes(bores) -> list[float]:
+    """Middle plane y of each inner wall (1, 2, ...), from the bores named ``<name>/inner<k>``
+    (:mod:`vibrogear.config.housing_walls`); [] for a housing without inner walls."""
+    planes: dict[int, float] = {}
+    for b in bores:
+        m = re.search(r"/inner(\d+)$", getattr(b, "name", "") or "")
+        if m:
+            planes.setdefault(int(m.group(1)), 0.5 * (b.y_range[0] + b.y_range[1]))
+    return [planes[k] for k in sorted(planes)]
+
+
 def classify_points(points: np.ndarray, planes: np.ndarray, bores) -> np.ndarray:
     """Region index of each point: 6 + b inside bore b's boss (within
     :data:`BOSS_RADIUS_FACTOR` bore radii of its axis, within its axial extent), else the
-    wall whose plane is nearest."""
+    wall whose plane is nearest: the six outer walls, then the inner walls (6 + B + k)."""
     p = np.asarray(points, float).reshape(-1, 3)
-    dist = np.full((len(p), 6), np.inf)
+    inner = inner_wall_planes(bores)
+    dist = np.full((len(p), 6 + len(inner)), np.inf)
     for k, d in enumerate(_DIRECTIONS):
         if np.isfinite(planes[k]):
             dist[:, k] = np.abs(p @ np.abs(d) - planes[k])
+    for k, y in enumerate(inner):
+        dist[:, 6 + k] = np.abs(p[:, 1] - y)
     region = np.argmin(dist, axis=1)
+    region[region >= 6] += len(bores)
     for j, b in enumerate(bores):
         ax = np.asarray(b.axis, float) / np.linalg.norm(b.axis)
         rel = p - np.asarray(b.center, float)
@@ -140,11 +158,13 @@ def classify_points(points: np.ndarray, planes: np.ndarray, bores) -> np.ndarray
 
 def region_normals(planes: np.ndarray, bores) -> np.ndarray:
     return np.vstack([_DIRECTIONS] + [np.asarray(b.axis, float) / np.linalg.norm(b.axis)
-                                      for b in bores]).reshape(-1, 3)
+                                      for b in bores]
+                     + [np.array([0.0, 1.0, 0.0])] * len(inner_wall_planes(bores))).reshape(-1, 3)
 
 
 def region_names(bores) -> tuple[str, ...]:
-    return WALL_NAMES + tuple(f"bore {j + 1} ({b.name})" for j, b in enumerate(bores))
+    return WALL_NAMES + tuple(f"bore {j + 1} ({b.name})" for j, b in enumerate(bores)) + tuple(
+        f"inner wall {k + 1}" for k in range(len(inner_wall_planes(bores))))
 
 
 def _wall_motion(u: np.ndarray, normal: np.ndarray) -> str:
@@ -182,8 +202,9 @@ def _bore_motion(x: np.ndarray, u: np.ndarray, axis: np.ndarray) -> str:
 def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
                 ) -> tuple[tuple[str, ...], np.ndarray]:
     """(a label per mode, the region its picture should face (m,)) from the kinetic-energy
-    shares, the first rule that applies (a bore belongs to the wall its axis points through;
-    a wall's "group" is the wall with its bores):
+    shares, the first rule that applies (a bore belongs to the wall its axis points through,
+    an inner wall's bore ``<name>/inner<k>`` to inner wall k; a wall's "group" is the wall
+    with its bores; only the six outer walls have an opposite):
 
     1. the largest group and the opposite one hold :data:`PAIR_SHARE`, the smaller at least
        half the larger: "front and back walls bending (44 % of KE)";
@@ -195,22 +216,27 @@ def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
     A wall's motion is "bending" when the motion normal to it carries most of its vertices'
     |u|^2, else "sway along" the in-plane axis with more; a boss's by a rigid fit."""
     n_wall = 6
-    owner = np.array([int(np.argmax(normals[:n_wall] @ normals[r])) for r in range(n_wall, len(names))],
-                     dtype=int)
+    inner0 = n_wall + sum(1 for n in names[n_wall:] if n.startswith("bore "))   # first inner wall
+    owner = []
+    for r in range(n_wall, inner0):
+        m = re.search(r"/inner(\d+)\)$", names[r])
+        owner.append(inner0 + int(m.group(1)) - 1 if m else int(np.argmax(normals[:n_wall] @ normals[r])))
+    owner = np.array(owner, dtype=int)
     out, where = [], np.zeros(len(energy), dtype=np.int64)
     for i, e in enumerate(np.asarray(energy, float)):
         if not e.size or not np.isfinite(e).all() or e.sum() <= 0:
             out.append("")
             continue
         e = e / e.sum()
-        group = e[:n_wall].copy()
-        np.add.at(group, owner, e[n_wall:])
+        group = e.copy()
+        group[n_wall:inner0] = 0.0                               # the walls with their bores
+        np.add.at(group, owner, e[n_wall:inner0])
         order = np.argsort(e)[::-1]
         k, w = int(order[0]), int(np.argmax(group))
-        o = w ^ 1                                                # the opposite wall
+        o = w ^ 1 if w < n_wall else w                           # the opposite wall
         motion_of = lambda r: _wall_motion(np.asarray(values[vertex_region == r, :, i], float),  # noqa: E731
                                            normals[r])
-        if group[o] >= 0.5 * group[w] and group[w] + group[o] >= PAIR_SHARE:
+        if o != w and group[o] >= 0.5 * group[w] and group[w] + group[o] >= PAIR_SHARE:
             motions = {motion_of(r) for r in (w, o)}
             motion = motions.pop() if len(motions) == 1 else "moving"
             out.append(f"{_PAIRS[w // 2]} {motion} ({100 * (group[w] + group[o]):.0f} % of KE)")
@@ -218,7 +244,7 @@ def mode_labels(energy: np.ndarray, names, normals, verts, values, vertex_region
         elif e[k] >= DOMINANT_SHARE:
             sel = vertex_region == k
             u = np.asarray(values[sel, :, i], float)
-            motion = (_wall_motion(u, normals[k]) if k < n_wall else
+            motion = (_wall_motion(u, normals[k]) if not n_wall <= k < inner0 else
                       _bore_motion(verts[sel], u, normals[k]) if sel.sum() >= 3 else "")
             out.append(f"{names[k]} {motion} ({100 * e[k]:.0f} % of KE)".replace("  ", " "))
             where[i] = k
@@ -300,7 +326,7 @@ def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rh
     tags = np.concatenate([p[2] for p in pieces])
     planes = wall_planes(verts, merged, tags)
     cell_region = classify_points(np.vstack([p[4] for p in pieces]), planes, bores)
-    n_reg = 6 + len(bores)
+    n_reg = 6 + len(bores) + len(inner_wall_planes(bores))
     energy = np.zeros((m, n_reg))
     np.add.at(energy.T, cell_region, np.vstack([p[5] for p in pieces]))
     names, normals = region_names(bores), region_normals(planes, bores)
