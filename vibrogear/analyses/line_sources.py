@@ -10,7 +10,9 @@ Candidate sources at a driving speed n [rpm] (f_s = n / 60, speed ratios from
 * ``bearing``: each rolling-element bearing's cage (FTF), outer- and inner-race ball-pass
   frequencies (BPFO, BPFI) by the closed forms of
   :func:`~vibrogear.solvers.sequential.spectral_lines.bearing_frequencies`, inner race on the
-  shaft, outer race fixed, contact angle 0 (radial ball and roller bearings).  The config
+  shaft, outer race fixed, contact angle 0 (radial ball and roller bearings).  A bearing
+  given by designation, boundary dimensions or element set brings its own element count,
+  element and pitch diameters (``GearboxBearingConfig.element_set``).  Otherwise the config
   gives the number of elements (the bearing's or the housing bore's ``rolling_elements``) but
   no ball and pitch diameters; they are taken from the journal diameter d (the shaft section
   at the bearing) and the bore diameter D (the housing bore; 2 d without one) by the
@@ -73,6 +75,13 @@ def bearing_geometry(scene) -> list[dict]:
         s = cfg.shaft_index(b.shaft, "")
         sh = cfg.shafts[s]
         d = _journal_diameter(sh, b.position)
+        es = b.element_set()
+        if es is not None:            # its own elements (designation, dimensions, element set)
+            out.append({"name": b.name, "shaft": s, "elements": int(es.count),
+                        "d_over_D": es.element_diameter / es.pitch_diameter,
+                        "ball_m": es.element_diameter, "pitch_m": es.pitch_diameter,
+                        "from": "the bearing's element set"})
+            continue
         bore = bores.get(sh.bore)
         n = b.elements or (getattr(bore, "rolling_elements", None) if bore else None)
         if not n:
