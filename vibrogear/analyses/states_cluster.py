@@ -24,12 +24,18 @@
     :func:`~vibrogear.solvers.sequential.motion.batch_blocks`: B - 1 degrees of freedom),
     plus ``stat_tol`` times the statistic's largest value over all starts here.
 
+  A motion joins, among the attractors whose first member it agrees with, the one with the
+  smallest score (:func:`non_periodic_score`: the largest ratio of a difference to what its
+  test allows).  Then a group is split where its members' qmin (or qmax) fall into two
+  clumps of at least :data:`GAP_SIDE` whose gap, over the larger spread of the two sides,
+  exceeds what one distribution gives in 99 % of draws (:func:`split_by_extrema`): distinct
+  tori with converged extrema, whose other statistics overlap within their errors.
   The attractor's extrema are the envelope of its members' (the pooled record's), its
   exponent the members' mean with the combined interval, and its class the one that
   interval gives (chaotic when it lies above 0).  Evidence for the rule: docs/states.md.
 
-Grouping is greedy in start order (a motion joins the first attractor whose first member it
-agrees with: the result does not depend on how the starts were split over workers).  The
+Grouping runs in start order (periodic motions join the first attractor they agree with):
+the result does not depend on how the starts were split over workers.  The
 basin fraction of an attractor is k / N_ok (k starts end there, N_ok starts settled without
 an integrator failure) with its Wilson 95 % score interval (``scipy.stats.binomtest``).
 """
@@ -47,7 +53,8 @@ from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, QUAS
                                          batch_blocks, motion_class)
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
-           "same_non_periodic", "non_periodic_score", "CLOUD_ALPHA", "CLOUD_MIN", "RANGE_OVERLAP", "LEVEL"]
+           "same_non_periodic", "non_periodic_score", "split_by_extrema", "gap_ratio",
+           "gap_threshold"]
 
 #: two-sided level of one statistic's comparison: 3 standard deviations of a normal law
 LEVEL = float(2.0 * norm.sf(3.0))
@@ -235,39 +242,35 @@ def gap_threshold(n: int, draws: int = 4000) -> float:
     one exponential law (a heavier tail than the Gumbel law of record extrema: one
     attractor's extrema split by chance at most 1 - GAP_QUANTILE of the time); fixed seed."""
     v = np.sort(np.random.default_rng(12345).exponential(size=(draws, n)), axis=1)
-    return float(np.quantile(_gap_ratios(v), GAP_QUANTILE))
+    return float(np.quantile(_gap_ratios(v)[0], GAP_QUANTILE))
 
 
-def _gap_ratios(v: np.ndarray) -> np.ndarray:
+def _gap_ratios(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per row of sorted ``v`` (rows, n): the largest gap between neighbours with at least
-    GAP_SIDE values on each side, over the larger standard deviation of the two sides."""
+    GAP_SIDE values on each side over the larger standard deviation of the two sides, and
+    the index of the first value above that gap."""
     n = v.shape[1]
-    best = np.zeros(v.shape[0])
+    best, at = np.zeros(v.shape[0]), np.zeros(v.shape[0], int)
     c1, c2 = np.cumsum(v, axis=1), np.cumsum(v * v, axis=1)
     for k in range(GAP_SIDE, n - GAP_SIDE + 1):
-        m = n - k
-        lv = np.maximum(c2[:, k - 1] - c1[:, k - 1] ** 2 / k, 0.0) / (k - 1)
         s1, s2 = c1[:, -1] - c1[:, k - 1], c2[:, -1] - c2[:, k - 1]
-        rv = np.maximum(s2 - s1 ** 2 / m, 0.0) / (m - 1)
-        sd = np.sqrt(np.maximum(lv, rv))
-        gap = v[:, k] - v[:, k - 1]
-        best = np.maximum(best, np.where(sd > 0, gap / np.where(sd > 0, sd, 1.0),
-                                         np.where(gap > 0, np.inf, 0.0)))
-    return best
+        var = np.maximum((c2[:, k - 1] - c1[:, k - 1] ** 2 / k) / (k - 1),
+                         (s2 - s1 ** 2 / (n - k)) / (n - k - 1))
+        sd, gap = np.sqrt(np.maximum(var, 0.0)), v[:, k] - v[:, k - 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(sd > 0, gap / sd, np.where(gap > 0, np.inf, 0.0))
+        at = np.where(r > best, k, at)
+        best = np.maximum(best, r)
+    return best, at
 
 
 def gap_ratio(values) -> tuple[float, float]:
-    """(ratio, cut): :func:`_gap_ratios` of ``values`` and the value between the two sides."""
+    """(ratio, cut) of ``values``: :func:`_gap_ratios` and the middle of that gap."""
     v = np.sort(np.asarray(values, dtype=float))
     if v.size < 2 * GAP_SIDE:
         return 0.0, math.nan
-    best, cut = 0.0, math.nan
-    for k in range(GAP_SIDE, v.size - GAP_SIDE + 1):
-        sd = max(np.std(v[:k], ddof=1), np.std(v[k:], ddof=1))
-        g = (v[k] - v[k - 1]) / sd if sd > 0 else (math.inf if v[k] > v[k - 1] else 0.0)
-        if g > best:
-            best, cut = g, 0.5 * (v[k] + v[k - 1])
-    return best, cut
+    best, at = (x[0] for x in _gap_ratios(v[None, :]))
+    return float(best), (0.5 * float(v[at] + v[at - 1]) if best > 0 else math.nan)
 
 
 def split_by_extrema(members: list) -> list[list]:
