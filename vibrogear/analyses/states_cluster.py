@@ -1,43 +1,27 @@
-"""The settled motions of one parameter value grouped into attractors, with their basins.
+"""The settled motions of one parameter value grouped into attractors, with their basins
+(the rule, its reasons and the evidence behind it: docs/states.md).
 
 * **Periodic** motions (the sweep point's period n > 0) are one attractor when they have the
   same n and their last n stroboscopic states (the cycle) agree after a cyclic shift: the
   largest difference, each block (positions, velocities) divided by its largest |value| over
-  all cycles at this parameter value (as the period test scales), at most ``cluster_tol``.
-* **Non-periodic** motions (quasi-periodic, chaotic, aperiodic: one family; "not settled"
-  only with "not settled") are one attractor when every test below passes.  A short record
-  of one chaotic attractor is classed quasi-periodic or chaotic by chance (the exponent's
-  interval straddles 0 or not), and its extrema are the rare excursions of that window: the
-  tests use statistics that converge, with errors that say how far short records scatter.
+  all cycles at this parameter value (as the period test scales), at most ``cluster_tol``;
+  a motion joins the first such attractor.
+* **Non-periodic** motions (quasi-periodic, chaotic, aperiodic: one family, since a short
+  record of one chaotic attractor is classed either way by chance; "not settled" only with
+  "not settled") are one attractor when every test of :func:`non_periodic_score` passes:
+  exponents within 3 combined standard errors; stroboscopic clouds not told apart by the
+  two-sample Kolmogorov-Smirnov test at :data:`CLOUD_ALPHA`; ranges [qmin, qmax] sharing
+  :data:`RANGE_OVERLAP` of their union; impacts and rattle per mesh within the Welch t
+  quantile of :data:`LEVEL` times their batch-means errors plus ``stat_tol`` of the largest
+  value here.  A motion joins the closest attractor it agrees with (smallest score).  A
+  group is then split where its qmin or qmax fall into two clumps (:func:`split_by_extrema`:
+  distinct tori whose other statistics agree within their errors).  Its extrema are the
+  envelope of its members', its exponent their mean, its class :func:`group_class`.
 
-  - **Exponent**: the largest Lyapunov exponents agree within 3 combined standard errors
-    (each the 95 % interval's half-width / 1.96), where both were computed;
-  - **Stroboscopic cloud**: the two-sample Kolmogorov-Smirnov test
-    (``scipy.stats.ks_2samp``) of the monitored deformation at the period multiples does
-    not reject at :data:`CLOUD_ALPHA` (records of at least :data:`CLOUD_MIN` periods);
-  - **Range**: the deformation ranges [qmin, qmax] overlap over at least
-    :data:`RANGE_OVERLAP` of their union (a quiet torus inside a rattle's range is not the
-    rattle);
-  - **Impacts and rattle** per mesh: the difference within the Welch t quantile of the
-    0.27 % two-sided level (3 standard deviations of a normal law) times the combined
-    batch-means error (``_err``; each from B blocks of the record,
-    :func:`~vibrogear.solvers.sequential.motion.batch_blocks`: B - 1 degrees of freedom),
-    plus ``stat_tol`` times the statistic's largest value over all starts here.
-
-  A motion joins, among the attractors whose first member it agrees with, the one with the
-  smallest score (:func:`non_periodic_score`: the largest ratio of a difference to what its
-  test allows).  Then a group is split where its members' qmin (or qmax) fall into two
-  clumps of at least :data:`GAP_SIDE` whose gap, over the larger spread of the two sides,
-  exceeds what one distribution gives in 99 % of draws (:func:`split_by_extrema`): distinct
-  tori with converged extrema, whose other statistics overlap within their errors.
-  The attractor's extrema are the envelope of its members' (the pooled record's), its
-  exponent the members' mean with the combined interval, and its class the one that
-  interval gives (chaotic when it lies above 0).  Evidence for the rule: docs/states.md.
-
-Grouping runs in start order (periodic motions join the first attractor they agree with):
-the result does not depend on how the starts were split over workers.  The
-basin fraction of an attractor is k / N_ok (k starts end there, N_ok starts settled without
-an integrator failure) with its Wilson 95 % score interval (``scipy.stats.binomtest``).
+Grouping runs in start order: the result does not depend on how the starts were split over
+workers.  The basin fraction of an attractor is k / N_ok (k starts end there, N_ok starts
+settled without an integrator failure) with its Wilson 95 % score interval
+(``scipy.stats.binomtest``).
 """
 from __future__ import annotations
 
@@ -50,11 +34,11 @@ from scipy.stats import binomtest, ks_2samp, norm
 from scipy.stats import t as student_t
 
 from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC,
-                                         batch_blocks, motion_class)
+                                         batch_blocks)
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
-           "same_non_periodic", "non_periodic_score", "split_by_extrema", "gap_ratio",
-           "gap_threshold"]
+           "non_periodic_score", "split_by_extrema", "gap_ratio",
+           "gap_threshold", "group_class"]
 
 #: two-sided level of one statistic's comparison: 3 standard deviations of a normal law
 LEVEL = float(2.0 * norm.sf(3.0))
@@ -69,6 +53,10 @@ RANGE_OVERLAP = 0.5
 #: interval); "not settled" is grouped only with itself
 _FAMILY = {QUASI_PERIODIC: 1, CHAOTIC: 1, APERIODIC: 1}
 _Z95 = float(norm.isf(0.025))
+#: a torus's record is classed chaotic (95 % interval above 0) at most this often
+CHAOTIC_BY_CHANCE = 0.025
+#: a group is chaotic when its chaotic members are this unlikely for a torus
+CLASS_LEVEL = 0.01
 #: an extrema gap splits a group only with at least this many members on each side
 GAP_SIDE = 3
 #: ... and when it exceeds this quantile of the largest gap ratio of one distribution
@@ -221,7 +209,8 @@ def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
     pa, pb = (np.asarray(r.poincare, dtype=float) for r in (a, b))
     pa, pb = pa[np.isfinite(pa)], pb[np.isfinite(pb)]
     if min(pa.size, pb.size) >= CLOUD_MIN:
-        pv = float(ks_2samp(pa, pb).pvalue)
+        pv = float(ks_2samp(pa, pb, method="auto" if pa.size * pb.size <= 10_000
+                            else "asymp").pvalue)
         worst = max(worst, math.log(max(pv, 1e-300)) / math.log(CLOUD_ALPHA))
     na, nb = _blocks(a), _blocks(b)
     ma, mb = _mesh_stats(a, meshes), _mesh_stats(b, meshes)
@@ -229,11 +218,6 @@ def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
         for k in (0, 1):
             worst = max(worst, _ratio(*ma[g][k], na, *mb[g][k], nb, stat_tol * floors[g][k]))
     return worst
-
-
-def same_non_periodic(a, b, meshes, floors, stat_tol: float) -> bool:
-    """Whether non-periodic records ``a`` and ``b`` are one attractor (module docstring)."""
-    return non_periodic_score(a, b, meshes, floors, stat_tol) <= 1.0
 
 
 @lru_cache(maxsize=None)
@@ -290,16 +274,33 @@ def split_by_extrema(members: list) -> list[list]:
     return [members]
 
 
-def _pooled_exponent(members) -> tuple[float, tuple, int | None]:
-    """(mean exponent, its 95 % interval, the class it gives) of non-periodic members."""
+def _pooled_exponent(members) -> tuple[float, tuple]:
+    """The members' mean exponent and its 95 % interval from their standard errors (the
+    sampling scatter only: a torus's finite-time exponent is biased above 0)."""
     lam = np.array([r.lyapunov for r in members], float)
     sig = np.array([_sigma(r) for r in members], float)
     ok = np.isfinite(lam) & np.isfinite(sig)
     if not ok.any():
-        return math.nan, (math.nan, math.nan), None
+        return math.nan, (math.nan, math.nan)
     mean = float(lam[ok].mean())
     half = _Z95 * float(math.sqrt(np.sum(sig[ok] ** 2))) / int(ok.sum())
-    return mean, (mean - half, mean + half), motion_class(0, (mean - half, mean + half))
+    return mean, (mean - half, mean + half)
+
+
+def group_class(members) -> int:
+    """The class of a group of non-periodic members: chaotic when more of them are classed
+    chaotic than a quasi-periodic torus gives by chance (each record's 95 % interval lies
+    above 0 at most :data:`CHAOTIC_BY_CHANCE` of the time; binomial test at
+    :data:`CLASS_LEVEL`), else quasi-periodic when any member is; else the first's."""
+    classes = [int(r.motion_class) for r in members]
+    if not all(_FAMILY.get(c) for c in classes):
+        return classes[0]
+    k = sum(c == CHAOTIC for c in classes)
+    if k and binomtest(k, len(classes), CHAOTIC_BY_CHANCE,
+                       alternative="greater").pvalue < CLASS_LEVEL:
+        return CHAOTIC
+    return QUASI_PERIODIC if any(c in (QUASI_PERIODIC, CHAOTIC) for c in classes) \
+        else classes[0]
 
 
 def _cycle_distance(a: np.ndarray, b: np.ndarray) -> float:
@@ -362,12 +363,11 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
         k = len(members)
         if att.period_n == 0:           # the pooled record: envelope, exponent, class
             att.qmin, att.qmax = float(q0.min()), float(q1.max())
-            att.lyapunov, att.lyapunov_ci, cls = _pooled_exponent(members)
+            att.lyapunov, att.lyapunov_ci = _pooled_exponent(members)
+            att.motion_class = group_class(members)
             for r in members:
                 name = MOTION_LEGEND[r.motion_class]
                 att.member_classes[name] = att.member_classes.get(name, 0) + 1
-            if cls is not None and _FAMILY.get(att.motion_class):
-                att.motion_class = int(cls)
         att.qmin_err = float(q0.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         att.qmax_err = float(q1.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         for g in meshes:
