@@ -276,7 +276,8 @@ def split_by_extrema(members: list) -> list[list]:
 
 def _pooled_exponent(members) -> tuple[float, tuple]:
     """The members' mean exponent and its 95 % interval from their standard errors (the
-    sampling scatter only: a torus's finite-time exponent is biased above 0)."""
+    sampling scatter only, not a bias of the finite-time estimate: the class is not read
+    from it, :func:`group_class`)."""
     lam = np.array([r.lyapunov for r in members], float)
     sig = np.array([_sigma(r) for r in members], float)
     ok = np.isfinite(lam) & np.isfinite(sig)
