@@ -235,6 +235,7 @@ def _gap_ratios(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     the index of the first value above that gap."""
     n = v.shape[1]
     best, at = np.zeros(v.shape[0]), np.zeros(v.shape[0], int)
+    v = v - v.mean(axis=1, keepdims=True)            # centred: sums of squares stay exact
     c1, c2 = np.cumsum(v, axis=1), np.cumsum(v * v, axis=1)
     for k in range(GAP_SIDE, n - GAP_SIDE + 1):
         s1, s2 = c1[:, -1] - c1[:, k - 1], c2[:, -1] - c2[:, k - 1]
