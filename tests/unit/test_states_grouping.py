@@ -171,12 +171,22 @@ def test_two_tori_with_overlapping_statistics_but_separate_extrema_stay_two():
     assert groups == [list(range(0, 16, 2)), list(range(1, 16, 2))]
 
 
-def test_not_settled_motions_are_grouped_only_with_not_settled_ones():
+def test_not_settled_motions_join_only_when_the_budget_alone_stopped_them():
+    """'Not settled' because the transient budget ran out, exponent interval around the
+    others' and the same statistics: on the attractor.  'Not settled' with an exponent
+    interval below 0 (the motion still converges, e.g. to an orbit): apart."""
     recs = [_chaotic(k, seed=40 + k) for k in range(3)]
-    r = recs[0]
-    recs.append(PointRecord(**{**r.__dict__, "index": 3, "motion_class": NOT_SETTLED}))
-    groups, _, _ = _group(recs)
-    assert groups == [[0, 1, 2], [3]]
+    lam = recs[0].lyapunov
+    budget = PointRecord(**{**recs[1].__dict__, "index": 3, "motion_class": NOT_SETTLED,
+                            "lyapunov_ci": (lam - 0.8, lam + 0.8)})
+    converging = PointRecord(**{**recs[2].__dict__, "index": 4, "motion_class": NOT_SETTLED,
+                                "lyapunov": -0.05, "lyapunov_ci": (-0.08, -0.02)})
+    groups, atts, _ = _group(recs + [budget, converging])
+    assert groups == [[0, 1, 2, 3], [4]]
+    big = next(a for a in atts if a.count == 4)
+    assert big.class_name == "chaotic" and big.member_classes == {"chaotic": 3,
+                                                                    "not settled": 1}
+    assert next(a for a in atts if a.count == 1).class_name == "not settled"
 
 
 @pytest.mark.parametrize("n", [6, 8, 16, 32])

@@ -6,9 +6,9 @@
   largest difference, each block (positions, velocities) divided by its largest |value| over
   all cycles at this parameter value (as the period test scales), at most ``cluster_tol``;
   a motion joins the first such attractor.
-* **Non-periodic** motions (quasi-periodic, chaotic, aperiodic: one family, since a short
-  record of one chaotic attractor is classed either way by chance; "not settled" only with
-  "not settled") are one attractor when every test of :func:`non_periodic_score` passes:
+* **Non-periodic** motions (quasi-periodic, chaotic, aperiodic and "not settled" by the
+  budget alone: one family, since a short record of one chaotic attractor is classed any of
+  these ways by chance; "not settled" with an exponent below 0 only with its own kind) are one attractor when every test of :func:`non_periodic_score` passes:
   exponents within 3 combined standard errors; stroboscopic clouds not told apart by the
   two-sample Kolmogorov-Smirnov test at :data:`CLOUD_ALPHA`; ranges [qmin, qmax] sharing
   :data:`RANGE_OVERLAP` of their union; impacts and rattle per mesh within the Welch t
@@ -33,8 +33,8 @@ import numpy as np
 from scipy.stats import binomtest, ks_2samp, norm
 from scipy.stats import t as student_t
 
-from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC,
-                                         batch_blocks)
+from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
+                                         QUASI_PERIODIC, batch_blocks)
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
            "non_periodic_score", "split_by_extrema", "gap_ratio",
@@ -43,15 +43,14 @@ __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths
 #: two-sided level of one statistic's comparison: 3 standard deviations of a normal law
 LEVEL = float(2.0 * norm.sf(3.0))
 #: two stroboscopic clouds differ when the two-sample KS test rejects at this level (low:
-#: the samples of a chaotic record are correlated, which makes the test's p-values too small)
+#: correlated samples of a chaotic record make the test's p-values too small)
 CLOUD_ALPHA = 1e-3
 #: ... tested only where both records have at least this many samples
 CLOUD_MIN = 8
 #: two deformation ranges [qmin, qmax] must overlap over at least this fraction of their union
 RANGE_OVERLAP = 0.5
-#: the classes one non-periodic attractor's short records fall into (by the exponent's
-#: interval); "not settled" is grouped only with itself
-_FAMILY = {QUASI_PERIODIC: 1, CHAOTIC: 1, APERIODIC: 1}
+#: the classes one non-periodic attractor's short records fall into (and :func:`_in_family`)
+_FAMILY = frozenset((QUASI_PERIODIC, CHAOTIC, APERIODIC))
 _Z95 = float(norm.isf(0.025))
 #: a torus's record is classed chaotic (95 % interval above 0) at most this often
 CHAOTIC_BY_CHANCE = 0.025
@@ -165,6 +164,13 @@ def _blocks(r) -> int:
     return batch_blocks(len(r.poincare))[1] if r.poincare is not None else 0
 
 
+def _in_family(r) -> bool:
+    """Quasi-periodic, chaotic or aperiodic; or "not settled" because the budget ran out
+    while the exponent's interval does not lie below 0 (one that does still converges)."""
+    c = int(r.motion_class)
+    return c in _FAMILY or (c == NOT_SETTLED and not float(r.lyapunov_ci[1]) < 0.0)
+
+
 def _sigma(r) -> float:
     """Standard error of a record's exponent (95 % half-width / 1.96; NaN: none)."""
     lo, hi = (float(c) for c in r.lyapunov_ci)
@@ -193,8 +199,7 @@ def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
     ratio of a test's difference to what it allows (module docstring); <= 1: one attractor,
     inf: classes that cannot be one.  ``floors``: per mesh the largest (impacts, rattle)
     over the records of this parameter value."""
-    if a.motion_class != b.motion_class and not (
-            _FAMILY.get(a.motion_class) and _FAMILY.get(b.motion_class)):
+    if a.motion_class != b.motion_class and not (_in_family(a) and _in_family(b)):
         return math.inf
     worst = 0.0
     sa, sb = _sigma(a), _sigma(b)
@@ -295,7 +300,7 @@ def group_class(members) -> int:
     above 0 at most :data:`CHAOTIC_BY_CHANCE` of the time; binomial test at
     :data:`CLASS_LEVEL`), else quasi-periodic when any member is; else the first's."""
     classes = [int(r.motion_class) for r in members]
-    if not all(_FAMILY.get(c) for c in classes):
+    if not all(_in_family(r) for r in members):
         return classes[0]
     k = sum(c == CHAOTIC for c in classes)
     if k and binomtest(k, len(classes), CHAOTIC_BY_CHANCE,
