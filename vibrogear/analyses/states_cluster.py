@@ -1,31 +1,65 @@
-"""The settled motions of one parameter value grouped into attractors, with their basins.
+"""The settled motions of one parameter value grouped into attractors, with their basins
+(the rule, its reasons and the evidence behind it: docs/states.md).
 
 * **Periodic** motions (the sweep point's period n > 0) are one attractor when they have the
   same n and their last n stroboscopic states (the cycle) agree after a cyclic shift: the
   largest difference, each block (positions, velocities) divided by its largest |value| over
-  all cycles at this parameter value (as the period test scales), at most ``cluster_tol``.
-* **Non-periodic** motions are one attractor when they have the same class (quasi-periodic,
-  chaotic, not settled, ...) and their statistics agree: the extrema of the monitored
-  deformation and, per mesh, the impacts per period and the rattle energy, each within 3
-  combined standard errors (the record's batch-means ``_err``) plus ``stat_tol`` times the
-  statistic's spread over all starts at this parameter value.
+  all cycles at this parameter value (as the period test scales), at most ``cluster_tol``;
+  a motion joins the first such attractor.
+* **Non-periodic** motions (quasi-periodic, chaotic, aperiodic and "not settled" by the
+  budget alone: one family, since a short record of one chaotic attractor is classed any of
+  these ways by chance; "not settled" with an exponent below 0 only with its own kind) are one attractor when every test of :func:`non_periodic_score` passes:
+  exponents within 3 combined standard errors; stroboscopic clouds not told apart by the
+  two-sample Kolmogorov-Smirnov test at :data:`CLOUD_ALPHA`; ranges [qmin, qmax] sharing
+  :data:`RANGE_OVERLAP` of their union; impacts and rattle per mesh within the Welch t
+  quantile of :data:`LEVEL` times their batch-means errors plus ``stat_tol`` of the largest
+  value here.  A motion joins the closest attractor it agrees with (smallest score).  A
+  group is then split where its qmin or qmax fall into two clumps (:func:`split_by_extrema`:
+  distinct tori whose other statistics agree within their errors).  Its extrema are the
+  envelope of its members', its exponent their mean, its class :func:`group_class`.
 
-Grouping is greedy in start order (a motion joins the first attractor it agrees with: the
-result does not depend on how the starts were split over workers).  The basin fraction of
-an attractor is k / N_ok (k starts end there, N_ok starts settled without an integrator
-failure) with its Wilson 95 % score interval (``scipy.stats.binomtest``).
+Grouping runs in start order: the result does not depend on how the starts were split over
+workers.  The basin fraction of an attractor is k / N_ok (k starts end there, N_ok starts
+settled without an integrator failure) with its Wilson 95 % score interval
+(``scipy.stats.binomtest``).
 """
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import binomtest
+from scipy.stats import binomtest, ks_2samp, norm
+from scipy.stats import t as student_t
 
-from ..solvers.sequential.motion import MOTION_LEGEND
+from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
+                                         QUASI_PERIODIC, batch_blocks)
 
-__all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths"]
+__all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
+           "non_periodic_score", "split_by_extrema", "gap_ratio",
+           "gap_threshold", "group_class"]
+
+#: two-sided level of one statistic's comparison: 3 standard deviations of a normal law
+LEVEL = float(2.0 * norm.sf(3.0))
+#: two stroboscopic clouds differ when the two-sample KS test rejects at this level (low:
+#: correlated samples of a chaotic record make the test's p-values too small)
+CLOUD_ALPHA = 1e-3
+#: ... tested only where both records have at least this many samples
+CLOUD_MIN = 8
+#: two deformation ranges [qmin, qmax] must overlap over at least this fraction of their union
+RANGE_OVERLAP = 0.5
+#: the classes one non-periodic attractor's short records fall into (and :func:`_in_family`)
+_FAMILY = frozenset((QUASI_PERIODIC, CHAOTIC, APERIODIC))
+_Z95 = float(norm.isf(0.025))
+#: a torus's record is classed chaotic (95 % interval above 0) at most this often
+CHAOTIC_BY_CHANCE = 0.025
+#: a group is chaotic when its chaotic members are this unlikely for a torus
+CLASS_LEVEL = 0.01
+#: an extrema gap splits a group only with at least this many members on each side
+GAP_SIDE = 3
+#: ... and when it exceeds this quantile of the largest gap ratio of one distribution
+GAP_QUANTILE = 0.99
 
 
 def wilson(k: int, n: int) -> tuple[float, float]:
@@ -68,6 +102,9 @@ class Attractor:
     stable: bool | None = None     # from the shot orbit's Floquet multipliers
     max_multiplier: float = math.nan
     seen_by_sweep: bool | None = None
+    lyapunov: float = math.nan     # non-periodic: members' mean exponent, its 95 % interval
+    lyapunov_ci: tuple = (math.nan, math.nan)
+    member_classes: dict = field(default_factory=dict)   # class name: members (non-periodic)
 
     @property
     def count(self) -> int:
@@ -96,7 +133,9 @@ class Attractor:
                 "impacts_per_period": {k: v["impacts"] for k, v in self.metrics.items()},
                 "impacts_per_period_err": {k: v["impacts_err"] for k, v in self.metrics.items()},
                 "rattle": {k: v["rattle"] for k, v in self.metrics.items()},
-                "seen_by_sweep": self.seen_by_sweep}
+                "seen_by_sweep": self.seen_by_sweep, "lyapunov": _num(self.lyapunov),
+                "lyapunov_ci_95": [_num(c) for c in self.lyapunov_ci],
+                "member_classes": dict(self.member_classes)}
 
 
 def _num(x):
@@ -120,6 +159,157 @@ def _mesh_stats(r, meshes) -> dict:
     return out
 
 
+def _blocks(r) -> int:
+    """Batch-means blocks behind a record's ``_err`` values (its window: len(poincare))."""
+    return batch_blocks(len(r.poincare))[1] if r.poincare is not None else 0
+
+
+def _in_family(r) -> bool:
+    """Quasi-periodic, chaotic or aperiodic; or "not settled" because the budget ran out
+    while the exponent's interval does not lie below 0 (one that does still converges)."""
+    c = int(r.motion_class)
+    return c in _FAMILY or (c == NOT_SETTLED and not float(r.lyapunov_ci[1]) < 0.0)
+
+
+def _sigma(r) -> float:
+    """Standard error of a record's exponent (95 % half-width / 1.96; NaN: none)."""
+    lo, hi = (float(c) for c in r.lyapunov_ci)
+    return (hi - lo) / (2.0 * _Z95) if math.isfinite(lo) and math.isfinite(hi) else math.nan
+
+
+def _ratio(a, ea, na, b, eb, nb, floor) -> float:
+    """|a - b| over its allowance: the Welch t quantile of :data:`LEVEL` times the combined
+    error (errors ``ea``, ``eb`` from ``na``, ``nb`` batch-means blocks) plus ``floor``
+    (<= 1: they agree; NaN on both sides agrees, on one side does not)."""
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return 0.0 if (math.isnan(a) and math.isnan(b)) else math.inf
+    s2 = ea * ea + eb * eb
+    crit = float(norm.isf(LEVEL / 2))                 # 3
+    terms = [(e, n) for e, n in ((ea, na), (eb, nb)) if e > 0]
+    if terms and all(n >= 2 for _, n in terms):       # Welch-Satterthwaite dof
+        crit = float(student_t.isf(LEVEL / 2, s2 * s2 / sum(e ** 4 / (n - 1)
+                                                               for e, n in terms)))
+    allow = crit * math.sqrt(s2) + floor
+    d = abs(a - b)
+    return d / allow if allow > 0 else (0.0 if d == 0 else math.inf)
+
+
+def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
+    """How far non-periodic records ``a`` and ``b`` are from one attractor: the largest
+    ratio of a test's difference to what it allows (module docstring); <= 1: one attractor,
+    inf: classes that cannot be one.  ``floors``: per mesh the largest (impacts, rattle)
+    over the records of this parameter value."""
+    if a.motion_class != b.motion_class and not (_in_family(a) and _in_family(b)):
+        return math.inf
+    worst = 0.0
+    sa, sb = _sigma(a), _sigma(b)
+    if math.isfinite(sa) and math.isfinite(sb):
+        worst = _ratio(a.lyapunov, sa, 0, b.lyapunov, sb, 0, 0.0)
+    union = max(a.qmax, b.qmax) - min(a.qmin, b.qmin)
+    if union > 0:
+        shared = max(0.0, min(a.qmax, b.qmax) - max(a.qmin, b.qmin)) / union
+        worst = max(worst, (1.0 - shared) / (1.0 - RANGE_OVERLAP))
+    elif not union == 0:                                # NaN extrema
+        return math.inf
+    pa, pb = (np.asarray(r.poincare, dtype=float) for r in (a, b))
+    pa, pb = pa[np.isfinite(pa)], pb[np.isfinite(pb)]
+    if min(pa.size, pb.size) >= CLOUD_MIN:
+        pv = float(ks_2samp(pa, pb, method="auto" if pa.size * pb.size <= 10_000
+                            else "asymp").pvalue)
+        worst = max(worst, math.log(max(pv, 1e-300)) / math.log(CLOUD_ALPHA))
+    na, nb = _blocks(a), _blocks(b)
+    ma, mb = _mesh_stats(a, meshes), _mesh_stats(b, meshes)
+    for g in meshes:
+        for k in (0, 1):
+            worst = max(worst, _ratio(*ma[g][k], na, *mb[g][k], nb, stat_tol * floors[g][k]))
+    return worst
+
+
+@lru_cache(maxsize=None)
+def gap_threshold(n: int, draws: int = 4000) -> float:
+    """The :data:`GAP_QUANTILE` quantile of :func:`gap_ratio` over ``n`` values drawn from
+    one exponential law (a heavier tail than the Gumbel law of record extrema: one
+    attractor's extrema split by chance at most 1 - GAP_QUANTILE of the time); fixed seed."""
+    v = np.sort(np.random.default_rng(12345).exponential(size=(draws, n)), axis=1)
+    return float(np.quantile(_gap_ratios(v)[0], GAP_QUANTILE))
+
+
+def _gap_ratios(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of sorted ``v`` (rows, n): the largest gap between neighbours with at least
+    GAP_SIDE values on each side over the larger standard deviation of the two sides, and
+    the index of the first value above that gap."""
+    n = v.shape[1]
+    best, at = np.zeros(v.shape[0]), np.zeros(v.shape[0], int)
+    v = v - v.mean(axis=1, keepdims=True)            # centred: sums of squares stay exact
+    c1, c2 = np.cumsum(v, axis=1), np.cumsum(v * v, axis=1)
+    for k in range(GAP_SIDE, n - GAP_SIDE + 1):
+        s1, s2 = c1[:, -1] - c1[:, k - 1], c2[:, -1] - c2[:, k - 1]
+        var = np.maximum((c2[:, k - 1] - c1[:, k - 1] ** 2 / k) / (k - 1),
+                         (s2 - s1 ** 2 / (n - k)) / (n - k - 1))
+        sd, gap = np.sqrt(np.maximum(var, 0.0)), v[:, k] - v[:, k - 1]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.where(sd > 0, gap / sd, np.where(gap > 0, np.inf, 0.0))
+        at = np.where(r > best, k, at)
+        best = np.maximum(best, r)
+    return best, at
+
+
+def gap_ratio(values) -> tuple[float, float]:
+    """(ratio, cut) of ``values``: :func:`_gap_ratios` and the middle of that gap."""
+    v = np.sort(np.asarray(values, dtype=float))
+    if v.size < 2 * GAP_SIDE:
+        return 0.0, math.nan
+    best, at = (x[0] for x in _gap_ratios(v[None, :]))
+    return float(best), (0.5 * float(v[at] + v[at - 1]) if best > 0 else math.nan)
+
+
+def split_by_extrema(members: list) -> list[list]:
+    """A non-periodic group split where its extrema (qmin or qmax over the members) fall
+    into two clumps whose gap exceeds :func:`gap_threshold` (recursively; start order kept
+    in each part)."""
+    if len(members) < 2 * GAP_SIDE:
+        return [members]
+    limit = gap_threshold(len(members))
+    for key in ("qmin", "qmax"):
+        ratio, cut = gap_ratio([getattr(r, key) for r in members])
+        if ratio > limit:
+            low = [r for r in members if getattr(r, key) < cut]
+            high = [r for r in members if getattr(r, key) >= cut]
+            parts = split_by_extrema(low) + split_by_extrema(high)
+            return sorted(parts, key=lambda ms: ms[0].index)
+    return [members]
+
+
+def _pooled_exponent(members) -> tuple[float, tuple]:
+    """The members' mean exponent and its 95 % interval from their standard errors (the
+    sampling scatter only, not a bias of the finite-time estimate: the class is not read
+    from it, :func:`group_class`)."""
+    lam = np.array([r.lyapunov for r in members], float)
+    sig = np.array([_sigma(r) for r in members], float)
+    ok = np.isfinite(lam) & np.isfinite(sig)
+    if not ok.any():
+        return math.nan, (math.nan, math.nan)
+    mean = float(lam[ok].mean())
+    half = _Z95 * float(math.sqrt(np.sum(sig[ok] ** 2))) / int(ok.sum())
+    return mean, (mean - half, mean + half)
+
+
+def group_class(members) -> int:
+    """The class of a group of non-periodic members: chaotic when more of them are classed
+    chaotic than a quasi-periodic torus gives by chance (each record's 95 % interval lies
+    above 0 at most :data:`CHAOTIC_BY_CHANCE` of the time; binomial test at
+    :data:`CLASS_LEVEL`), else quasi-periodic when any member is; else the first's."""
+    classes = [int(r.motion_class) for r in members]
+    if not all(_in_family(r) for r in members):
+        return classes[0]
+    k = sum(c == CHAOTIC for c in classes)
+    if k and binomtest(k, len(classes), CHAOTIC_BY_CHANCE,
+                       alternative="greater").pvalue < CLASS_LEVEL:
+        return CHAOTIC
+    return QUASI_PERIODIC if any(c in (QUASI_PERIODIC, CHAOTIC) for c in classes) \
+        else classes[0]
+
+
 def _cycle_distance(a: np.ndarray, b: np.ndarray) -> float:
     return min(float(np.max(np.abs(a - np.roll(b, s, axis=0)))) for s in range(a.shape[0]))
 
@@ -135,7 +325,6 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
     cycles = [np.atleast_2d(r.states) for r in ok if r.period_n > 0 and r.states is not None]
     sx = max((float(np.max(np.abs(c[:, :m]))) for c in cycles), default=1.0) or 1.0
     sv = max((float(np.max(np.abs(c[:, m:]))) for c in cycles), default=1.0) or 1.0
-    qspread = (max(r.qmax for r in ok) - min(r.qmin for r in ok)) if ok else 0.0
     spread = {g: (max(_mesh_stats(r, meshes)[g][0][0] for r in ok),
                   max(_mesh_stats(r, meshes)[g][1][0] for r in ok)) for g in meshes}
     found: list[tuple[Attractor, list]] = []        # (attractor, member records)
@@ -146,39 +335,46 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
         c[:, m:] /= sv
         return c
 
-    def agree(a: float, ea: float, b: float, eb: float, scale: float) -> bool:
-        if not (math.isfinite(a) and math.isfinite(b)):
-            return math.isnan(a) and math.isnan(b)
-        return abs(a - b) <= 3.0 * math.hypot(ea, eb) + stat_tol * scale
-
-    def same(rep, r) -> bool:
-        if rep.period_n != r.period_n or rep.motion_class != r.motion_class:
+    def same_cycle(rep, r) -> bool:
+        if rep.period_n != r.period_n or rep.states is None or r.states is None:
             return False
-        if r.period_n > 0:
-            if rep.states is None or r.states is None:
-                return False
-            return _cycle_distance(scaled(rep.states), scaled(r.states)) <= cluster_tol
-        if not (agree(rep.qmin, 0, r.qmin, 0, qspread) and agree(rep.qmax, 0, r.qmax, 0, qspread)):
-            return False
-        a, b = _mesh_stats(rep, meshes), _mesh_stats(r, meshes)
-        return all(agree(*a[g][k], *b[g][k], spread[g][k]) for g in meshes for k in (0, 1))
+        return _cycle_distance(scaled(rep.states), scaled(r.states)) <= cluster_tol
 
     for r in ok:
-        for att, members in found:
-            if same(members[0], r):
-                members.append(r)
-                break
+        if r.period_n > 0:
+            home = next((members for _att, members in found if same_cycle(members[0], r)), None)
+        else:                    # the closest attractor among those it agrees with
+            scores = [(non_periodic_score(members[0], r, meshes, spread, stat_tol), j)
+                      for j, (att, members) in enumerate(found) if att.period_n == 0]
+            best = min(scores, default=(math.inf, -1))
+            home = found[best[1]][1] if best[0] <= 1.0 else None
+        if home is not None:
+            home.append(r)
         else:
             found.append((Attractor(point, float(param), int(r.motion_class), int(r.period_n)),
                           [r]))
-    out = []
+    parts = []
     for att, members in found:
+        if att.period_n > 0:
+            parts.append((att, members))
+            continue
+        for ms in split_by_extrema(members):
+            parts.append((Attractor(point, float(param), int(ms[0].motion_class), 0), ms))
+    out = []
+    for att, members in parts:
         att.members = [int(r.index) for r in members]
         att.n_ok = len(ok)
         q0 = np.array([r.qmin for r in members])
         q1 = np.array([r.qmax for r in members])
         att.qmin, att.qmax = float(q0.mean()), float(q1.mean())
         k = len(members)
+        if att.period_n == 0:           # the pooled record: envelope, exponent, class
+            att.qmin, att.qmax = float(q0.min()), float(q1.max())
+            att.lyapunov, att.lyapunov_ci = _pooled_exponent(members)
+            att.motion_class = group_class(members)
+            for r in members:
+                name = MOTION_LEGEND[r.motion_class]
+                att.member_classes[name] = att.member_classes.get(name, 0) + 1
         att.qmin_err = float(q0.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         att.qmax_err = float(q1.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         for g in meshes:

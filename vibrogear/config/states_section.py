@@ -54,9 +54,10 @@ class StatesSettings(SweepOptions):
     cluster_tol: float = spec(1e-3, gt=0.0, lt=1.0, doc="two periodic motions are one "
                               "attractor when their stroboscopic points agree within this "
                               "fraction of the states' size (as the period test measures)")
-    stat_tol: float = spec(0.05, gt=0.0, lt=1.0, doc="two non-periodic motions of one class "
-                           "are one attractor when extrema, impacts and rattle agree within "
-                           "3 standard errors plus this fraction of their spread")
+    stat_tol: float = spec(0.05, gt=0.0, lt=1.0, doc="two non-periodic motions are one "
+                           "attractor only when their impacts and rattle per mesh agree "
+                           "within their errors (3-sigma level, Welch t) plus this fraction "
+                           "of the largest value at that speed (docs/states.md)")
     branches: bool = spec(True, doc="continue a branch both ways from each distinct periodic "
                           "attractor that no branch found so far passes through")
     branch_max_points: int = spec(60, ge=2, le=100_000, doc="points per half-branch")
