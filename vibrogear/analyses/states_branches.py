@@ -14,9 +14,13 @@
 * :func:`compare_with_sweep`: whether the sweep (this run's, or ``sweep.npz`` in the output
   folder) passes through each attractor: some direction's sweep, linearly interpolated at
   the attractor's parameter between two good points, has the same periodicity (periodic or
-  not) at the nearer point and extrema within 5 % of the sweep's overall range of the
-  monitored deformation (plus 3 standard errors of the attractor's extrema).  A heuristic,
-  named as such in the summary; ``seen_by_sweep`` is None where there is no sweep.
+  not) at the nearer point and, for a periodic attractor, extrema within 5 % of the sweep's
+  overall range of the monitored deformation (plus 3 standard errors of the attractor's
+  extrema); for a non-periodic one (whose extrema are the envelope over its starts' records,
+  wider than one record's) a range [qmin, qmax] that overlaps the attractor's over at least
+  :data:`~.states_cluster.RANGE_OVERLAP` of their union, the census's own grouping test.  A
+  heuristic, named as such in the summary; ``seen_by_sweep`` is None where there is no
+  sweep.
 """
 from __future__ import annotations
 
@@ -29,6 +33,7 @@ from ..config.options import ContinuationOptions, ShootingOptions
 from ..pipeline.executors import run_units, under_mpi
 from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ..solvers.periodic.shooting import shoot
+from .states_cluster import RANGE_OVERLAP
 from .study import integration_options
 from .sweep_branches import on_branch
 
@@ -176,6 +181,13 @@ def compare_with_sweep(study, attractors, sweep) -> dict | None:
                 continue
             q0 = qmin[j0] + s * (qmin[j1] - qmin[j0])
             q1 = qmax[j0] + s * (qmax[j1] - qmax[j0])
+            if a.period_n == 0:        # the census's own range test (envelope vs one record)
+                union = max(q1, a.qmax) - min(q0, a.qmin)
+                shared = max(0.0, min(q1, a.qmax) - max(q0, a.qmin))
+                if union > 0 and shared >= RANGE_OVERLAP * union:
+                    seen = True
+                    break
+                continue
             tol = SWEEP_MATCH * span
             if abs(q0 - a.qmin) <= tol + 3 * _z(a.qmin_err) and \
                     abs(q1 - a.qmax) <= tol + 3 * _z(a.qmax_err):

@@ -69,8 +69,9 @@ def states_summary(result, cfg, opts, info) -> dict:
         "stopped_early_at": [float(result.params[i]) for i in info.get("stopped_early", [])],
         "per_speed": per_speed,
         "unseen_by_sweep": unseen if result.sweep is not None else None,
-        "sweep_match_rule": "periodicity and extrema within 5 % of the sweep's range "
-                            "(a heuristic)" if result.sweep is not None else None,
+        "sweep_match_rule": "periodicity, and extrema within 5 % of the sweep's range "
+                            "(periodic) or ranges overlapping over half their union "
+                            "(non-periodic): a heuristic" if result.sweep is not None else None,
         "branches": list(result.branch_notes),
         "counters": result.counters,
         "wall_split_s": {k: round(float(v), 3) for k, v in result.timings.items()},
