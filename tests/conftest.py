@@ -14,6 +14,8 @@ import os
 import shutil
 import tempfile
 
+import pytest
+
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
@@ -59,3 +61,17 @@ def pytest_unconfigure(config):
     if _controller(config):
         for d in _SESSION_CACHE:
             shutil.rmtree(d, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def empty_vibrogear_cache(tmp_path_factory):
+    """An empty vibrogear cache for one test module (tests that must see a cache miss or
+    keep their housings apart from the session's), the session's restored after it."""
+    d = tmp_path_factory.mktemp("vgcache")
+    old = os.environ.get("VIBROGEAR_CACHE_DIR")
+    os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
+    yield d
+    if old is None:
+        os.environ.pop("VIBROGEAR_CACHE_DIR")
+    else:
+        os.environ["VIBROGEAR_CACHE_DIR"] = old

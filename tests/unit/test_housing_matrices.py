@@ -33,18 +33,6 @@ def _cfg(**changes) -> HousingConfig:
     return build(HousingConfig, d, "housing")
 
 
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    d = tmp_path_factory.mktemp("vgcache")
-    old = os.environ.get("VIBROGEAR_CACHE_DIR")
-    os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
-    yield d
-    if old is None:
-        os.environ.pop("VIBROGEAR_CACHE_DIR")
-    else:
-        os.environ["VIBROGEAR_CACHE_DIR"] = old
-
-
 def _check(cfg, n_modes: int):
     """Full matrices vs master modes of ``cfg``: frequencies, bore values, bore-centre values."""
     from vibrogear.models.housing.run import housing_matrices, housing_modes
@@ -83,7 +71,7 @@ def _check(cfg, n_modes: int):
     return modes, mats
 
 
-def test_full_matrices_reproduce_master_modes_and_bore_values(cache):
+def test_full_matrices_reproduce_master_modes_and_bore_values(empty_vibrogear_cache):
     _, mats = _check(_cfg(), 10)
     assert not mats.cached and mats.n_dofs < mats.n_dofs_total            # base plate clamped
     assert mats.mass_kg > 0 and mats.beta == _cfg().material.beta
@@ -100,7 +88,7 @@ print(json.dumps({"cached": m.cached, "dolfinx": "dolfinx" in sys.modules, "gmsh
 """
 
 
-def test_second_call_is_a_cache_load_without_fe_work(cache):
+def test_second_call_is_a_cache_load_without_fe_work(empty_vibrogear_cache):
     from vibrogear.models.housing.run import housing_cache_keys, housing_matrices
     first = housing_matrices(_cfg())                        # computed by the test above or now
     again = housing_matrices(_cfg())
@@ -110,7 +98,7 @@ def test_second_call_is_a_cache_load_without_fe_work(cache):
     assert np.array_equal(again.free_dofs, first.free_dofs)
     assert again.cache_key.split("-")[-1] == housing_cache_keys(_cfg())[1].split("-")[-1]
     assert again.cache_key.startswith("housing-matrices-")
-    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(cache)}
+    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(empty_vibrogear_cache)}
     out = subprocess.run([sys.executable, "-c", _LOAD, str(SMALL)], capture_output=True, text=True,
                          env=env, cwd=ROOT, timeout=120)
     r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -126,7 +114,7 @@ def test_refuses_under_mpi(monkeypatch):
 
 
 @pytest.mark.slow
-def test_elastic_foundation_and_finer_mesh(cache):
+def test_elastic_foundation_and_finer_mesh(empty_vibrogear_cache):
     """No clamped DOF on an elastic foundation (K SPD through the springs, rigid-like modes low),
     and a finer mesh with more modes."""
     _, soft = _check(_cfg(support="elastic", foundation_stiffness=2e8, **{"modes.count": 12}), 12)

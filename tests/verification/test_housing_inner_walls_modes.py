@@ -21,7 +21,6 @@ frequency (the min-max principle: exact for nested spaces), with and without the
 """
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -41,18 +40,6 @@ def _cfg(walls, refine=0) -> HousingConfig:
     d["mesh"] = {**d["mesh"], "refine": refine}
     d["modes"] = {**d["modes"], "count": 6, "shapes": 0}
     return build(HousingConfig, d, "housing")
-
-
-@pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    d = tmp_path_factory.mktemp("vgcache")
-    old = os.environ.get("VIBROGEAR_CACHE_DIR")
-    os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
-    yield d
-    if old is None:
-        os.environ.pop("VIBROGEAR_CACHE_DIR")
-    else:
-        os.environ["VIBROGEAR_CACHE_DIR"] = old
 
 
 def _modes(walls, refine=0):
@@ -95,12 +82,12 @@ def _check_pair(plain, walled, walls):
     assert _direction_share(plain)[0, 1] > 0.7 and _direction_share(walled)[0, 1] > 0.7
 
 
-def test_inner_wall_stiffens_the_in_plane_sway(cache):
+def test_inner_wall_stiffens_the_in_plane_sway(empty_vibrogear_cache):
     _check_pair(_modes(()), _modes((0.08,)), (0.08,))
 
 
 @pytest.mark.slow
-def test_nested_refinement_lowers_every_frequency_with_and_without_the_wall(cache):
+def test_nested_refinement_lowers_every_frequency_with_and_without_the_wall(empty_vibrogear_cache):
     for walls in ((), (0.08,)):
         coarse, fine = _modes(walls), _modes(walls, refine=1)
         assert fine.n_dofs > 5 * coarse.n_dofs

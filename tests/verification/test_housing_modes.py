@@ -33,19 +33,7 @@ def _cfg(**changes):
 
 
 @pytest.fixture(scope="module")
-def cache(tmp_path_factory):
-    d = tmp_path_factory.mktemp("vgcache")
-    old = os.environ.get("VIBROGEAR_CACHE_DIR")
-    os.environ["VIBROGEAR_CACHE_DIR"] = str(d)
-    yield d
-    if old is None:
-        os.environ.pop("VIBROGEAR_CACHE_DIR")
-    else:
-        os.environ["VIBROGEAR_CACHE_DIR"] = old
-
-
-@pytest.fixture(scope="module")
-def fixed(cache):
+def fixed(empty_vibrogear_cache):
     from vibrogear.models.housing.run import housing_modes
     return housing_modes(_cfg())
 
@@ -67,7 +55,7 @@ def test_fixed_base_modes_are_mass_normalised_and_converged(fixed):
     assert np.allclose(fixed.damping_ratios, 0.5 * cfg.material.beta * 2 * np.pi * fixed.freqs_hz)
 
 
-def test_soft_foundation_rigid_modes_reproduce_the_housing_mass(cache):
+def test_soft_foundation_rigid_modes_reproduce_the_housing_mass(empty_vibrogear_cache):
     """On a very soft elastic foundation the 6 lowest modes are rigid-body motions.  Their values
     at the bore coupling points must fit u = a + theta x X exactly, and for mass-normalised modes
     sum_i psi_i psi_i^T = M_rb^-1, whose translational block inverts to m I with m = rho V
@@ -107,9 +95,9 @@ print(json.dumps({"cached": res.cached, "dolfinx": "dolfinx" in sys.modules, "gm
 """
 
 
-def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, cache):
+def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, empty_vibrogear_cache):
     from vibrogear.models.housing.run import housing_modes
-    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(cache)}
+    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(empty_vibrogear_cache)}
     out = subprocess.run([sys.executable, "-c", _LOAD, str(SMALL)], capture_output=True, text=True,
                          env=env, cwd=ROOT, timeout=120)
     r = json.loads(out.stdout.strip().splitlines()[-1])
@@ -124,7 +112,7 @@ def test_cache_hit_does_no_fe_work_and_changes_invalidate(fixed, cache):
     assert not thick.cached and thick.timings["meshing"] > 0.0
 
 
-def test_block_lanczos_agrees_with_slepc_krylov_schur_and_cutoff(fixed, cache):
+def test_block_lanczos_agrees_with_slepc_krylov_schur_and_cutoff(fixed, empty_vibrogear_cache):
     """The default block Lanczos against SLEPc Krylov-Schur on the same mesh; cutoff_hz mode."""
     from vibrogear.models.housing.run import housing_modes
     ks = housing_modes(_cfg(**{"modes": {**as_data(_cfg().modes), "solver": "krylovschur"}}))
