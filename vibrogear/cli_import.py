@@ -29,8 +29,12 @@ def import_command(model: str, output: str | None, argv=None, housing: str | Non
             raise ConfigError(output, "is a folder; give the scene file to write")
         step, region = _step_casing(housing, fixed_region, length_unit)
         imp = import_rexs(model, housing=step or housing, fixed_region=region)
+        if step is not None:
+            samples = _seat_radii_from_step(imp, step)
         scene = scene_from_dict(imp.data)
         validate_scene(scene)
+        if step is not None:
+            _check_step_faces(scene.housing, samples, step)
         notes = derived_lines(scene)
         if step is not None:        # the scene file names the STEP file relative to itself
             imp.data["housing"]["file"] = (os.path.relpath(step, Path(output).resolve().parent)
@@ -70,3 +74,84 @@ def _step_casing(housing: str | None, fixed_region: str | None, length_unit: str
         return None, None
     f = check_file(housing, "step", "--housing")
     return str(f.resolve()), parse_fixed_region(fixed_region, LENGTH_UNITS[length_unit])
+
+
+def _step_faces(file: str) -> tuple[dict, float]:
+    """({boundary face: sample points (n, 3) in m}, diagonal of the bounding box in m) of the
+    STEP solid, read as the housing run reads it (gmsh's OpenCASCADE, in metres)."""
+    from .config import ConfigError
+    from .geometry.housing import MeshingError, gmsh_session
+    from .geometry.housing_import import _face_samples
+    import numpy as np
+    try:
+        with gmsh_session(False) as gmsh:
+            gmsh.option.setString("Geometry.OCCTargetUnit", "M")
+            try:
+                gmsh.model.occ.importShapes(file)
+            except Exception:
+                msg = gmsh.logger.getLastError() or "OpenCASCADE could not read it"
+                raise ConfigError("--housing", f"{file}: not a readable STEP file ({msg})") from None
+            gmsh.model.occ.synchronize()
+            vols = gmsh.model.getEntities(3)
+            if not vols:
+                raise ConfigError("--housing", f"{file}: holds no solid (an open shell or surface "
+                                  "model cannot be meshed with tetrahedra)")
+            bbox = gmsh.model.getBoundingBox(-1, -1)
+            faces = sorted({abs(t) for _, t in gmsh.model.getBoundary(vols, combined=True,
+                                                                      oriented=False)})
+            return ({f: _face_samples(gmsh, f) for f in faces},
+                    float(np.linalg.norm(np.subtract(bbox[3:], bbox[:3]))))
+    except MeshingError as exc:
+        raise ConfigError("--housing", f"{file}: not a readable STEP file ({exc})") from None
+
+
+def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
+    """Read the STEP casing; each bore takes the radius of the boundary cylinder about its line
+    (within its search window) nearest to its bearing's, reported where they differ.
+    ConfigError naming the bore and the file where no such cylinder exists."""
+    import numpy as np
+    from .config import ConfigError
+    samples, scale = _step_faces(file)
+    for b in imp.data["housing"]["bores"]:
+        c, u, half = np.asarray(b["center"]), np.asarray(b["axis"]), 0.5 * b["length"]
+        radii = []
+        for pts in samples.values():
+            d = pts - c
+            s = d @ u
+            r = np.linalg.norm(d - s[:, None] * u, axis=1)
+            if s.min() >= -half - 1e-5 and s.max() <= half + 1e-5 and r.min() > 1e-6 \
+                    and r.max() - r.min() <= 1e-6 + 1e-4 * r.mean():
+                radii.append(float(r.mean()))
+        want = b["bore_radius"]
+        if not radii:
+            raise ConfigError("--housing", f"{file}: bore {b['name']!r}: no boundary cylinder "
+                              f"about the shaft axis through {b['center']} (m) along y within "
+                              f"+-{half * 1e3:.4g} mm of the bearing plane; is the casing in the "
+                              "housing frame of --housing box (docs/your-gearbox.md)?")
+        got = min(radii, key=lambda r: abs(r - want))
+        if abs(got - want) > 1e-6 + 1e-4 * want:
+            b["bore_radius"] = round(got, 9)
+            imp.report.assumed.append(
+                f"gear_casing: housing bore {b['name']!r}: the STEP casing has no seat of the "
+                f"bearing's radius {want * 1e3:.4g} mm there; its coaxial cylinder nearest to "
+                f"it, radius {got * 1e3:.4g} mm, is taken as the bore")
+    return samples, scale
+
+
+def _check_step_faces(housing, samples: tuple[dict, float], file: str) -> None:
+    """The bore and clamped-face selection the housing run will make, done now: ConfigError
+    naming the bore (or --fixed-region) where it selects nothing or clamps a bore."""
+    from .config import ConfigError
+    from .geometry.housing_import import _fixed, _select_bores
+    faces, scale = samples
+    bores, groups = _select_bores(housing, faces, file, scale)
+    for k, b in enumerate(bores):
+        if "/" in b.name.partition("/")[2]:
+            raise ConfigError("--housing", f"{file}: bore {b.name.rpartition('/')[0]!r} finds "
+                              f"{sum(x.name.startswith(b.name.rpartition('/')[0]) for x in bores)}"
+                              " separate seats within its search window; shorten its length in "
+                              "the scene or move the bearings' seats apart")
+    try:
+        _fixed(housing, faces, groups, file)
+    except ConfigError as exc:
+        raise ConfigError("--fixed-region", str(exc).partition(": ")[2]) from None
