@@ -60,7 +60,7 @@ def parse_fixed_region(text: str | None, unit: float) -> dict:
         if v[k] > v[k + 3]:
             raise ConfigError("--fixed-region", f"{axis.upper()}MIN = {v[k]:g} exceeds "
                               f"{axis.upper()}MAX = {v[k + 3]:g}; " + FIXED_REGION_HELP)
-    return {"min": [x * unit for x in v[:3]], "max": [x * unit for x in v[3:]]}
+    return {"min": [round(x * unit, 12) for x in v[:3]], "max": [round(x * unit, 12) for x in v[3:]]}
 
 
 def _width(b) -> float | None:
