@@ -1,9 +1,13 @@
-"""``vibrogear import MODEL.rexs|.rexsj [-o SCENE.toml] [--housing box|CASING.step]``: the REXS model as a scene TOML.
+"""``vibrogear import MODEL.rexs|.rexsj [-o SCENE.toml] [--housing box|CASING.step ...]``: the
+REXS model as a scene TOML.
 
 The model is read and mapped (:mod:`vibrogear.config.rexs`), the scene validated exactly as
 ``vibrogear check`` validates it, and only then written (atomically), so a bad file writes
 nothing and exits 2 naming the component and attribute.  The mapping report goes to stderr
-and into the TOML header; without ``-o`` the scene goes to stdout.
+and into the TOML header; without ``-o`` the scene goes to stdout.  With a STEP casing the
+file is read here too (:func:`_seat_radii_from_step`, :func:`_check_step_faces`: the same face
+selection the housing run makes), so a casing without a bearing's seat or a fixed region that
+clamps nothing exits 2 before anything is written.
 """
 from __future__ import annotations
 
@@ -111,10 +115,11 @@ def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
     ConfigError naming the bore and the file where no such cylinder exists."""
     import numpy as np
     from .config import ConfigError
+    from .geometry.housing_import import bore_segments
     samples, scale = _step_faces(file)
     for b in imp.data["housing"]["bores"]:
         c, u, half = np.asarray(b["center"]), np.asarray(b["axis"]), 0.5 * b["length"]
-        radii = []
+        radii, spans = [], []
         for pts in samples.values():
             d = pts - c
             s = d @ u
@@ -122,6 +127,7 @@ def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
             if s.min() >= -half - 1e-5 and s.max() <= half + 1e-5 and r.min() > 1e-6 \
                     and r.max() - r.min() <= 1e-6 + 1e-4 * r.mean():
                 radii.append(float(r.mean()))
+                spans.append((float(s.min()), float(s.max())))
         want = b["bore_radius"]
         if not radii:
             raise ConfigError("--housing", f"{file}: bore {b['name']!r}: no boundary cylinder "
@@ -129,6 +135,15 @@ def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
                               f"+-{half * 1e3:.4g} mm of the bearing plane; is the casing in the "
                               "housing frame of --housing box (docs/your-gearbox.md)?")
         got = min(radii, key=lambda r: abs(r - want))
+        segs = bore_segments([sp for r, sp in zip(radii, spans)
+                              if abs(r - got) <= 1e-6 + 1e-4 * got], 1e-6 * scale)
+        if len(segs) > 1:          # other seats of this radius in the window: the nearest only
+            s0, s1, _ = min(segs, key=lambda g: 0.0 if g[0] <= 0.0 <= g[1] else min(abs(g[0]), abs(g[1])))
+            b["length"] = round(2 * max(abs(s0), abs(s1)) + 1e-4, 9)
+            imp.report.assumed.append(
+                f"gear_casing: housing bore {b['name']!r}: {len(segs)} separate seats of radius "
+                f"{got * 1e3:.4g} mm in its window; length {b['length'] * 1e3:.4g} mm takes the "
+                "one at the bearing")
         if abs(got - want) > 1e-6 + 1e-4 * want:
             b["bore_radius"] = round(got, 9)
             imp.report.assumed.append(
@@ -145,12 +160,12 @@ def _check_step_faces(housing, samples: tuple[dict, float], file: str) -> None:
     from .geometry.housing_import import _fixed, _select_bores
     faces, scale = samples
     bores, groups = _select_bores(housing, faces, file, scale)
-    for k, b in enumerate(bores):
-        if "/" in b.name.partition("/")[2]:
-            raise ConfigError("--housing", f"{file}: bore {b.name.rpartition('/')[0]!r} finds "
-                              f"{sum(x.name.startswith(b.name.rpartition('/')[0]) for x in bores)}"
-                              " separate seats within its search window; shorten its length in "
-                              "the scene or move the bearings' seats apart")
+    split = sorted({g.name.rpartition("/")[0] for g in bores if g.name.count("/") > 1})
+    if split:
+        raise ConfigError("--housing", f"{file}: bore {split[0]!r} finds separate seats within "
+                          "its search window (its length along the axis): the bearings' seats "
+                          "on one axis are closer than the window; shorten that bore's length "
+                          "in the scene")
     try:
         _fixed(housing, faces, groups, file)
     except ConfigError as exc:
