@@ -175,3 +175,21 @@ def test_step_casing_gives_the_box_housing_modes(box, tmp_path):
     assert gap_fine.max() < 0.6 * gap_coarse.max() and gap_fine.max() < 2.5e-3
     assert np.sqrt(np.mean(gap_fine ** 2)) < 0.75 * np.sqrt(np.mean(gap_coarse ** 2))
     assert np.all(np.abs(fine[1] - fine[0]) < np.abs(coarse[0] - fine[0]))
+
+
+def test_several_seats_in_a_window_take_the_one_at_the_bearing(box):
+    """A window along the whole second axis holds its front, inner-wall and back seats (all of
+    radius 81 mm in the box): the front bore shrinks its window to the seat at its plane,
+    the front wall and boss, y = -0.02 .. 0.02 m about the plane y = 0.01 m."""
+    from vibrogear.cli_import import _seat_radii_from_step
+    from vibrogear.config.rexs.mapping import MappingReport
+
+    class Imp:
+        report = MappingReport()
+        data = {"housing": {"bores": [{"name": "axis2/front", "center": [0.157413888, 0.01, 0.157413888],
+                                       "axis": [0.0, 1.0, 0.0], "length": 0.6, "bore_radius": 0.081}]}}
+    _seat_radii_from_step(Imp, str(box[1]))
+    b = Imp.data["housing"]["bores"][0]
+    assert b["bore_radius"] == 0.081
+    assert b["length"] == pytest.approx(2 * 0.03 + 1e-4, abs=1e-6)
+    assert "3 separate seats of radius 81 mm" in Imp.report.assumed[-1]
