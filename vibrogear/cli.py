@@ -49,7 +49,7 @@ def _parser() -> argparse.ArgumentParser:
                      "casing is rigid ground)")
     imp.add_argument("--fixed-region", default=None, metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
                      help="with a STEP casing (required): the box around its clamped faces "
-                     "(e.g. the feet' undersides), housing frame")
+                     "(e.g. the undersides of the feet), housing frame")
     imp.add_argument("--length-unit", default="m", choices=["m", "mm"],
                      help="unit of the --fixed-region numbers (default m)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")

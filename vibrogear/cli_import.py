@@ -115,6 +115,7 @@ def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
     ConfigError naming the bore and the file where no such cylinder exists."""
     import numpy as np
     from .config import ConfigError
+    from .config.rexs.mapping_casing_step import set_mesh_size
     from .geometry.housing_import import bore_segments
     samples, scale = _step_faces(file)
     for b in imp.data["housing"]["bores"]:
@@ -150,6 +151,7 @@ def _seat_radii_from_step(imp, file: str) -> tuple[dict, float]:
                 f"gear_casing: housing bore {b['name']!r}: the STEP casing has no seat of the "
                 f"bearing's radius {want * 1e3:.4g} mm there; its coaxial cylinder nearest to "
                 f"it, radius {got * 1e3:.4g} mm, is taken as the bore")
+    set_mesh_size(imp.data, imp.report)
     return samples, scale
 
 

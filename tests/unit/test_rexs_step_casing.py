@@ -186,12 +186,16 @@ def test_several_seats_in_a_window_take_the_one_at_the_bearing(box):
     class Imp:
         report = MappingReport()
         data = {"housing": {"bores": [{"name": "axis2/front", "center": [0.157413888, 0.01, 0.157413888],
-                                       "axis": [0.0, 1.0, 0.0], "length": 0.6, "bore_radius": 0.081}]}}
+                                       "axis": [0.0, 1.0, 0.0], "length": 0.6, "bore_radius": 0.09}],
+                            "mesh": {"size": 0.045}}}
     _seat_radii_from_step(Imp, str(box[1]))
     b = Imp.data["housing"]["bores"][0]
-    assert b["bore_radius"] == 0.081
+    assert b["bore_radius"] == 0.081          # the casing's seat, not the 90 mm asked for
     assert b["length"] == pytest.approx(2 * 0.03 + 1e-4, abs=1e-6)
-    assert "3 separate seats of radius 81 mm" in Imp.report.assumed[-1]
+    text = "\n".join(Imp.report.assumed)
+    assert "3 separate seats of radius 81 mm" in text and "radius 90 mm there" in text
+    assert Imp.data["housing"]["mesh"]["size"] == pytest.approx(0.5 * 0.081)   # follows the seat
+    assert text.count("tetrahedral P2 mesh, size 0.0405 m") == 1
 
 
 @pytest.mark.slow

@@ -28,7 +28,7 @@ import math
 from ..base import ConfigError
 from .mapping_housing import WALL, box_frame, casing_bearing_ys, outer_diameter_and_count
 
-__all__ = ["step_housing", "parse_fixed_region", "SEAT_WIDTHS", "DEFAULT_WIDTH",
+__all__ = ["step_housing", "set_mesh_size", "parse_fixed_region", "SEAT_WIDTHS", "DEFAULT_WIDTH",
            "SIZE_PER_BORE_RADIUS", "FIXED_REGION_HELP"]
 
 #: length of the face search window about a bearing's plane, in bearing widths
@@ -133,17 +133,30 @@ def step_housing(model, data: dict, report, file: str, fixed_region: dict) -> No
         s["y0"] = round(s["y0"] - front + 0.5 * WALL, 12)
     for b in casing:
         b.pop("elements", None)
-    size = SIZE_PER_BORE_RADIUS * min(b["bore_radius"] for b in bores)
     data["housing"] = {
         "source": "step", "file": file, "fixed_region": fixed_region, "support": "fixed",
         "bores": bores, "material": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 1e-6},
-        "mesh": {"size": round(size, 6), "degree": 2}, "modes": {"count": 20, "shapes": 0}}
+        "mesh": {"size": 0.0, "degree": 2}, "modes": {"count": 20, "shapes": 0}}
     report.assumed.append(
         f"gear_casing: the STEP solid {file} in the housing frame of `--housing box` (y along "
-        f"the shafts, y = {0.5 * WALL:g} m at the first casing bearing's plane; the lowest shaft "
-        f"axis at x = z = {margin:.4g} m, the largest gear tip radius + 0.03 m); "
+        f"the shafts, y = {0.5 * WALL:g} m at the first casing bearing's plane; the smallest "
+        f"shaft-axis x and z at {margin:.4g} m, the largest gear tip radius + 0.03 m); "
         "a casing exported in another frame must be moved there first; steel, clamped on the "
         f"faces inside fixed_region = {fixed_region['min']} .. {fixed_region['max']} m, 20 "
-        f"housing modes, tetrahedral P2 mesh size {size:.4g} m ({SIZE_PER_BORE_RADIUS:g} x the "
-        "smallest bore radius), bore faces at size / 2")
+        "housing modes")
     report.assumed += [f"gear_casing: {line}" for line in lines]
+    set_mesh_size(data, report)
+
+
+def set_mesh_size(data: dict, report) -> None:
+    """``[housing.mesh] size`` = :data:`SIZE_PER_BORE_RADIUS` x the smallest bore radius, and
+    its report line (replaced where the bore radii changed since)."""
+    r = min(b["bore_radius"] for b in data["housing"]["bores"])
+    size = round(SIZE_PER_BORE_RADIUS * r, 6)
+    data["housing"]["mesh"]["size"] = size
+    report.assumed[:] = [a for a in report.assumed if not a.startswith(_MESH_LINE)]
+    report.assumed.append(f"{_MESH_LINE}size {size:g} m ({SIZE_PER_BORE_RADIUS:g} x the "
+                          f"smallest bore radius, {r * 1e3:.4g} mm), bore faces at size / 2")
+
+
+_MESH_LINE = "gear_casing: tetrahedral P2 mesh, "
