@@ -216,3 +216,18 @@ def test_gearbox_modes_with_the_step_casing_are_the_box_ones(box, tmp_path):
     fs = np.array([float(r["frequency_hz"]) for r in res["step"][:20]])
     assert np.max(np.abs(fs - fb) / fb) < 5e-3
     assert [r["dominant"] for r in res["step"][:20]] == [r["dominant"] for r in res["box"][:20]]
+
+
+def test_bores_of_one_axis_off_its_line_are_named(box, tmp_path, capsys):
+    """The bores ``axis1/<wall>`` all carry the axis ``axis1``: one moved off the line is an
+    input error at ``check`` naming it."""
+    rc, out = _import(box, tmp_path)
+    assert rc == 0
+    text = out.read_text()
+    i = text.index('name = "axis1/back"')
+    j = text.index("center = [0.347413888", i)
+    out.write_text(text[:j] + "center = [0.35" + text[j + len("center = [0.347413888"):])
+    capsys.readouterr()
+    assert main(["check", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "housing.bores[2].center" in err and "'axis1/back'" in err and "one line" in err

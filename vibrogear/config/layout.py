@@ -102,6 +102,14 @@ def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
                 raise ConfigError(f"housing.bores[{k}].axis", f"bore {sh.bore!r} carries "
                                   f"gearbox.shafts[{i}]: its axis must be parallel to the housing "
                                   "y axis (shafts run along y)")
+            for k, b in enumerate(housing.bores):     # one bore per wall: all on the shaft's line
+                if b.name.rpartition("/")[0] == sh.bore and b.x is not None and (
+                        abs(b.x - bores[sh.bore].x) > 1e-9 or abs(b.z - bores[sh.bore].z) > 1e-9):
+                    raise ConfigError(f"housing.bores[{k}].center", f"bore {b.name!r} carries "
+                                      f"the axis {sh.bore!r} of gearbox.shafts[{i}] at x, z = "
+                                      f"{b.x:g}, {b.z:g} m, but {bores[sh.bore].name!r} at "
+                                      f"{bores[sh.bore].x:g}, {bores[sh.bore].z:g} m: the bores of "
+                                      "one shaft axis must lie on one line")
         return
     t = housing.wall_thickness
     errs = ErrorList()
