@@ -47,7 +47,8 @@ KNOWN_IGNORED = {
                  "taken is the longest)",
     "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
                    "(`vibrogear import --housing box` generates a box housing with "
-                   "its walls at the casing bearings' planes)",
+                   "its walls at the casing bearings' planes; `--housing CASING.step "
+                   "--fixed-region ...` takes the casing from CAD)",
     "lubricant": "oil data do not enter the dynamic model",
     "cylindrical_stage_gear_data": "read through the stage's gears",
     "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
