@@ -43,9 +43,15 @@ def _parser() -> argparse.ArgumentParser:
     imp.add_argument("model", help="REXS file (.rexs or .rexsj)")
     imp.add_argument("-o", "--output", default=None, metavar="SCENE.toml",
                      help="scene file to write (default: the scene on stdout)")
-    imp.add_argument("--housing", choices=["box"], default=None,
-                     help="generate a parametric box housing around the shafts (default: "
-                     "the casing is rigid ground)")
+    imp.add_argument("--housing", default=None, metavar="box|CASING.step",
+                     help="'box': generate a parametric box housing around the shafts; a STEP "
+                     "file: the casing from CAD, in the box's housing frame (default: the "
+                     "casing is rigid ground)")
+    imp.add_argument("--fixed-region", default=None, metavar="XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX",
+                     help="with a STEP casing (required): the box around its clamped faces "
+                     "(e.g. the undersides of the feet), housing frame")
+    imp.add_argument("--length-unit", default="m", choices=["m", "mm"],
+                     help="unit of the --fixed-region numbers (default m)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -118,7 +124,8 @@ def _main(argv: list[str] | None) -> int:
         return _cache(args.action)
     if args.command == "import":
         from .cli_import import import_command
-        return import_command(args.model, args.output, argv, housing=args.housing)
+        return import_command(args.model, args.output, argv, housing=args.housing,
+                              fixed_region=args.fixed_region, length_unit=args.length_unit)
     from .config import ConfigError, load_scene
     from .pipeline.files import check_output_dir
 

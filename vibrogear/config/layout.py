@@ -15,7 +15,7 @@ import math
 from .base import ConfigError, ErrorList
 from .housing_walls import bore_walls
 
-__all__ = ["check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
+__all__ = ["shaft_bore", "check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
            "MAX_TIME_RESPONSE_BYTES", "BEARING_SLACK_WALLS"]
 
 #: a bearing may sit this many wall thicknesses outside its bore's span (and no further)
@@ -74,9 +74,20 @@ def _check_free_bearings(cfg) -> None:
                               "a housing needs its number of rolling elements (an integer 3..200)")
 
 
+def shaft_bore(housing, name: str):
+    """The ``[[housing.bores]]`` entry a shaft's ``bore = name`` refers to: the one so named,
+    else (an imported housing given one bore per wall) the first named ``<name>/<wall>``;
+    None where there is none."""
+    exact = next((b for b in housing.bores if b.name == name), None)
+    return exact or next((b for b in housing.bores if b.name.rpartition("/")[0] == name), None)
+
+
 def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
     bores = {b.name: b for b in housing.bores}
-    names = ", ".join(repr(n) for n in bores)
+    for sh in cfg.shafts:
+        if sh.bore not in bores and shaft_bore(housing, sh.bore) is not None:
+            bores[sh.bore] = shaft_bore(housing, sh.bore)
+    names = ", ".join(repr(b.name) for b in housing.bores)
     for i, sh in enumerate(cfg.shafts):
         if sh.bore not in bores:
             raise ConfigError(f"gearbox.shafts[{i}].bore", f"unknown bore {sh.bore!r}; housing "
@@ -87,10 +98,18 @@ def _check_gearbox_in_housing(cfg, housing, moved=None) -> None:
     if housing.source != "parametric":   # imported: no box; its bores are found in its file
         for i, sh in enumerate(cfg.shafts):
             if bores[sh.bore].x is None:
-                k = next(j for j, b in enumerate(housing.bores) if b.name == sh.bore)
+                k = next(j for j, b in enumerate(housing.bores) if b is bores[sh.bore])
                 raise ConfigError(f"housing.bores[{k}].axis", f"bore {sh.bore!r} carries "
                                   f"gearbox.shafts[{i}]: its axis must be parallel to the housing "
                                   "y axis (shafts run along y)")
+            for k, b in enumerate(housing.bores):     # one bore per wall: all on the shaft's line
+                if b.name.rpartition("/")[0] == sh.bore and b.x is not None and (
+                        abs(b.x - bores[sh.bore].x) > 1e-9 or abs(b.z - bores[sh.bore].z) > 1e-9):
+                    raise ConfigError(f"housing.bores[{k}].center", f"bore {b.name!r} carries "
+                                      f"the axis {sh.bore!r} of gearbox.shafts[{i}] at x, z = "
+                                      f"{b.x:g}, {b.z:g} m, but {bores[sh.bore].name!r} at "
+                                      f"{bores[sh.bore].x:g}, {bores[sh.bore].z:g} m: the bores of "
+                                      "one shaft axis must lie on one line")
         return
     t = housing.wall_thickness
     errs = ErrorList()

@@ -83,7 +83,8 @@ def _axes(scene) -> dict[str, tuple[float, float]]:
     bores = {b.name: b for b in (scene.housing.bores if scene.housing is not None else ())}
     out = {}
     for sh in scene.gearbox.shafts:
-        b = bores.get(sh.bore)
+        b = bores.get(sh.bore) or next((v for k, v in bores.items()        # one bore per wall
+                                        if k.rpartition("/")[0] == sh.bore), None)
         if b is not None and b.x is not None and b.z is not None:
             out[sh.name] = (b.x, b.z)
         elif sh.x is not None and sh.z is not None:

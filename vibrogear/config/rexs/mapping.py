@@ -47,7 +47,8 @@ KNOWN_IGNORED = {
                  "taken is the longest)",
     "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
                    "(`vibrogear import --housing box` generates a box housing with "
-                   "its walls at the casing bearings' planes)",
+                   "its walls at the casing bearings' planes; `--housing CASING.step "
+                   "--fixed-region ...` takes the casing from CAD)",
     "lubricant": "oil data do not enter the dynamic model",
     "cylindrical_stage_gear_data": "read through the stage's gears",
     "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
@@ -114,9 +115,11 @@ def _refuse_unsupported(model) -> None:
                               "are not supported; nothing was written")
 
 
-def import_rexs(path, *, name: str | None = None, housing: str | None = None) -> RexsImport:
+def import_rexs(path, *, name: str | None = None, housing: str | None = None,
+                fixed_region: dict | None = None) -> RexsImport:
     """Read and map a REXS file; ConfigError naming the component and attribute on any
-    problem (nothing is written by this function)."""
+    problem (nothing is written by this function).  ``housing``: None (casing = ground),
+    ``"box"`` or the path of a STEP casing (then ``fixed_region`` = {"min", "max"} in m)."""
     from .mapping_supports import analysis_sections, bearings, loads
     model = read_rexs(path)
     src = model.source
@@ -239,8 +242,15 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None) ->
         skip += ("gear_casing",)
         report.mapped += [f"gear_casing {c.id} -> [housing]: a generated box (see assumed)"
                           for c in model.of_type("gear_casing")]
+    elif housing is not None and Path(housing).suffix.lower() in (".step", ".stp"):
+        from .mapping_casing_step import step_housing
+        step_housing(model, data, report, str(housing), fixed_region)
+        skip += ("gear_casing",)
+        report.mapped += [f"gear_casing {c.id} -> [housing]: the STEP solid {housing} (see "
+                          "assumed)" for c in model.of_type("gear_casing")]
     elif housing is not None:
-        raise ConfigError("--housing", f"expected 'box', got {housing!r}")
+        raise ConfigError("--housing", f"expected 'box' or a STEP file (*.step, *.stp), got "
+                          f"{housing!r}")
     for c in model.components.values():
         if c.type in KNOWN_IGNORED and c.type not in skip:
             report.ignored.append(f"{c.type} {c.id}: {KNOWN_IGNORED[c.type]}")

@@ -28,7 +28,7 @@ from ..base import ConfigError
 from ..bearing_catalogue import boundary_dimensions, element_set
 from ..housing_walls import MIN_GAP_WALLS
 
-__all__ = ["box_housing", "WALL", "CLEARANCE"]
+__all__ = ["box_housing", "box_frame", "casing_bearing_ys", "outer_diameter_and_count", "WALL", "CLEARANCE"]
 
 #: wall thickness of the generated box [m]
 WALL = 0.02
@@ -36,7 +36,7 @@ WALL = 0.02
 CLEARANCE = 0.01
 
 
-def _outer_diameter_and_count(b) -> tuple[float | None, int | None]:
+def outer_diameter_and_count(b) -> tuple[float | None, int | None]:
     if b.get("designation"):
         bd = boundary_dimensions(b["designation"])
         es = element_set(bd.kind, bd.d, bd.D, bd.B)
@@ -53,16 +53,11 @@ def box_housing(model, data: dict, report) -> None:
     shaft axis, shafts moved onto them; ConfigError naming a casing bearing off the walls."""
     gb = data["gearbox"]
     shafts = {s["name"]: s for s in gb["shafts"]}
-    casing = [b for b in gb["bearings"] if not b.get("outer_shaft")]
-    if not casing:
-        raise ConfigError(model.source, "--housing box: no bearing sits in the gear_casing")
-    ys = {b["name"]: shafts[b["shaft"]]["y0"] + b["position"] for b in casing}
+    casing, ys = casing_bearing_ys(model, gb, "--housing box")
     front, back = min(ys.values()), max(ys.values())
     walls = _inner_walls(model, gb, shafts, casing, ys, front, back)
     width = back - front + WALL
-    tip = max(0.5 * g["module"] * g["teeth"] / math.cos(math.radians(g["helix_angle"]))
-              + g["module"] for g in gb["gears"])
-    margin = tip + WALL + CLEARANCE
+    margin = box_frame(gb)[0]
     xs = [s["x"] for s in gb["shafts"]]
     zs = [s["z"] for s in gb["shafts"]]
     axes: dict[tuple[float, float], str] = {}
@@ -74,7 +69,7 @@ def box_housing(model, data: dict, report) -> None:
             axes[key] = f"axis{len(axes) + 1}"
             mine = sorted((b for b in casing if keys[b["shaft"]] == key),
                           key=lambda b: ys[b["name"]])
-            D, n = _outer_diameter_and_count(mine[0]) if mine else (None, None)
+            D, n = outer_diameter_and_count(mine[0]) if mine else (None, None)
             if D is None:
                 D = 1.8 * max(sec["outer_diameter"] for sec in s["sections"])
                 report.assumed.append(f"housing bore {axes[key]!r}: radius {0.5 * D:.4g} m "
@@ -117,13 +112,38 @@ def box_housing(model, data: dict, report) -> None:
             f"{ids} between the front and the back wall")
 
 
+def casing_bearing_ys(model, gb, flag: str) -> tuple[list, dict]:
+    """(the casing bearings of the imported ``gearbox`` data, {name: y in the model frame});
+    ConfigError naming ``flag`` where no bearing sits in the casing."""
+    shafts = {s["name"]: s for s in gb["shafts"]}
+    casing = [b for b in gb["bearings"] if not b.get("outer_shaft")]
+    if not casing:
+        raise ConfigError(model.source, f"{flag}: no bearing sits in the gear_casing")
+    return casing, {b["name"]: shafts[b["shaft"]]["y0"] + b["position"] for b in casing}
+
+
+def box_frame(gb) -> tuple[float, float, float, float]:
+    """(margin, x0, z0, y_front) of the generated box's housing frame for the imported
+    ``gearbox`` data in the model frame: housing x = x - x0 + margin, z = z - z0 + margin,
+    y = y - y_front + WALL / 2, where x0, z0 are the smallest shaft-axis coordinates, margin
+    the largest gear tip radius + one wall + CLEARANCE and y_front the first casing
+    bearing's plane (the front wall's middle)."""
+    tip = max((0.5 * g["module"] * g["teeth"] / math.cos(math.radians(g["helix_angle"]))
+               + g["module"] for g in gb["gears"]), default=0.0)
+    shafts = {s["name"]: s for s in gb["shafts"]}
+    casing = [b for b in gb["bearings"] if not b.get("outer_shaft")]
+    y_front = min(shafts[b["shaft"]]["y0"] + b["position"] for b in casing)
+    return (tip + WALL + CLEARANCE, min(s["x"] for s in gb["shafts"]),
+            min(s["z"] for s in gb["shafts"]), y_front)
+
+
 def _wall_counts(mine, ys, planes) -> list[int | None]:
     """The rolling-element count of the bearing in each wall plane (None: no counted bearing
     there), each bearing in the plane nearest to it."""
     counts: list[int | None] = [None] * len(planes)
     for b in mine:
         j = min(range(len(planes)), key=lambda k: abs(ys[b["name"]] - planes[k]))
-        counts[j] = counts[j] or _outer_diameter_and_count(b)[1]
+        counts[j] = counts[j] or outer_diameter_and_count(b)[1]
     return counts
 
 

@@ -35,6 +35,7 @@ import numpy as np
 
 from ...config.base import ConfigError
 from ...config.gearbox_supports import torque_order_ratios
+from ...config.layout import shaft_bore
 from ...config.options import RPM as RPM_PARAMETER
 from ...config.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
@@ -162,12 +163,12 @@ def _shaft_axis(scene, sh, i) -> tuple[float, float]:
     """Housing-frame (x, z) of shaft i's axis."""
     path = f"gearbox.shafts[{i}]"
     if scene.housing is not None:
-        for b in scene.housing.bores:
-            if b.name == sh.bore:
-                if sh.x is not None or sh.z is not None:
-                    raise ConfigError(f"{path}.x", "with a housing the axis is the bore's: "
-                                      "leave x and z out")
-                return b.x, b.z
+        b = shaft_bore(scene.housing, sh.bore)
+        if b is not None:
+            if sh.x is not None or sh.z is not None:
+                raise ConfigError(f"{path}.x", "with a housing the axis is the bore's: "
+                                  "leave x and z out")
+            return b.x, b.z
         names = ", ".join(repr(b.name) for b in scene.housing.bores)
         raise ConfigError(f"{path}.bore", f"unknown bore {sh.bore!r}; housing bores are {names}")
     if sh.x is None or sh.z is None:
