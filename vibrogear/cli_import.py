@@ -85,7 +85,7 @@ def _step_faces(file: str) -> tuple[dict, float]:
     STEP solid, read as the housing run reads it (gmsh's OpenCASCADE, in metres)."""
     from .config import ConfigError
     from .geometry.housing import MeshingError, gmsh_session
-    from .geometry.housing_import import _face_samples
+    from .geometry.housing_import import face_samples
     import numpy as np
     try:
         with gmsh_session(False) as gmsh:
@@ -103,7 +103,7 @@ def _step_faces(file: str) -> tuple[dict, float]:
             bbox = gmsh.model.getBoundingBox(-1, -1)
             faces = sorted({abs(t) for _, t in gmsh.model.getBoundary(vols, combined=True,
                                                                       oriented=False)})
-            return ({f: _face_samples(gmsh, f) for f in faces},
+            return ({f: face_samples(gmsh, f) for f in faces},
                     float(np.linalg.norm(np.subtract(bbox[3:], bbox[:3]))))
     except MeshingError as exc:
         raise ConfigError("--housing", f"{file}: not a readable STEP file ({exc})") from None
@@ -159,9 +159,9 @@ def _check_step_faces(housing, samples: tuple[dict, float], file: str) -> None:
     """The bore and clamped-face selection the housing run will make, done now: ConfigError
     naming the bore (or --fixed-region) where it selects nothing or clamps a bore."""
     from .config import ConfigError
-    from .geometry.housing_import import _fixed, _select_bores
+    from .geometry.housing_import import fixed_faces, select_bores
     faces, scale = samples
-    bores, groups = _select_bores(housing, faces, file, scale)
+    bores, groups = select_bores(housing, faces, file, scale)
     split = sorted({g.name.rpartition("/")[0] for g in bores if g.name.count("/") > 1})
     if split:
         raise ConfigError("--housing", f"{file}: bore {split[0]!r} finds separate seats within "
@@ -169,6 +169,6 @@ def _check_step_faces(housing, samples: tuple[dict, float], file: str) -> None:
                           "on one axis are closer than the window; shorten that bore's length "
                           "in the scene")
     try:
-        _fixed(housing, faces, groups, file)
+        fixed_faces(housing, faces, groups, file)
     except ConfigError as exc:
         raise ConfigError("--fixed-region", str(exc).partition(": ")[2]) from None

@@ -36,7 +36,7 @@ from .housing import (BASE_TAG, BORE_TAG0, VOLUME_TAG, BoreGeometry, HousingMesh
 
 __all__ = ["ImportedHousing", "build_mesh", "mesh_bores", "mesh_info", "save_layout", "build_step_mesh",
            "build_imported_mesh", "read_tet_mesh", "bore_segments", "segment_bores",
-           "write_tagged_msh", "BOX_TOL"]
+           "write_tagged_msh", "BOX_TOL", "face_samples", "select_bores", "fixed_faces"]
 
 log = logging.getLogger(__name__)
 
@@ -112,7 +112,7 @@ def segment_bores(cfg: HousingConfig, i: int, segs, c: np.ndarray, u: np.ndarray
     return out
 
 
-def _select_bores(cfg: HousingConfig, samples: dict[int, np.ndarray], file: str, scale: float):
+def select_bores(cfg: HousingConfig, samples: dict[int, np.ndarray], file: str, scale: float):
     """(bore layout, [face ids per bore]) from boundary faces given by sample points."""
     bores, groups = [], []
     for i, b in enumerate(cfg.bores):
@@ -133,7 +133,7 @@ def _select_bores(cfg: HousingConfig, samples: dict[int, np.ndarray], file: str,
     return tuple(bores), groups
 
 
-def _fixed(cfg: HousingConfig, samples, bore_groups, file: str) -> list[int]:
+def fixed_faces(cfg: HousingConfig, samples, bore_groups, file: str) -> list[int]:
     if cfg.fixed_region is None:
         return []
     lo = np.asarray(cfg.fixed_region.min) - BOX_TOL
@@ -181,9 +181,9 @@ def build_step_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = Fal
         bbox = gmsh.model.getBoundingBox(-1, -1)
         scale = float(np.linalg.norm(np.subtract(bbox[3:], bbox[:3])))
         faces = sorted({abs(t) for _, t in gmsh.model.getBoundary(vols, combined=True, oriented=False)})
-        samples = {f: _face_samples(gmsh, f) for f in faces}
-        bores, groups = _select_bores(cfg, samples, file, scale)
-        fixed = _fixed(cfg, samples, groups, file)
+        samples = {f: face_samples(gmsh, f) for f in faces}
+        bores, groups = select_bores(cfg, samples, file, scale)
+        fixed = fixed_faces(cfg, samples, groups, file)
         gmsh.model.addPhysicalGroup(3, [t for _, t in vols], VOLUME_TAG)
         gmsh.model.setPhysicalName(3, VOLUME_TAG, "housing")
         if fixed:
@@ -213,7 +213,7 @@ def build_step_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = Fal
     return ImportedHousing(hm, bores, info)
 
 
-def _face_samples(gmsh, tag: int) -> np.ndarray:
+def face_samples(gmsh, tag: int) -> np.ndarray:
     """Points on an OCC face: a parametric grid over its bounds plus its vertices."""
     lo, hi = gmsh.model.getParametrizationBounds(2, tag)
     uu, vv = np.meshgrid(np.linspace(lo[0], hi[0], _SAMPLES), np.linspace(lo[1], hi[1], _SAMPLES))
@@ -288,8 +288,8 @@ def build_imported_mesh(cfg: HousingConfig, path: str | Path) -> ImportedHousing
     facets = _boundary_facets(tets)
     samples = x[facets]                                   # (k, 3, 3): every triangle's vertices
     scale = float(np.linalg.norm(np.ptp(x, axis=0)))
-    bores, groups = _select_bores(cfg, samples, file, scale)
-    fixed = _fixed(cfg, samples, groups, file)
+    bores, groups = select_bores(cfg, samples, file, scale)
+    fixed = fixed_faces(cfg, samples, groups, file)
     tagged = [(BASE_TAG, facets[fixed])] if fixed else []
     tagged += [(BORE_TAG0 + k, facets[g]) for k, g in enumerate(groups)]
     write_tagged_msh(path, x, tets, tagged)
