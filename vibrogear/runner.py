@@ -21,6 +21,7 @@ from . import __version__
 from .config import Scene
 from .analyses.invoke import invoke, load, with_needs
 from .config.verbs import VERBS
+from .models.scene_notes import derived_lines
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
                                WriteFailure, is_root_process)
@@ -103,6 +104,8 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
     summary: dict[str, Any] = {
         "scene": scene.scene.name, "source": source, "model": scene.model_kind,
         "analyses": list(scene.scene.analyses),
+        # what the scene derives from what its author wrote (loads, engine orders, bearings)
+        "derived": derived_lines(scene),
         "versions": {"vibrogear": __version__, "python": platform.python_version(),
                      **_versions()},
         "wall_time_s": {}, "results": {}, "status": "ok",

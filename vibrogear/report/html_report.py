@@ -179,7 +179,8 @@ def _run_details(summary: dict, names, status: str) -> list[str]:
             _table(["entry", "value"], [
                 ("scene", summary.get("scene")), ("source", summary.get("source")),
                 ("model", summary.get("model")), ("analyses", ", ".join(map(str, names))),
-                ("computation status", status)]),
+                ("computation status", status)]
+                + [("derived from the scene", line) for line in summary.get("derived") or ()]),
             "<h3>Versions</h3>",
             _table(["package", "version"], list((summary.get("versions") or {}).items())),
             "<h3>Wall times [s]</h3>", _table(["stage", "wall time [s]"], walls),
