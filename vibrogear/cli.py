@@ -140,7 +140,7 @@ def _main(argv: list[str] | None) -> int:
                check_output_dir(Path("out") / scene.scene.name, "scene.name"))
         from .models.validate import validate_scene
         from .runner import resolve
-        validate_scene(scene)
+        validate_scene(scene, files=args.command == "check")
         resolve(scene)
     except (ConfigError, NotImplementedError) as exc:
         _error("invalid input", exc)

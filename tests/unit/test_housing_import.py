@@ -4,6 +4,7 @@ modal readers' checks on hand-made data (frequencies, normalisation, layouts).""
 from __future__ import annotations
 
 import os
+import shutil
 import stat
 from pathlib import Path
 
@@ -143,11 +144,39 @@ def _scene(tmp_path, *, source="step", file="data/h.step", axis="[0, 1, 0]",
 
 def test_file_is_relative_to_the_scene_and_check_passes(tmp_path, capsys):
     (tmp_path / "data").mkdir()
-    _touch(tmp_path / "data", "h.step")
+    shutil.copy(ROOT / "configs" / "data" / "housing_feet_ribs_mm.step", tmp_path / "data" / "h.step")
     scene = _scene(tmp_path)
     s = load_scene(scene)
     assert Path(s.housing.file) == tmp_path / "data" / "h.step"
     assert main(["check", str(scene)]) == 0
+
+
+@pytest.mark.parametrize("change, field, words", [
+    ("bore_radius = 0.02", "housing.bores[0]", "cuts no boundary face"),
+    ("max = [1, 1, -0.014]", "housing.fixed_region", "selects no boundary face"),
+    ("__empty__", "housing.file", "not a readable STEP file"),
+])
+def test_check_opens_the_step_file(tmp_path, capsys, change, field, words):
+    """``check`` selects a STEP housing's bores and clamped faces as the mesher will: a bore
+    off its seat (radius 21 mm on the 20 mm seat), a clamping box below the feet, or a file
+    that is no STEP exit 2 naming the field (the shipped housing_step.toml's solid)."""
+    (tmp_path / "data").mkdir()
+    src = ROOT / "configs" / "data" / "housing_feet_ribs_mm.step"
+    if change == "__empty__":
+        _touch(tmp_path / "data", "h.step")
+    else:
+        shutil.copy(src, tmp_path / "data" / "h.step")
+    scene = _scene(tmp_path)
+    text = scene.read_text()
+    if change == "bore_radius = 0.02":
+        text = text.replace(change, "bore_radius = 0.021")
+    elif change.startswith("max"):
+        text = text.replace("min = [-1, -1, -0.016], max = [1, 1, -0.014]",
+                            "min = [-1, -1, -0.06], max = [1, 1, -0.05]")
+    scene.write_text(text)
+    assert main(["check", str(scene)]) == 2
+    err = capsys.readouterr().err
+    assert field in err and words in err
 
 
 @pytest.mark.parametrize("case, field, words", [

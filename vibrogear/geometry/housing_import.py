@@ -36,7 +36,8 @@ from .housing import (BASE_TAG, BORE_TAG0, VOLUME_TAG, BoreGeometry, HousingMesh
 
 __all__ = ["ImportedHousing", "build_mesh", "mesh_bores", "mesh_info", "save_layout", "build_step_mesh",
            "build_imported_mesh", "read_tet_mesh", "bore_segments", "segment_bores",
-           "write_tagged_msh", "BOX_TOL", "face_samples", "select_bores", "fixed_faces"]
+           "write_tagged_msh", "BOX_TOL", "face_samples", "select_bores", "fixed_faces",
+           "check_step_housing"]
 
 log = logging.getLogger(__name__)
 
@@ -154,34 +155,51 @@ def fixed_faces(cfg: HousingConfig, samples, bore_groups, file: str) -> list[int
     return fixed
 
 
+def _read_step_solid(gmsh, file: str):
+    """Import the STEP file into the open gmsh session (OCC, metres): (volumes, solids in the
+    file, volume m^3, bounding box, its diagonal m, boundary faces, their sample points);
+    ConfigError naming ``housing.file`` for a file OCC cannot read or one without a solid."""
+    gmsh.option.setString("Geometry.OCCTargetUnit", "M")
+    occ = gmsh.model.occ
+    try:
+        occ.importShapes(file)
+    except Exception:
+        msg = gmsh.logger.getLastError() or "OpenCASCADE could not read it"
+        raise ConfigError("housing.file", f"{file}: not a readable STEP file ({msg})") from None
+    occ.synchronize()
+    vols = gmsh.model.getEntities(3)
+    if not vols:
+        n_s = len(gmsh.model.getEntities(2))
+        raise ConfigError("housing.file", f"{file}: holds no solid ({n_s} surfaces, 0 volumes): an open "
+                          "shell or surface model cannot be meshed with tetrahedra")
+    n_solids = len(vols)
+    if n_solids > 1:                      # conformal interfaces between touching solids
+        occ.fragment(vols[:1], vols[1:])
+        occ.synchronize()
+        vols = gmsh.model.getEntities(3)
+    volume = float(sum(occ.getMass(3, t) for _, t in vols))
+    bbox = gmsh.model.getBoundingBox(-1, -1)
+    scale = float(np.linalg.norm(np.subtract(bbox[3:], bbox[:3])))
+    faces = sorted({abs(t) for _, t in gmsh.model.getBoundary(vols, combined=True, oriented=False)})
+    return vols, n_solids, volume, bbox, scale, faces, {f: face_samples(gmsh, f) for f in faces}
+
+
+def check_step_housing(cfg: HousingConfig) -> None:
+    """The STEP housing's bores and clamped faces selected as the mesher selects them, without
+    meshing (``vibrogear check``): ConfigError naming the bore or ``housing.fixed_region``."""
+    file = str(cfg.file)
+    with gmsh_session(False) as gmsh:
+        _, _, _, _, scale, _, samples = _read_step_solid(gmsh, file)
+        _, groups = select_bores(cfg, samples, file, scale)
+        fixed_faces(cfg, samples, groups, file)
+
+
 def build_step_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = False) -> ImportedHousing:
     """Import ``cfg.file`` (STEP) with OCC in metres, tag, mesh (P2 rules) and write ``path`` (.msh)."""
     path, file = Path(path), str(cfg.file)
     t0 = time.perf_counter()
     with gmsh_session(verbose) as gmsh:
-        gmsh.option.setString("Geometry.OCCTargetUnit", "M")
-        occ = gmsh.model.occ
-        try:
-            occ.importShapes(file)
-        except Exception:
-            msg = gmsh.logger.getLastError() or "OpenCASCADE could not read it"
-            raise ConfigError("housing.file", f"{file}: not a readable STEP file ({msg})") from None
-        occ.synchronize()
-        vols = gmsh.model.getEntities(3)
-        if not vols:
-            n_s = len(gmsh.model.getEntities(2))
-            raise ConfigError("housing.file", f"{file}: holds no solid ({n_s} surfaces, 0 volumes): an open "
-                              "shell or surface model cannot be meshed with tetrahedra")
-        n_solids = len(vols)
-        if n_solids > 1:                      # conformal interfaces between touching solids
-            occ.fragment(vols[:1], vols[1:])
-            occ.synchronize()
-            vols = gmsh.model.getEntities(3)
-        volume = float(sum(occ.getMass(3, t) for _, t in vols))
-        bbox = gmsh.model.getBoundingBox(-1, -1)
-        scale = float(np.linalg.norm(np.subtract(bbox[3:], bbox[:3])))
-        faces = sorted({abs(t) for _, t in gmsh.model.getBoundary(vols, combined=True, oriented=False)})
-        samples = {f: face_samples(gmsh, f) for f in faces}
+        vols, n_solids, volume, bbox, scale, faces, samples = _read_step_solid(gmsh, file)
         bores, groups = select_bores(cfg, samples, file, scale)
         fixed = fixed_faces(cfg, samples, groups, file)
         gmsh.model.addPhysicalGroup(3, [t for _, t in vols], VOLUME_TAG)
