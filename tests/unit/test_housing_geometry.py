@@ -14,18 +14,9 @@ from vibrogear.config.housing import HousingConfig
 from vibrogear.geometry.housing import (BASE_TAG, bore_layout, build_housing_mesh, housing_volume,
                                         read_msh_arrays)
 from pathlib import Path
+from mesh_measures import tet_volume, tri_area
 
 SMALL = Path(__file__).resolve().parents[2] / "configs" / "housing_small.toml"
-
-
-def _tet_volume(x, tets):
-    a, b, c, d = (x[tets[:, i]] for i in range(4))
-    return np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))).sum() / 6.0
-
-
-def _tri_area(x, tris):
-    a, b, c = (x[tris[:, i]] for i in range(3))
-    return 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1).sum()
 
 
 @pytest.mark.parametrize("variant", [dict(), dict(base="feet", ribs=True), dict(base="none", ribs=True)])
@@ -39,14 +30,14 @@ def test_mesh_volume_and_groups_match_closed_form(tmp_path, variant):
     hm = build_housing_mesh(cfg, tmp_path / "h.msh")
     x, tets, facets, values = read_msh_arrays(hm.path)
     # solid volume: faceted cylinders are inscribed polygons, bores cut slightly less -> tolerance 0.3 %
-    assert _tet_volume(x, tets) == pytest.approx(housing_volume(cfg), rel=3e-3)
+    assert tet_volume(x, tets) == pytest.approx(housing_volume(cfg), rel=3e-3)
     # base area: plate / feet / box bottom (exact planar faces)
     L, W = cfg.length, cfg.width
     base_area = {"plate": (L + 2 * cfg.base_overhang) * (W + 2 * cfg.base_overhang),
                  "feet": 4 * cfg.foot_size ** 2, "none": L * W}[cfg.base]
     if cfg.base == "none" and cfg.ribs:  # rib feet stand on the ground too
         base_area += sum(2 * cfg.rib_t * b.boss_length for b in cfg.bores)
-    assert _tri_area(x, facets[values == BASE_TAG]) == pytest.approx(base_area, rel=1e-9)
+    assert tri_area(x, facets[values == BASE_TAG]) == pytest.approx(base_area, rel=1e-9)
     # each bore surface: lateral area 2 pi r l of its cylinder (inscribed facets: within 2 %)
     layout = bore_layout(cfg)
     assert len(hm.bore_tags) == len(layout) == 2 * len(cfg.bores)
@@ -56,7 +47,7 @@ def test_mesh_volume_and_groups_match_closed_form(tmp_path, variant):
         r = np.hypot(x[tris.ravel(), 0] - g.center[0], x[tris.ravel(), 2] - g.center[2])
         assert np.allclose(r, g.radius, rtol=1e-6), "bore group holds faces off the bore cylinder"
         length = g.y_range[1] - g.y_range[0]
-        assert _tri_area(x, tris) == pytest.approx(2 * math.pi * g.radius * length, rel=0.02)
+        assert tri_area(x, tris) == pytest.approx(2 * math.pi * g.radius * length, rel=0.02)
 
 
 def test_coupling_points_uniform_on_bore_circle():
@@ -120,7 +111,7 @@ def test_edge_grading_refines_near_junction_edges(tmp_path):
     assert far_g == pytest.approx(far_p, rel=0.2)   # and the bulk about unchanged
     assert hg.n_tets > hp.n_tets
     x, tets, _, _ = read_msh_arrays(hg.path)        # still the same solid
-    assert _tet_volume(x, tets) == pytest.approx(housing_volume(graded), rel=3e-3)
+    assert tet_volume(x, tets) == pytest.approx(housing_volume(graded), rel=3e-3)
 
 
 def test_junction_curves_are_the_reentrant_edges():
