@@ -247,32 +247,26 @@ def test_box_housing_puts_an_inner_wall_at_the_middle_bearing(tmp_path, capsys):
                    "bearing37": f"{i}/front", "bearing38": f"{i}/back"}
 
 
-def test_box_housing_refuses_an_inner_wall_through_a_gear(tmp_path, capsys):
-    """Bearing 34 moved onto gear 18's middle (u = 65 mm on shaft 14): its wall would cut the
-    gear; exit 2 naming both, nothing written."""
+@pytest.mark.parametrize("component, u_mm, words", [
+    # bearing 34 onto gear 18's middle (u = 65 mm on shaft 14): its wall would cut the gear
+    ("34", "65", ("gear 18",)),
+    # bearing 38 at u = 225 mm on shaft 13 (housing y 45 + 225 = 270 mm): 30 mm before the
+    # back plane (300 mm), more than one 20 mm wall from it, so it needs an inner wall at
+    # 270 mm, whose face would leave 300 - 10 - 280 = 10 mm of cavity to the back wall
+    ("38", "225", ("10 mm of cavity to the back wall",)),
+], ids=["wall-through-a-gear", "wall-crowding-its-neighbour"])
+def test_box_housing_refuses_an_inner_wall_it_cannot_place(tmp_path, capsys, component, u_mm,
+                                                           words):
+    """A casing bearing moved where its inner wall cannot go: exit 2 naming the bearing
+    component and why, nothing written."""
     root = _xml_root()
-    b = _component(root, "34")
-    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "65"
-    src = _write_xml(root, tmp_path / "onto_gear.rexs")
+    b = _component(root, component)
+    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = u_mm
+    src = _write_xml(root, tmp_path / "moved.rexs")
     out = tmp_path / "s.toml"
     assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 2
     err = capsys.readouterr().err
-    assert "bearing component(s) 34" in err and "gear 18" in err and not out.exists()
-
-
-def test_box_housing_refuses_a_wall_crowding_its_neighbour(tmp_path, capsys):
-    """Bearing 38 moved to u = 225 mm on shaft 13 (housing y 45 + 225 = 270 mm): 30 mm before
-    the back plane (300 mm), more than one 20 mm wall from it, so it needs an inner wall at
-    270 mm, whose face would leave 300 - 10 - 280 = 10 mm of cavity to the back wall: exit 2
-    naming it, nothing written."""
-    root = _xml_root()
-    b = _component(root, "38")
-    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "225"
-    src = _write_xml(root, tmp_path / "crowded.rexs")
-    out = tmp_path / "s.toml"
-    assert main(["import", str(src), "--housing", "box", "-o", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "bearing component(s) 38" in err and "10 mm of cavity to the back wall" in err
+    assert f"bearing component(s) {component}" in err and all(w in err for w in words)
     assert not out.exists()
 
 

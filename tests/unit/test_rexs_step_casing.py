@@ -131,15 +131,19 @@ def test_casing_in_another_frame_exits_2_naming_the_bore(box, tmp_path, capsys):
     assert "--housing" in err and "bore 'axis1/front'" in err and "housing frame" in err
 
 
+def _edit_after(path, anchor: str, old: str, new: str) -> None:
+    """Replace the first ``old`` after ``anchor`` in the scene file (a hand edit)."""
+    text = path.read_text()
+    j = text.index(old, text.index(anchor))
+    path.write_text(text[:j] + new + text[j + len(old):])
+
+
 def test_run_names_a_bore_without_faces(box, tmp_path, capsys):
     """A bore edited off its seat in the written scene: the run exits 2 naming the bore entry
     before any output is written."""
     rc, out = _import(box, tmp_path)
     assert rc == 0
-    text = out.read_text()
-    i = text.index('name = "axis1/inner1"')
-    j = text.index("bore_radius = 0.045", i)
-    out.write_text(text[:j] + "bore_radius = 0.05" + text[j + len("bore_radius = 0.045"):])
+    _edit_after(out, 'name = "axis1/inner1"', "bore_radius = 0.045", "bore_radius = 0.05")
     capsys.readouterr()
     res = tmp_path / "res"
     assert main(["modes", str(out), "--out", str(res), "--quiet"]) == 2
@@ -223,10 +227,7 @@ def test_bores_of_one_axis_off_its_line_are_named(box, tmp_path, capsys):
     input error at ``check`` naming it."""
     rc, out = _import(box, tmp_path)
     assert rc == 0
-    text = out.read_text()
-    i = text.index('name = "axis1/back"')
-    j = text.index("center = [0.347413888", i)
-    out.write_text(text[:j] + "center = [0.35" + text[j + len("center = [0.347413888"):])
+    _edit_after(out, 'name = "axis1/back"', "center = [0.347413888", "center = [0.35")
     capsys.readouterr()
     assert main(["check", str(out)]) == 2
     err = capsys.readouterr().err
