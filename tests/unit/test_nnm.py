@@ -258,7 +258,7 @@ def test_a_bad_ds_exits_2_naming_the_field(tmp_path, capsys):
     scene = str(ROOT / "configs" / "impact_pair_nnm.toml")
     assert main(["nnm", scene, "--out", str(out), "--quiet", "--set", "nnm.ds=0.5"]) == 2
     err = capsys.readouterr().err
-    assert "invalid input: nnm.ds: expected ds_min <= ds <= ds_max" in err, err
+    assert "invalid input: nnm.ds: must satisfy ds_min <= ds <= ds_max" in err, err
     assert not out.exists()
 
 

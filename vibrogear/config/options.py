@@ -49,6 +49,18 @@ def check_fields(obj) -> None:
             check(v, f.metadata, f.name)
 
 
+def check_step_order(obj) -> None:
+    """``ds_min <= ds <= ds_max`` of a continuation's steps, else a ConfigError naming ds."""
+    if not obj.ds_min <= obj.ds <= obj.ds_max:
+        raise ConfigError("ds", f"must satisfy ds_min <= ds <= ds_max ({obj.ds_min:g} <= "
+                          f"ds <= {obj.ds_max:g}), got {obj.ds:g}")
+
+
+def fields_of(obj, cls) -> dict:
+    """The fields of dataclass ``cls`` that ``obj`` carries, as keyword arguments."""
+    return {f.name: getattr(obj, f.name) for f in dataclasses.fields(cls)}
+
+
 def check_range(obj, path: str, lo: str, hi: str) -> None:
     """``obj.lo < obj.hi``, else a ConfigError naming ``path.hi``."""
     a, b = getattr(obj, lo), getattr(obj, hi)
@@ -159,13 +171,11 @@ class ContinuationSteps:
 
     def __post_init__(self):
         check_fields(self)
-        if not self.ds_min <= self.ds <= self.ds_max:
-            raise ConfigError("ds", f"must satisfy ds_min <= ds <= ds_max ({self.ds_min:g} <= "
-                              f"ds <= {self.ds_max:g}), got {self.ds:g}")
+        check_step_order(self)
 
     def steps(self) -> dict:
         """These fields as keyword arguments (for :class:`ContinuationOptions`)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(ContinuationSteps)}
+        return fields_of(self, ContinuationSteps)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -203,13 +213,11 @@ class NnmSteps:
         check_fields(self)
         if self.phase not in ("monitor", "mode"):
             raise ConfigError("phase", f"expected 'monitor' or 'mode', got {self.phase!r}")
-        if not self.ds_min <= self.ds <= self.ds_max:
-            raise ConfigError("ds", f"expected ds_min <= ds <= ds_max "
-                              f"({self.ds_min:g} <= {self.ds:g} <= {self.ds_max:g})")
+        check_step_order(self)
 
     def steps(self) -> dict:
         """These fields as keyword arguments (for :class:`NnmMethod`)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(NnmSteps)}
+        return fields_of(self, NnmSteps)
 
 
 @dataclass(frozen=True, kw_only=True)
