@@ -33,7 +33,7 @@ from ..config.options import ContinuationOptions, ShootingOptions
 from ..pipeline.executors import run_units, under_mpi
 from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ..solvers.periodic.shooting import shoot
-from .states_cluster import RANGE_OVERLAP
+from .states_cluster import RANGE_OVERLAP, shared_range
 from .study import integration_options
 from .sweep_branches import on_branch
 
@@ -182,9 +182,7 @@ def compare_with_sweep(study, attractors, sweep) -> dict | None:
             q0 = qmin[j0] + s * (qmin[j1] - qmin[j0])
             q1 = qmax[j0] + s * (qmax[j1] - qmax[j0])
             if a.period_n == 0:        # the census's own range test (envelope vs one record)
-                union = max(q1, a.qmax) - min(q0, a.qmin)
-                shared = max(0.0, min(q1, a.qmax) - max(q0, a.qmin))
-                if union > 0 and shared >= RANGE_OVERLAP * union:
+                if shared_range(q0, q1, a.qmin, a.qmax) >= RANGE_OVERLAP:
                     seen = True
                     break
                 continue

@@ -8,7 +8,8 @@
   a motion joins the first such attractor.
 * **Non-periodic** motions (quasi-periodic, chaotic, aperiodic and "not settled" by the
   budget alone: one family, since a short record of one chaotic attractor is classed any of
-  these ways by chance; "not settled" with an exponent below 0 only with its own kind) are one attractor when every test of :func:`non_periodic_score` passes:
+  these ways by chance; "not settled" with an exponent below 0 only with its own kind) are
+  one attractor when every test of :func:`non_periodic_score` passes:
   exponents within 3 combined standard errors; stroboscopic clouds not told apart by the
   two-sample Kolmogorov-Smirnov test at :data:`CLOUD_ALPHA`; ranges [qmin, qmax] sharing
   :data:`RANGE_OVERLAP` of their union; impacts and rattle per mesh within the Welch t
@@ -26,7 +27,6 @@ settled without an integrator failure) with its Wilson 95 % score interval
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,10 +35,10 @@ from scipy.stats import t as student_t
 
 from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
                                          QUASI_PERIODIC, batch_blocks)
+from .states_gaps import split_by_extrema
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
-           "non_periodic_score", "split_by_extrema", "gap_ratio",
-           "gap_threshold", "group_class"]
+           "non_periodic_score", "shared_range", "group_class"]
 
 #: two-sided level of one statistic's comparison: 3 standard deviations of a normal law
 LEVEL = float(2.0 * norm.sf(3.0))
@@ -56,10 +56,6 @@ _Z95 = float(norm.isf(0.025))
 CHAOTIC_BY_CHANCE = 0.025
 #: a group is chaotic when its chaotic members are this unlikely for a torus
 CLASS_LEVEL = 0.01
-#: an extrema gap splits a group only with at least this many members on each side
-GAP_SIDE = 3
-#: ... and when it exceeds this quantile of the largest gap ratio of one distribution
-GAP_QUANTILE = 0.99
 
 
 def wilson(k: int, n: int) -> tuple[float, float]:
@@ -194,6 +190,15 @@ def _ratio(a, ea, na, b, eb, nb, floor) -> float:
     return d / allow if allow > 0 else (0.0 if d == 0 else math.inf)
 
 
+def shared_range(lo1: float, hi1: float, lo2: float, hi2: float) -> float:
+    """The share of the union of [lo1, hi1] and [lo2, hi2] that both cover (1 for two equal
+    points; NaN for NaN ends)."""
+    union = max(hi1, hi2) - min(lo1, lo2)
+    if not union > 0:
+        return 1.0 if union == 0 else math.nan
+    return max(0.0, min(hi1, hi2) - max(lo1, lo2)) / union
+
+
 def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
     """How far non-periodic records ``a`` and ``b`` are from one attractor: the largest
     ratio of a test's difference to what it allows (module docstring); <= 1: one attractor,
@@ -205,12 +210,10 @@ def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
     sa, sb = _sigma(a), _sigma(b)
     if math.isfinite(sa) and math.isfinite(sb):
         worst = _ratio(a.lyapunov, sa, 0, b.lyapunov, sb, 0, 0.0)
-    union = max(a.qmax, b.qmax) - min(a.qmin, b.qmin)
-    if union > 0:
-        shared = max(0.0, min(a.qmax, b.qmax) - max(a.qmin, b.qmin)) / union
-        worst = max(worst, (1.0 - shared) / (1.0 - RANGE_OVERLAP))
-    elif not union == 0:                                # NaN extrema
+    shared = shared_range(a.qmin, a.qmax, b.qmin, b.qmax)
+    if math.isnan(shared):                              # NaN extrema
         return math.inf
+    worst = max(worst, (1.0 - shared) / (1.0 - RANGE_OVERLAP))
     pa, pb = (np.asarray(r.poincare, dtype=float) for r in (a, b))
     pa, pb = pa[np.isfinite(pa)], pb[np.isfinite(pb)]
     if min(pa.size, pb.size) >= CLOUD_MIN:
@@ -223,61 +226,6 @@ def non_periodic_score(a, b, meshes, floors, stat_tol: float) -> float:
         for k in (0, 1):
             worst = max(worst, _ratio(*ma[g][k], na, *mb[g][k], nb, stat_tol * floors[g][k]))
     return worst
-
-
-@lru_cache(maxsize=None)
-def gap_threshold(n: int, draws: int = 4000) -> float:
-    """The :data:`GAP_QUANTILE` quantile of :func:`gap_ratio` over ``n`` values drawn from
-    one exponential law (a heavier tail than the Gumbel law of record extrema: one
-    attractor's extrema split by chance at most 1 - GAP_QUANTILE of the time); fixed seed."""
-    v = np.sort(np.random.default_rng(12345).exponential(size=(draws, n)), axis=1)
-    return float(np.quantile(_gap_ratios(v)[0], GAP_QUANTILE))
-
-
-def _gap_ratios(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per row of sorted ``v`` (rows, n): the largest gap between neighbours with at least
-    GAP_SIDE values on each side over the larger standard deviation of the two sides, and
-    the index of the first value above that gap."""
-    n = v.shape[1]
-    best, at = np.zeros(v.shape[0]), np.zeros(v.shape[0], int)
-    v = v - v.mean(axis=1, keepdims=True)            # centred: sums of squares stay exact
-    c1, c2 = np.cumsum(v, axis=1), np.cumsum(v * v, axis=1)
-    for k in range(GAP_SIDE, n - GAP_SIDE + 1):
-        s1, s2 = c1[:, -1] - c1[:, k - 1], c2[:, -1] - c2[:, k - 1]
-        var = np.maximum((c2[:, k - 1] - c1[:, k - 1] ** 2 / k) / (k - 1),
-                         (s2 - s1 ** 2 / (n - k)) / (n - k - 1))
-        sd, gap = np.sqrt(np.maximum(var, 0.0)), v[:, k] - v[:, k - 1]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            r = np.where(sd > 0, gap / sd, np.where(gap > 0, np.inf, 0.0))
-        at = np.where(r > best, k, at)
-        best = np.maximum(best, r)
-    return best, at
-
-
-def gap_ratio(values) -> tuple[float, float]:
-    """(ratio, cut) of ``values``: :func:`_gap_ratios` and the middle of that gap."""
-    v = np.sort(np.asarray(values, dtype=float))
-    if v.size < 2 * GAP_SIDE:
-        return 0.0, math.nan
-    best, at = (x[0] for x in _gap_ratios(v[None, :]))
-    return float(best), (0.5 * float(v[at] + v[at - 1]) if best > 0 else math.nan)
-
-
-def split_by_extrema(members: list) -> list[list]:
-    """A non-periodic group split where its extrema (qmin or qmax over the members) fall
-    into two clumps whose gap exceeds :func:`gap_threshold` (recursively; start order kept
-    in each part)."""
-    if len(members) < 2 * GAP_SIDE:
-        return [members]
-    limit = gap_threshold(len(members))
-    for key in ("qmin", "qmax"):
-        ratio, cut = gap_ratio([getattr(r, key) for r in members])
-        if ratio > limit:
-            low = [r for r in members if getattr(r, key) < cut]
-            high = [r for r in members if getattr(r, key) >= cut]
-            parts = split_by_extrema(low) + split_by_extrema(high)
-            return sorted(parts, key=lambda ms: ms[0].index)
-    return [members]
 
 
 def _pooled_exponent(members) -> tuple[float, tuple]:
@@ -325,8 +273,9 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
     cycles = [np.atleast_2d(r.states) for r in ok if r.period_n > 0 and r.states is not None]
     sx = max((float(np.max(np.abs(c[:, :m]))) for c in cycles), default=1.0) or 1.0
     sv = max((float(np.max(np.abs(c[:, m:]))) for c in cycles), default=1.0) or 1.0
-    spread = {g: (max(_mesh_stats(r, meshes)[g][0][0] for r in ok),
-                  max(_mesh_stats(r, meshes)[g][1][0] for r in ok)) for g in meshes}
+    stats = {r.index: _mesh_stats(r, meshes) for r in ok}    # per mesh (impacts, rattle)
+    spread = {g: tuple(max(stats[r.index][g][k][0] for r in ok) for k in (0, 1))
+              for g in meshes}
     found: list[tuple[Attractor, list]] = []        # (attractor, member records)
 
     def scaled(c):
@@ -366,8 +315,8 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
         att.n_ok = len(ok)
         q0 = np.array([r.qmin for r in members])
         q1 = np.array([r.qmax for r in members])
-        att.qmin, att.qmax = float(q0.mean()), float(q1.mean())
         k = len(members)
+        att.qmin, att.qmax = float(q0.mean()), float(q1.mean())
         if att.period_n == 0:           # the pooled record: envelope, exponent, class
             att.qmin, att.qmax = float(q0.min()), float(q1.max())
             att.lyapunov, att.lyapunov_ci = _pooled_exponent(members)
@@ -378,7 +327,7 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
         att.qmin_err = float(q0.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         att.qmax_err = float(q1.std(ddof=1) / math.sqrt(k)) if k > 1 else 0.0
         for g in meshes:
-            st = [_mesh_stats(r, meshes)[g] for r in members]
+            st = [stats[r.index][g] for r in members]
             imp = np.array([s[0][0] for s in st])
             rat = np.array([s[1][0] for s in st])
             att.metrics[g] = {"impacts": float(np.mean(imp)), "rattle": float(np.mean(rat)),
