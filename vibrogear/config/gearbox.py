@@ -82,7 +82,7 @@ from typing import ClassVar
 from .base import ConfigError, ErrorList, spec
 from .options import RPM, Parameter
 from .gearbox_supports import (BEARING_EXPONENTS, MAX_ORDER_PERIOD, ExternalCouplingConfig,
-                               GearboxBearingConfig, torque_order_ratios)
+                               GearboxBearingConfig, order_period, torque_order_ratios)
 from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections, with_nodes_at
 from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
@@ -346,13 +346,14 @@ class GearboxConfig:
         """The torque orders' whole excitation period: at most MAX_ORDER_PERIOD mesh periods
         (named at the coupling whose order needs the longest)."""
         terms = torque_order_ratios(self)
-        if terms and math.lcm(*(t[4].denominator for t in terms)) > MAX_ORDER_PERIOD:
+        period = order_period(terms)
+        if period > MAX_ORDER_PERIOD:
             i, order, _, _, n = max(terms, key=lambda t: t[4].denominator)
             raise ConfigError(f"{path}.couplings[{i}].torque_orders",
                               f"order {float(order):g} is {n.numerator}/{n.denominator} of the "
                               f"mesh frequency: with the other orders the excitation repeats "
-                              f"only after {math.lcm(*(t[4].denominator for t in terms))} mesh "
-                              f"periods (at most {MAX_ORDER_PERIOD}); use orders whose ratios "
+                              f"only after {period} mesh periods (at most {MAX_ORDER_PERIOD}); "
+                              "use orders whose ratios "
                               "to the mesh frequency share a denominator")
 
     def speed_ratios(self, path: str = "gearbox") -> tuple[list[float], list[float]]:

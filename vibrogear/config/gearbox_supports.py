@@ -12,7 +12,7 @@ from .bearing_catalogue import ElementSet, boundary_dimensions, element_set
 
 __all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS",
            "MAX_TORQUE_ORDERS", "MAX_ORDER_DENOMINATOR", "MAX_ORDER_PERIOD",
-           "torque_order_ratios"]
+           "torque_order_ratios", "order_period"]
 
 #: torque orders per coupling, the largest denominator of an order (0.5: 2, 1/3: 3, ...),
 #: and the longest whole excitation period the orders may make, in mesh periods
@@ -54,6 +54,13 @@ def torque_order_ratios(gearbox) -> tuple[tuple, ...]:
         p_s = Fraction(abs(shaft_p[gearbox.shaft_index(c.shaft, "")])).limit_denominator(10 ** 6)
         out += [(i, order, amp, phase, order * p_s / z) for order, amp, phase in c.order_terms()]
     return tuple(out)
+
+
+def order_period(terms) -> int:
+    """Mesh periods after which the excitation with these torque-order ``terms``
+    (:func:`torque_order_ratios`) repeats: the least common multiple of the denominators of
+    their fractions n (1 without orders)."""
+    return math.lcm(1, *(t[4].denominator for t in terms))
 
 
 #: contact-law exponent of each bearing type ("spring" has no contacts)

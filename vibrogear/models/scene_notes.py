@@ -5,9 +5,7 @@ given by designation, boundary dimensions or element set (with the element set a
 formula).  ``vibrogear check`` and ``vibrogear import`` print these lines."""
 from __future__ import annotations
 
-import math
-
-from ..config.gearbox_supports import torque_order_ratios
+from ..config.gearbox_supports import order_period, torque_order_ratios
 
 __all__ = ["derived_lines"]
 
@@ -57,7 +55,7 @@ def _order_lines(cfg) -> list[str]:
                  + f") = {n.numerator}/{n.denominator} of the mesh frequency"
                  for j, o, a, ph, n in terms if j == i]
         out.append(f"gearbox.couplings[{i}] {c.name!r}: torque " + "; ".join(parts))
-    P = math.lcm(*(t[4].denominator for t in terms))
+    P = order_period(terms)
     if P > 1:
         out.append(f"torque orders: the excitation repeats every {P} mesh periods; a sweep, "
                    f"states and continuation period is that whole period ({P} mesh periods: "
