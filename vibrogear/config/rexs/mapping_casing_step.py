@@ -26,7 +26,8 @@ from __future__ import annotations
 import math
 
 from ..base import ConfigError
-from .mapping_housing import WALL, box_frame, casing_bearing_ys, outer_diameter_and_count
+from .mapping_housing import (STEEL, WALL, box_frame, casing_bearing_ys, seat_diameter,
+                              shafts_into_housing_frame)
 
 __all__ = ["step_housing", "set_mesh_size", "parse_fixed_region", "SEAT_WIDTHS", "DEFAULT_WIDTH",
            "SIZE_PER_BORE_RADIUS", "FIXED_REGION_HELP"]
@@ -101,11 +102,9 @@ def step_housing(model, data: dict, report, file: str, fixed_region: dict) -> No
         for k, g in enumerate(groups):
             b = g[0]
             side = ("front" if k == 0 else "back" if k == len(groups) - 1 else f"inner{k}")
-            D, n = outer_diameter_and_count(b)
-            how_r = "half the outside diameter"
-            if D is None:
-                D = 1.8 * max(sec["outer_diameter"] for sec in shafts[b["shaft"]]["sections"])
-                how_r = "0.9 x the shaft's largest diameter (no outside diameter given)"
+            D, n, assumed = seat_diameter(b, shafts[b["shaft"]])
+            how_r = ("0.9 x the shaft's largest diameter (no outside diameter given)" if assumed
+                     else "half the outside diameter")
             B = _width(b)
             how_l = f"{SEAT_WIDTHS:g} x the bearing width"
             if B is None:
@@ -126,16 +125,10 @@ def step_housing(model, data: dict, report, file: str, fixed_region: dict) -> No
                          f"within +-{0.5 * length * 1e3:.4g} mm along the axis ({how_l}), "
                          f"{n or 8} coupling points ("
                          + ("the bearing's rolling elements)" if n else "assumed: no element count)"))
-    for s in gb["shafts"]:
-        s["bore"] = axes[keys[s["name"]]]
-        s.pop("x")
-        s.pop("z")
-        s["y0"] = round(s["y0"] - front + 0.5 * WALL, 12)
-    for b in casing:
-        b.pop("elements", None)
+    shafts_into_housing_frame(gb, casing, lambda s: axes[keys[s["name"]]], front)
     data["housing"] = {
         "source": "step", "file": file, "fixed_region": fixed_region, "support": "fixed",
-        "bores": bores, "material": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 1e-6},
+        "bores": bores, "material": dict(STEEL),
         "mesh": {"size": 0.0, "degree": 2}, "modes": {"count": 20, "shapes": 0}}
     report.assumed.append(
         f"gear_casing: the STEP solid {file} in the housing frame of `--housing box` (y along "

@@ -28,7 +28,8 @@ from ..base import ConfigError
 from ..bearing_catalogue import boundary_dimensions, element_set
 from ..housing_walls import MIN_GAP_WALLS
 
-__all__ = ["box_housing", "box_frame", "casing_bearing_ys", "outer_diameter_and_count", "WALL", "CLEARANCE"]
+__all__ = ["box_housing", "box_frame", "casing_bearing_ys", "outer_diameter_and_count", "seat_diameter",
+           "shafts_into_housing_frame", "STEEL", "WALL", "CLEARANCE"]
 
 #: wall thickness of the generated box [m]
 WALL = 0.02
@@ -46,6 +47,34 @@ def outer_diameter_and_count(b) -> tuple[float | None, int | None]:
         es = element_set(kind, b["bore_diameter"], b["outer_diameter"], b["width"])
         return b["outer_diameter"], es.count
     return None, None
+
+
+#: the generated housings' material (steel) and stiffness-proportional damping
+STEEL = {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 1e-6}
+
+
+def seat_diameter(b, shaft: dict) -> tuple[float, int | None, bool]:
+    """(outside diameter of bearing ``b`` [m], its element count or None, whether the
+    diameter was assumed): the designation's or boundary dimensions' D, else 1.8 x the
+    shaft's largest section diameter (a bore radius 1.8 x the shaft radius)."""
+    D, n = outer_diameter_and_count(b) if b is not None else (None, None)
+    if D is not None:
+        return D, n, False
+    return 1.8 * max(sec["outer_diameter"] for sec in shaft["sections"]), n, True
+
+
+def shafts_into_housing_frame(gb: dict, casing, axis_of, front: float) -> None:
+    """The shafts of ``gb`` onto their housing bores (in place): ``bore`` = ``axis_of`` their
+    (x, z), x and z dropped (the bores carry them), y0 shifted so that the first casing
+    bearing's plane lies at half a wall; the casing bearings' element counts dropped (the
+    housing's coupling points carry them)."""
+    for s in gb["shafts"]:
+        s["bore"] = axis_of(s)
+        s.pop("x")
+        s.pop("z")
+        s["y0"] = round(s["y0"] - front + 0.5 * WALL, 12)
+    for b in casing:
+        b.pop("elements", None)
 
 
 def box_housing(model, data: dict, report) -> None:
@@ -69,9 +98,8 @@ def box_housing(model, data: dict, report) -> None:
             axes[key] = f"axis{len(axes) + 1}"
             mine = sorted((b for b in casing if keys[b["shaft"]] == key),
                           key=lambda b: ys[b["name"]])
-            D, n = outer_diameter_and_count(mine[0]) if mine else (None, None)
-            if D is None:
-                D = 1.8 * max(sec["outer_diameter"] for sec in s["sections"])
+            D, n, assumed = seat_diameter(mine[0] if mine else None, s)
+            if assumed:
                 report.assumed.append(f"housing bore {axes[key]!r}: radius {0.5 * D:.4g} m "
                                       "(1.8 x the shaft's largest radius)")
             counts = _wall_counts(mine, ys, [front] + [y for y, _ in walls] + [back])
@@ -82,19 +110,13 @@ def box_housing(model, data: dict, report) -> None:
                           "boss_length": WALL, "rolling_elements": default})
             if len({c or default for c in counts}) > 1:
                 bores[-1]["wall_rolling_elements"] = [c or default for c in counts]
-        s["bore"] = axes[key]
-        s.pop("x")
-        s.pop("z")
-        s["y0"] = round(s["y0"] - front + 0.5 * WALL, 12)
-    for b in casing:
-        b.pop("elements", None)
+    shafts_into_housing_frame(gb, casing, lambda s: axes[keys[s["name"]]], front)
     data["housing"] = {
         "length": round(max(xs) - min(xs) + 2 * margin, 9), "width": round(width, 9),
         "height": round(max(zs) - min(zs) + 2 * margin, 9), "wall_thickness": WALL,
         **({"inner_walls": [round(y - front + 0.5 * WALL, 9) for y, _ in walls]} if walls else {}),
         "base": "plate", "support": "fixed", "bores": bores,
-        "material": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0, "beta": 1e-6},
-        "modes": {"count": 20, "shapes": 0}}
+        "material": dict(STEEL), "modes": {"count": 20, "shapes": 0}}
     report.assumed.append(
         f"gear_casing: a generated steel box {data['housing']['length']:.4g} x "
         f"{width:.4g} x {data['housing']['height']:.4g} m (walls {WALL:g} m, gear tips "
