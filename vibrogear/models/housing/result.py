@@ -35,6 +35,12 @@ _ARRAYS = ("freqs_hz", "bore_values", "bore_points", "bore_centers", "bore_axes"
            "bore_center_values", "residuals", "preview_points", "preview_values") + SURFACE_FIELDS + SHAPE_FIELDS
 
 
+def _empty(fields, name: str):
+    """A dataclass field defaulting to entry ``name`` of ``fields()`` (the empty arrays of a
+    housing without surface data)."""
+    return field(default_factory=lambda: fields()[name])
+
+
 @dataclass(frozen=True, eq=False, kw_only=True)
 class HousingModes:
     freqs_hz: np.ndarray
@@ -65,21 +71,21 @@ class HousingModes:
     preview_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     preview_values: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
     source_info: Mapping[str, object] = field(default_factory=dict)   # what the housing was made from
-    surface_vertices: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_vertices"])
-    surface_triangles: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_triangles"])
-    surface_centers: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_centers"])
-    surface_areas: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_areas"])
-    surface_weights: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_weights"])
-    surface_values: np.ndarray = field(default_factory=lambda: empty_surface_fields()["surface_values"])
+    surface_vertices: np.ndarray = _empty(empty_surface_fields, "surface_vertices")
+    surface_triangles: np.ndarray = _empty(empty_surface_fields, "surface_triangles")
+    surface_centers: np.ndarray = _empty(empty_surface_fields, "surface_centers")
+    surface_areas: np.ndarray = _empty(empty_surface_fields, "surface_areas")
+    surface_weights: np.ndarray = _empty(empty_surface_fields, "surface_weights")
+    surface_values: np.ndarray = _empty(empty_surface_fields, "surface_values")
     # the whole boundary triangulated, the modes at its vertices, energy per wall / bore
     # (:mod:`.surface_mesh`; empty when the modes come from another program)
-    shape_vertices: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_vertices"])
-    shape_triangles: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_triangles"])
-    shape_facet_tag: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_facet_tag"])
-    shape_values: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_values"])
-    region_normals: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_normals"])
-    region_energy: np.ndarray = field(default_factory=lambda: empty_shape_fields()["region_energy"])
-    shape_vertex_region: np.ndarray = field(default_factory=lambda: empty_shape_fields()["shape_vertex_region"])
+    shape_vertices: np.ndarray = _empty(empty_shape_fields, "shape_vertices")
+    shape_triangles: np.ndarray = _empty(empty_shape_fields, "shape_triangles")
+    shape_facet_tag: np.ndarray = _empty(empty_shape_fields, "shape_facet_tag")
+    shape_values: np.ndarray = _empty(empty_shape_fields, "shape_values")
+    region_normals: np.ndarray = _empty(empty_shape_fields, "region_normals")
+    region_energy: np.ndarray = _empty(empty_shape_fields, "region_energy")
+    shape_vertex_region: np.ndarray = _empty(empty_shape_fields, "shape_vertex_region")
     region_names: tuple[str, ...] = ()
 
     @property
