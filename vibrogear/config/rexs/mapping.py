@@ -163,9 +163,9 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
             if owner is None:
                 raise ConfigError(src, f"component {g.id} (cylindrical_gear) is not part of "
                                   "any shaft; fix: add an assembly relation with its shaft")
+            d = gear_data(model, g, src, report)
             if owner.id not in shafts:
                 continue                    # its shaft's problem is listed
-            d = gear_data(model, g, src, report)
             d["shaft"] = owner.id
             gears[g.id] = d
     axial_reference(gears, shafts, report)
@@ -208,16 +208,22 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
                                   f"{-b_common * 1e3:.4g} mm); fix: their "
                                   "u_coordinate_on_shaft or the shafts' support_vector")
             stages.append((st, g1, g2))
+    # the power flow and the loads follow the gear train: where a part of it has a problem,
+    # the consequences would only repeat it
+    train_ok = not errs
     order = list(shafts)
-    with errs.catch():
-        order = _power_flow(model, shafts, gears, stages)
+    if train_ok:
+        with errs.catch():
+            order = _power_flow(model, shafts, gears, stages)
+        train_ok = not errs
     data = {"scene": {}, "gearbox": {"name": model.application and
                                      f"{Path(src).stem} ({model.application} export)"
                                      or Path(src).stem}}
     supports = bearings(model, shafts, report, errs)
     couplings, case = [], None
-    with errs.catch():
-        couplings, case = loads(model, shafts, gears, stages, order, report, load_case)
+    if train_ok:
+        with errs.catch():
+            couplings, case = loads(model, shafts, gears, stages, order, report, load_case)
     for sid in order:
         sh = shafts[sid]
         sh["features"].update(b["position"] for b in supports if b["shaft"] == sid)

@@ -138,7 +138,9 @@ class Component:
         if attr not in self.attributes:
             raise ConfigError(source, f"component {self.id} ({self.type}"
                               f"{', ' + repr(self.name) if self.name else ''}): missing "
-                              f"attribute {attr!r}")
+                              f"attribute {attr!r}; fix: give it in the REXS file"
+                              + (f" (a {ATTRIBUTE_QUANTITY[attr]})" if attr in
+                                 ATTRIBUTE_QUANTITY else ""))
         return self.attributes[attr][0]
 
     def given(self, attr: str) -> bool:
