@@ -224,3 +224,13 @@ def test_every_problem_at_once_and_the_draft(tmp_path, capsys):
     with pytest.raises(MappingStopped) as info:
         import_rexs(bad)
     assert isinstance(info.value, ConfigError) and len(info.value.errors) == 3
+
+
+def test_placeholders_leave_no_shaft_free(tmp_path):
+    """With the file's axial_stiffness = 0 copied, four rigid-body modes appear (each shaft
+    free to slide; checked by hand with --set ...axial_stiffness=0 on the five locating
+    bearings: n_rigid = 4); with the placeholders taken as not given, none."""
+    import json
+    out = tmp_path / "modes"
+    assert main(["modes", str(_variant("placeholders")), "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "summary.json").read_text())["results"]["modes"]["n_rigid"] == 0
