@@ -11,6 +11,14 @@ Power flow.  ``shafts[0]`` (the driving shaft of the scene) is the shaft with
 ``defines_speed`` (else the one carrying the torque-defining load, else the first); the
 stages order the other shafts outwards from it, and each mesh's ``gear_a`` is the gear on
 the shaft nearer the driving shaft.
+
+Gears.  Each gear sits at its face centre (:func:`.mapping_shafts.axial_reference`: face-start
+positions where only they seat the file's gears); a stage's mesh takes the axial overlap of
+its two faces as its face width.
+
+Problems.  Every component is mapped on its own: a problem (missing attribute, unknown unit,
+broken reference, ...) is collected and the others go on; :class:`MappingStopped` then
+carries all of them and the scene as far as it was mapped (the draft).
 """
 from __future__ import annotations
 

@@ -13,12 +13,17 @@ to ground.
 * ``concept_bearing``: a linear spring bearing with its ``radial_stiffness`` (assumed
   1e9 N/m where the file gives none).
 Bearings that take an axial force (``axial_force_absorption`` other than ``no_direction``)
-get an axial spring (``axial_stiffness``, assumed 1e8 N/m where none is given).
+get an axial spring (``axial_stiffness``, assumed 1e8 N/m where none is given).  Exporter
+placeholders count as not given: a stiffness of 0, of :data:`PLACEHOLDER_STIFFNESS` (1e20
+N/m) or more, or an empty value (listed under "assumed" with the file's value).
 
 Loads.  An ``external_load`` that ``transmits_torque`` becomes a torsional coupling at its
 position: the one on the driving shaft the motor, the others loads.  Its torque is the
-``torque_around_u_axis`` of the load case used (the one with the largest
-``load_duration_fraction``); a load without one takes the input torque times its shaft's
+``torque_around_u_axis`` (else ``power`` / omega) of the load case used: the one named
+(``--load-case N``), else the one with the largest duration share
+(``load_duration_fraction``, REXS 1.6 ``operating_time_fraction``); without a load spectrum
+the components' own attributes (the loads' torque or power, the speed-defining shaft's
+``rotational_speed``).  A load without a torque takes the input torque times its shaft's
 speed reduction (lossless).  Forces of external loads are not mapped (reported).
 """
 from __future__ import annotations
