@@ -85,8 +85,14 @@ def _stopped(errors: list, draft, output: str | None, argv) -> int:
     from .config.base import DRAFT_MARKER
     from .config.rexs.scene_toml import scene_toml
     from .pipeline.files import atomic_write_bytes
+    import re
     n = len(errors)
-    lines = [f"{k + 1}. {e}" for k, e in enumerate(errors)]
+
+    def origin(e) -> str:          # a scene field's REXS component, from the draft's comments
+        m = re.match(r"gearbox\.(\w+)\[(\d+)\]", str(getattr(e, "path", "")))
+        c = draft.comments.get((m.group(1), int(m.group(2)))) if m and draft else None
+        return f" [{c}]" if c else ""
+    lines = [f"{k + 1}. {e}{origin(e)}" for k, e in enumerate(errors)]
     print(f"vibrogear: invalid input: the import stopped on {n} problem{'s' * (n != 1)} "
           "(each names the REXS component, the attribute and the fix):", file=sys.stderr)
     for line in lines:
@@ -96,7 +102,8 @@ def _stopped(errors: list, draft, output: str | None, argv) -> int:
               "SCENE.draft.toml)", file=sys.stderr)
         return 2
     head = [f"{DRAFT_MARKER} the import stopped on {n} problem{'s' * (n != 1)}; "
-            "`vibrogear check` refuses this file until they are fixed and this line deleted",
+            f"`vibrogear check` refuses this file until {'they are' if n != 1 else 'it is'} "
+            "fixed and this line deleted",
             *[f"# {x}" for line in lines for x in line.splitlines()], ""]
     try:
         body = scene_toml(draft, "vibrogear import " + " ".join(argv))

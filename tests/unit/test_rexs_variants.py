@@ -234,3 +234,34 @@ def test_placeholders_leave_no_shaft_free(tmp_path):
     out = tmp_path / "modes"
     assert main(["modes", str(_variant("placeholders")), "--out", str(out), "--quiet"]) == 0
     assert json.loads((out / "summary.json").read_text())["results"]["modes"]["n_rigid"] == 0
+
+
+def test_missing_operating_point_lists_speed_and_torque(tmp_path, capsys):
+    """No load spectrum and neither speed nor torque on the components: both named at once,
+    each with its component and fix."""
+    root = ET.parse(_variant("no_spectrum")).getroot()
+    for cid, aid in (("40", "torque_around_u_axis"), ("12", "rotational_speed")):
+        c = next(x for x in root.iter("component") if x.get("id") == cid)
+        c.remove(next(a for a in c if a.get("id") == aid))
+    bad = tmp_path / "bad.rexs"
+    bad.write_bytes(ET.tostring(root))
+    assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "2 problems" in err
+    assert "component 12 (shaft): missing attribute 'rotational_speed'; fix:" in err
+    assert "component 40 (external_load): missing attribute 'torque_around_u_axis'" in err
+    assert (tmp_path / "s.draft.toml").exists() and not (tmp_path / "s.toml").exists()
+
+
+def test_scene_check_problem_names_the_rexs_component(tmp_path, capsys):
+    """Mapped, but the scene fails its check (bearing 33 moved to u = 500 mm on the 190 mm
+    shaft 12): the scene field and the REXS component it came from, and the draft."""
+    root = ET.parse(XML).getroot()
+    b = next(x for x in root.iter("component") if x.get("id") == "33")
+    next(a for a in b if a.get("id") == "u_coordinate_on_shaft_inner_side").text = "500"
+    bad = tmp_path / "bad.rexs"
+    bad.write_bytes(ET.tostring(root))
+    assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
+    err = capsys.readouterr().err
+    assert "gearbox.bearings[0].position" in err and "rolling_bearing_with_catalog_geometry 33" in err
+    assert (tmp_path / "s.draft.toml").read_text().startswith("# vibrogear DRAFT:")
