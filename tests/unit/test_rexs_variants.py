@@ -147,7 +147,9 @@ def test_placeholders_are_not_given():
     b = _by_name(imp.data["gearbox"]["bearings"])
     for cid in LOCATING:
         assert b[f"bearing{cid}"]["axial_stiffness"] == 1e8
-        assert any(a.startswith(f"{'concept_bearing' if cid in ('37', '38') else 'rolling_bearing_with_catalog_geometry'} {cid}: axial stiffness 1e+08 N/m (the file's 0 N/m")
+        kind = "concept_bearing" if cid in ("37", "38") else \
+            "rolling_bearing_with_catalog_geometry"
+        assert any(a.startswith(f"{kind} {cid}: axial stiffness 1e+08 N/m (the file's 0 N/m")
                    for a in imp.report.assumed), cid
     for cid, why in (("36", "1e+23 N/m"), ("37", "empty"), ("38", "1e+23 N/m")):
         assert b[f"bearing{cid}"]["stiffness"] == 1e9
@@ -263,5 +265,6 @@ def test_scene_check_problem_names_the_rexs_component(tmp_path, capsys):
     bad.write_bytes(ET.tostring(root))
     assert main(["import", str(bad), "-o", str(tmp_path / "s.toml")]) == 2
     err = capsys.readouterr().err
-    assert "gearbox.bearings[0].position" in err and "rolling_bearing_with_catalog_geometry 33" in err
+    assert "gearbox.bearings[0].position" in err
+    assert "rolling_bearing_with_catalog_geometry 33" in err
     assert (tmp_path / "s.draft.toml").read_text().startswith("# vibrogear DRAFT:")

@@ -78,7 +78,8 @@ def shafts_of(model, report, errs=None):
                                           f"the mean diameters {0.5 * sum(do) * 1e3:g} / "
                                           f"{0.5 * sum(di) * 1e3:g} mm")
                 length = c.number("length", src)
-                rows.append({"length": round(length, 12), "outer_diameter": round(0.5 * sum(do), 12),
+                rows.append({"length": round(length, 12),
+                             "outer_diameter": round(0.5 * sum(do), 12),
                              "inner_diameter": round(0.5 * sum(di), 12)})
                 u = start + length
             S = sh.vector("support_vector", src)
