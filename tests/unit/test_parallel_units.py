@@ -139,3 +139,49 @@ def test_the_sweep_reports_its_walks_and_serial_part(tmp_path):
     (walks,) = s["parallel_phases"]
     assert walks["name"] == "walks" and walks["units"] == 4     # 2 directions x 2 segments
     assert walks["workers"] == 2 and s["serial_wall_s"] >= 0 and "rank 0" in s["serial_part"]
+
+
+STATES_MPI = r"""
+import json, sys
+sys.path.insert(0, sys.argv[2])
+from test_parallel_units import _ip_scene
+from vibrogear.analyses import states
+from vibrogear.analyses.study import build_study
+from vibrogear.pipeline.outcome import RunContext
+from mpi4py import MPI
+scene = _ip_scene(workers=None)
+root = MPI.COMM_WORLD.rank == 0
+out = states.run(build_study(scene), scene, RunContext(out=sys.argv[1], quiet=True))
+if root:
+    s = out.summary
+    json.dump({"per_speed": s["per_speed"], "branches": s["branches"],
+               "phases": s["parallel_phases"],
+               "qmax": [float(b.array("qmax").sum()) for b in out.result.branches]},
+              open(sys.argv[1] + "/states.json", "w"))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(__import__("shutil").which("mpirun") is None, reason="no mpirun")
+def test_mpirun_two_ranks_share_the_orbits_and_branches_and_match_one_worker(tmp_path):
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    cmd = ["mpirun", "-n", "2", "--oversubscribe"] + (
+        ["--allow-run-as-root"] if os.geteuid() == 0 else [])
+    env = dict(os.environ, PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1")
+    r = subprocess.run(cmd + [sys.executable, "-c", STATES_MPI, str(tmp_path),
+                              str(Path(__file__).parent)],
+                       env=env, cwd=root, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-3000:]
+    got = json.loads((tmp_path / "states.json").read_text())
+    one = _states(tmp_path, 1)
+    assert got["per_speed"] == json.loads(json.dumps(one.summary["per_speed"]))
+    assert got["branches"] == json.loads(json.dumps(one.summary["branches"]))
+    assert got["qmax"] == [float(b.array("qmax").sum()) for b in one.result.branches]
+    phases = {p["name"]: p for p in got["phases"]}
+    assert {n: phases[n]["workers"] for n in phases} == {"census": 2, "orbits": 2,
+                                                         "branches": 2}
