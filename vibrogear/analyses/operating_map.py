@@ -258,6 +258,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.map
     if study.gearbox is None:
         raise NumericalFailure("map: needs a gearbox scene")
+    split = WallSplit(SERIAL_PART + (CURVES_PART if cfg.curves else ""))
     scaling = load_scaling(study.gearbox, scene.gearbox)
     values = cfg.load_values()
     scales = (scaling.scale_of_twist(values) if cfg.load_kind == "twist"
@@ -266,7 +267,6 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
                                 study=study)
     total = len(cfg.directions) * rpm.size * scales.size
-    split = WallSplit(SERIAL_PART + (CURVES_PART if cfg.curves else ""))
     with ctx.progress(total, "map") as bar:
         res = compute_map(study, scaling, rpm, scales, SweepOptions.of(cfg), opts, out=ctx.out,
                           root=ctx.root, split=split, force_periods=cfg.force_periods,

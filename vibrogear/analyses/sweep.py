@@ -83,11 +83,11 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.sweep
+    split = WallSplit(SERIAL_PART)
     lo, hi = cfg.param_range()
     params = np.linspace(lo, hi, cfg.n_points)
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, study=study)
     total = len(cfg.directions) * params.size
-    split = WallSplit(SERIAL_PART)
     with ctx.progress(total, "sweep") as bar:
         res, store, resumed = resumable_sweep(
             study.model, params, ctx.out, physics=study.physics, root=ctx.root, split=split,
