@@ -27,6 +27,7 @@ Writes benchmarks/results/bench_parallel.json.
 from __future__ import annotations
 
 import argparse
+import heapq
 import json
 import os
 import platform
@@ -37,6 +38,8 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
 
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.pipeline.executors import unit_size  # noqa: E402
@@ -85,10 +88,39 @@ def _full_census(entry: dict, measured_starts: int, full_starts: int, batch: int
         p = dict(p)
         if p["name"] == "census":
             p["unit_work_s"] = p["unit_work_s"] * ratio
-            p["largest_unit_s"] = longest_start * unit_size(full_starts, w, batch)
+            size = unit_size(full_starts, w, batch) if w > 1 else batch
+            p["largest_unit_s"] = longest_start * size
+            p["units"] = -(-full_starts // size)
         phases.append(p)
     return {"serial_wall_s": entry["serial_wall_s"] + clustering * (ratio - 1.0),
             "parallel_phases": phases}
+
+
+def _list_schedule(times, workers: int) -> float:
+    """Makespan of units handed out in order, each to the first worker free (run_units)."""
+    free = [0.0] * workers
+    heapq.heapify(free)
+    for t in times:
+        heapq.heappush(free, heapq.heappop(free) + t)
+    return max(free)
+
+
+def _simulated_full(entry: dict, point, wall, full_per_speed: int, batch: int, w: int,
+                    serial: float) -> float:
+    """Wall of the full census on ``w`` workers: each speed's starts resampled (fixed seed)
+    from its measured starts, cut into units as the census cuts them, handed out in order
+    (equal costs); the orbits and branches as :func:`project` has them; ``serial``: the
+    scaled serial part."""
+    rng = np.random.default_rng(0)
+    speeds = sorted(set(int(i) for i in point))
+    size = unit_size(full_per_speed * len(speeds), w, batch) if w > 1 else batch
+    units = []
+    for i in speeds:
+        mine = rng.choice(wall[point == i], size=full_per_speed, replace=True)
+        units += [float(np.sum(mine[a:a + size])) for a in range(0, full_per_speed, size)]
+    rest = {"serial_wall_s": serial, "parallel_phases": [
+        p for p in entry["parallel_phases"] if p["name"] != "census"]}
+    return _list_schedule(units, w) + project(rest, w)["wall_s"][0]
 
 
 def main(argv=None) -> dict:
@@ -100,6 +132,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--map-speeds", type=int, default=4)
     ap.add_argument("--skip", nargs="*", default=(), choices=("states", "sweep", "map"))
     ap.add_argument("--out", default="/tmp/bench_parallel")
+    ap.add_argument("--reuse", action="store_true", help="states: recompute the projections "
+                    "from the last run's files in --out (no new measurement)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     res = {"conditions": f"2-core machine shared with other jobs; load average (1 minute) "
@@ -112,11 +146,18 @@ def main(argv=None) -> dict:
     w = f"workers={a.workers}"
     if "states" not in a.skip:
         sets = (f"states.starts={a.starts}", f"states.{w}", "states.branches=true")
-        m, entry = _run("states", sets, out / "states")
+        if a.reuse:
+            entry = json.loads((out / "states" / "summary.json").read_text())
+            old = json.loads((ROOT / "benchmarks" / "results" / "bench_parallel.json").read_text())
+            m = {k: v for k, v in old["runs"]["states"].items() if not k.startswith("projection")}
+            entry = entry["results"]["states"]
+        else:
+            m, entry = _run("states", sets, out / "states")
         n = int(entry["counters"]["starts_settled"])
-        import numpy as np
         with np.load(out / "states" / "states.npz") as z:
-            longest = float(np.max(z["start_wall_s"]))
+            wall = np.asarray(z["start_wall_s"], float)
+            point = np.asarray(z["start_point"], int)
+        longest = float(np.max(wall))
         m.update(starts=n, attractors=entry["attractors"],
                  branches_continued=len(entry["branches"]),
                  wall_split_s=entry["wall_split_s"], longest_start_s=round(longest, 3),
@@ -130,6 +171,15 @@ def main(argv=None) -> dict:
                     "scaled, orbits and branches as measured",
             **{str(k): _projections(_full_census(entry, n, full, batch, longest, k), (k,))[str(k)]
                for k in (1, *PROJECT_AT)}}
+        scaled = _full_census(entry, n, full, batch, longest, 1)["serial_wall_s"]
+        one = _simulated_full(entry, point, wall, FULL_STARTS, batch, 1, scaled)
+        m["projection_full_census"]["simulated"] = {
+            "note": "each speed's starts resampled from its measured ones, units as the census "
+                    "cuts them, handed out in order to the first free worker; orbits and "
+                    "branches as in the projection",
+            **{str(k): {"wall_s": round(t, 2), "speedup": round(one / t, 2)}
+               for k in (1, *PROJECT_AT)
+               for t in (_simulated_full(entry, point, wall, FULL_STARTS, batch, k, scaled),)}}
         res["runs"]["states"] = m
     if "sweep" not in a.skip:
         sets = (f"sweep.n_points={a.sweep_points}", f"sweep.segments={a.segments}",

@@ -39,6 +39,11 @@ def test_projection_is_amdahl_for_fine_units_and_the_largest_unit_bounds_it():
     two = {"serial_wall_s": 0.0, "parallel_phases": [
         {"unit_work_s": 8.0, "largest_unit_s": 1.0}, {"unit_work_s": 2.0, "largest_unit_s": 2.0}]}
     assert project(two, 4)["wall_s"][0] == 4.0      # max(2, 1) + max(0.5, 2)
+    # no more units than workers: each has its own, the phase lasts its largest unit
+    few = {"serial_wall_s": 1.0, "parallel_phases": [
+        {"units": 3, "unit_work_s": 6.0, "largest_unit_s": 3.0}]}
+    assert project(few, 4)["wall_s"] == [4.0, 4.0]
+    assert project(few, 2)["wall_s"] == [4.0, pytest.approx(1.0 + 3.0 + 0.5 * 3.0)]
     with pytest.raises(ValueError, match="workers"):
         project(fine, 0)
 

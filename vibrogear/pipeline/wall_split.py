@@ -17,7 +17,8 @@ as ``summary.json`` reports it, and the speed-up it allows on more workers.
 and the units' granularity.  Each phase is a barrier (the serial part after it needs all its
 units); its units are handed out dynamically, longest first, so on W workers a phase of unit
 walls t_u takes at least ``max(sum(t_u) / W, max(t_u))`` (the last unit cannot be shared) and
-at most ``sum(t_u) / W + (1 - 1/W) max(t_u)`` (Graham's bound for list scheduling).  The
+at most ``sum(t_u) / W + (1 - 1/W) max(t_u)`` (Graham's bound for list scheduling); with no
+more units than workers, exactly ``max(t_u)``.  The
 wall on one worker is ``serial + sum over phases of sum(t_u)``, so the projected speed-up is::
 
     S(W) = (serial + sum_p work_p) / (serial + sum_p max(work_p / W, largest_p))
@@ -126,10 +127,13 @@ def project(entry: dict, workers: int) -> dict:
     serial = float(entry["serial_wall_s"])
     phases = entry.get("parallel_phases") or []
     work = sum(float(p["unit_work_s"]) for p in phases)
-    lo = serial + sum(max(float(p["unit_work_s"]) / w, float(p["largest_unit_s"]))
-                      for p in phases)
-    hi = serial + sum(float(p["unit_work_s"]) / w + (1.0 - 1.0 / w) * float(p["largest_unit_s"])
-                      for p in phases)
+    lo = hi = serial
+    for p in phases:
+        pw, big = float(p["unit_work_s"]), float(p["largest_unit_s"])
+        if int(p.get("units", w + 1)) <= w:     # a worker for every unit: the largest
+            lo, hi = lo + big, hi + big
+        else:
+            lo, hi = lo + max(pw / w, big), hi + pw / w + (1.0 - 1.0 / w) * big
     one = serial + work
     amdahl = one / (serial + work / w) if serial + work / w > 0 else 1.0
     return {"workers": w, "one_worker_s": one, "wall_s": [lo, hi],
