@@ -143,7 +143,8 @@ def test_the_sweep_reports_its_walks_and_serial_part(tmp_path):
     s = out.summary
     (walks,) = s["parallel_phases"]
     assert walks["name"] == "walks" and walks["units"] == 4     # 2 directions x 2 segments
-    assert walks["workers"] == 2 and s["serial_wall_s"] >= 0 and "rank 0" in s["serial_part"]
+    assert walks["workers"] == 2 and s["serial_wall_s"] >= 0
+    assert "not shared" in s["serial_part"]
 
 
 STATES_MPI = r"""
@@ -190,3 +191,65 @@ def test_mpirun_two_ranks_share_the_orbits_and_branches_and_match_one_worker(tmp
     phases = {p["name"]: p for p in got["phases"]}
     assert {n: phases[n]["workers"] for n in phases} == {"census": 2, "orbits": 2,
                                                          "branches": 2}
+
+
+CURVES_MPI = r"""
+import json, sys
+from vibrogear.analyses.bifurcation_curves import locate_bifurcations
+from vibrogear.analyses.load_scaling import load_scaling
+from vibrogear.analyses.study import build_study
+from vibrogear.config import load_scene
+from vibrogear.pipeline.wall_split import WallSplit
+from mpi4py import MPI
+scene = load_scene(sys.argv[2])
+study = build_study(scene)
+ls = load_scaling(study.gearbox, scene.gearbox)
+split = WallSplit()
+loads = locate_bifurcations(study.model, ls, [0.9, 1.0], (4950.0, 5350.0), margin=100.0,
+                            integration=scene.integration, tol=scene.shooting.tol,
+                            steps=dict(ds=20.0, ds_min=1e-3, ds_max=40.0, max_points=200),
+                            split=split)
+json.dump({"points": [list(map(list, ld.points)) for ld in loads],
+           "windows": [list(map(list, ld.windows)) for ld in loads],
+           "phases": split.summary()["parallel_phases"]},
+          open(sys.argv[1] + f"/rank{MPI.COMM_WORLD.rank}.json", "w"))
+"""
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(__import__("shutil").which("mpirun") is None, reason="no mpirun")
+def test_mpirun_map_curves_run_their_windows_on_every_rank_and_match_one_process(tmp_path):
+    """The map's LP / PD curves, collective under MPI: every rank places the same windows
+    and gets the same points as one process computing them in turn."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    from vibrogear.analyses.bifurcation_curves import locate_bifurcations
+    from vibrogear.analyses.load_scaling import load_scaling
+    from vibrogear.analyses.study import build_study
+    from vibrogear.config import load_scene
+    root = Path(__file__).resolve().parents[2]
+    gear_pair = str(root / "configs" / "gear_pair.toml")
+    cmd = ["mpirun", "-n", "2", "--oversubscribe"] + (
+        ["--allow-run-as-root"] if os.geteuid() == 0 else [])
+    env = dict(os.environ, PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1")
+    r = subprocess.run(cmd + [sys.executable, "-c", CURVES_MPI, str(tmp_path), gear_pair],
+                       env=env, cwd=root, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    scene = load_scene(gear_pair)
+    study = build_study(scene)
+    ls = load_scaling(study.gearbox, scene.gearbox)
+    ref = locate_bifurcations(study.model, ls, [0.9, 1.0], (4950.0, 5350.0), margin=100.0,
+                              integration=scene.integration, tol=scene.shooting.tol,
+                              steps=dict(ds=20.0, ds_min=1e-3, ds_max=40.0, max_points=200),
+                              workers=1)
+    want = [[[lab, p] for lab, p in ld.points] for ld in ref]
+    for rank in (0, 1):
+        got = json.loads((tmp_path / f"rank{rank}.json").read_text())
+        assert got["points"] == want
+        assert got["windows"] == [[list(w) for w in ld.windows] for ld in ref]
+        (ph,) = got["phases"]
+        assert ph["name"] == "curves" and ph["units"] == sum(len(ld.windows) for ld in ref)
+        assert ph["workers"] == 2

@@ -51,10 +51,11 @@ __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
 
 PARTIAL_NAME = "map.partial.jsonl"
 #: what the map does on one process (summary.json's serial_part)
-SERIAL_PART = ("rank 0 alone: the load scaling and the resume file before the walks; stacking "
-               "each load row and the summary after them")
-CURVES_PART = ("; the LP / PD curves: each load after the last (its windows are placed around "
-               "the last load's points), the windows of one load in parallel on local processes")
+SERIAL_PART = ("not shared among the workers: the load scaling and the resume file before "
+               "the walks; stacking each load row and the summary after them")
+CURVES_PART = ("; between the LP / PD curves' loads, which follow one another (a load's "
+               "windows are placed around the last load's points; the windows of one load are "
+               "work units, phase 'curves')")
 
 
 @dataclass(frozen=True, eq=False)
@@ -280,9 +281,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         raise NumericalFailure(f"map: all {failed} points failed; first: "
                                f"{res.rows[0].message[0]}")
     curves = None
-    if cfg.curves and ctx.root:
+    if cfg.curves:              # collective under MPI: every rank computes windows
         from .bifurcation_curves import curves_for_map
-        curves = curves_for_map(study, scene, scaling, scales)
+        curves = curves_for_map(study, scene, scaling, scales, split=split)
         res = dataclasses.replace(res, curves=curves)
     res = dataclasses.replace(res, load_kind=cfg.load_kind)
     summary = map_summary(res, scaling)

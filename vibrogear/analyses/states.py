@@ -188,10 +188,10 @@ def _group(by_point, params, model, cfg, study):
     return attractors, n_ok, n_failed, recs, starts, t_cluster
 
 
-#: what the census does on one process (summary.json's serial_part)
-SERIAL_PART = ("rank 0 alone: the start states and the resume file before the census; the "
-               "grouping into attractors, the choice of each wave of branches, the comparison "
-               "with the sweep and the summary after it")
+#: what the census does without sharing it among the workers (summary.json's serial_part)
+SERIAL_PART = ("not shared among the workers: the start states and the resume file before "
+               "the census; the grouping into attractors, the choice of each wave of branches, "
+               "the comparison with the sweep and the summary after it")
 
 
 def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:

@@ -30,8 +30,9 @@ __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME"
 
 PARTIAL_NAME = "sweep.partial.jsonl"
 #: what the sweep does on one process (summary.json's serial_part)
-SERIAL_PART = ("rank 0 alone: the static start and the resume file before the walks; stacking "
-               "the points, their spectral evidence and the summary after them")
+SERIAL_PART = ("not shared among the workers: the static start and the resume file before "
+               "the walks; stacking the points, their spectral evidence and the summary after "
+               "them")
 #: sweep settings that do not change the results (left out of the resume signature)
 _NOT_IN_SIGNATURE = ("workers", "callback", "done")
 
