@@ -132,6 +132,8 @@ def main(argv=None) -> dict:
     ap.add_argument("--map-speeds", type=int, default=4)
     ap.add_argument("--skip", nargs="*", default=(), choices=("states", "sweep", "map"))
     ap.add_argument("--out", default="/tmp/bench_parallel")
+    ap.add_argument("--results", default="bench_parallel.json",
+                    help="file name in benchmarks/results/ (e.g. for a 1-worker reference)")
     ap.add_argument("--reuse", action="store_true", help="states: recompute the projections "
                     "from the last run's files in --out (no new measurement)")
     a = ap.parse_args(argv)
@@ -148,7 +150,7 @@ def main(argv=None) -> dict:
         sets = (f"states.starts={a.starts}", f"states.{w}", "states.branches=true")
         if a.reuse:
             entry = json.loads((out / "states" / "summary.json").read_text())
-            old = json.loads((ROOT / "benchmarks" / "results" / "bench_parallel.json").read_text())
+            old = json.loads((ROOT / "benchmarks" / "results" / a.results).read_text())
             m = {k: v for k, v in old["runs"]["states"].items() if not k.startswith("projection")}
             entry = entry["results"]["states"]
         else:
@@ -195,7 +197,7 @@ def main(argv=None) -> dict:
         m["points"] = entry["points"]
         m["projection"] = _projections(m, (a.workers, *PROJECT_AT))
         res["runs"]["map"] = m
-    path = ROOT / "benchmarks" / "results" / "bench_parallel.json"
+    path = ROOT / "benchmarks" / "results" / a.results
     old = json.loads(path.read_text()) if path.exists() else {}
     old_runs = old.get("runs", {})
     res["runs"] = {**{k: v for k, v in old_runs.items() if k in a.skip}, **res["runs"]}
