@@ -10,7 +10,7 @@ export XDG_CACHE_HOME ?= $(HOME)/.cache
 # gearbox scenes and their studies
 .PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: nnm nnm-impact-pair
-.PHONY: states states-impact-pair bench-states
+.PHONY: states states-impact-pair bench-states bench-parallel
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 .PHONY: optimize-damping optimize-two-stage reduction-accuracy
 
@@ -99,6 +99,11 @@ states-impact-pair: $(STAMP)
 ## two_stage census: transient / record / clustering split, projection to 64 MPI ranks
 bench-states: $(STAMP)
 	$(PY) benchmarks/bench_states.py
+
+## the parallel / serial wall split of states, sweep and map and the speed-up it allows on
+## 16 and 64 workers (docs/performance.md, "Parallel runs"); small runs, a few minutes
+bench-parallel: $(STAMP)
+	$(PY) benchmarks/bench_parallel.py
 
 ## run-up / run-down transients ([runup]) in the scene's own output folder, so that the
 ## envelope figure overlays the sweep and branches of `make two-stage` / `make gear-pair`

@@ -185,6 +185,8 @@ def test_the_map_verb_writes_both_load_units_and_the_grids(tmp_path):
     summary = json.loads((out / "summary.json").read_text())["results"]["map"]
     assert summary["loads"]["twist_rad"] == pytest.approx([0.015, 0.03])
     assert summary["points"] == 12 and summary["cost"]["point_wall_s_mean"] > 0
+    (walks,) = summary["parallel_phases"]           # 2 loads x 2 directions, one unit each
+    assert walks["units"] == 4 and summary["serial_wall_s"] >= 0 and summary["serial_part"]
     assert not (out / PARTIAL_NAME).exists()
     rows = (out / "map.csv").read_text().splitlines()
     assert len(rows) == 1 + 12

@@ -155,22 +155,33 @@ def _window_unit(model, kw, window, _emit):
     return p, msg, n, f
 
 
-def _run_windows(model, kw, windows, workers):
-    """The windows of one load: in parallel on local processes (``workers``, None: all
-    cores), serially under MPI (the curves run on rank 0 alone)."""
+def _run_windows(model, kw, windows, workers, split=None):
+    """The windows of one load: work units on local processes (``workers``, None: all
+    cores) or on every MPI rank (collective: every rank gets every window's result, so every
+    rank places the next load's windows alike).  ``split``: a
+    :class:`~vibrogear.pipeline.wall_split.WallSplit` that times them (phase ``curves``)."""
     fn = partial(_window_unit, model, kw)
-    if len(windows) == 1 or workers == 1 or under_mpi():
-        return [fn(w, None) for w in windows]
+    if (len(windows) == 1 or workers == 1) and not under_mpi():
+        t0 = time.perf_counter()
+        out = [fn(w, None) for w in windows]
+        if split is not None:
+            split.add("curves", time.perf_counter() - t0, [time.perf_counter() - t0], 1)
+        return out
+    if split is not None:
+        return split.run("curves", fn, list(windows), workers=workers)
     return run_units(fn, list(windows), workers=workers)
 
 
 def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, margin: float,
                         integration, tol: float, steps: dict, transient_periods: int = 200,
-                        period_tol: float = 1e-4, callback=None, workers=None) -> tuple:
+                        period_tol: float = 1e-4, callback=None, workers=None,
+                        split=None) -> tuple:
     """:class:`LoadBifurcations` per load factor in ``scales`` (returned in increasing
     load), visiting the loads outward from the one nearest 1 (module docstring).
     ``steps``: the :class:`~vibrogear.config.options.ContinuationSteps` fields (rpm);
-    ``workers``: local processes for the windows of one load (None: all cores)."""
+    ``workers``: local processes for the windows of one load (None: all cores); under MPI
+    collective (every rank calls it and gets the same result).  ``split``: a
+    :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the windows."""
     scales = np.sort(np.asarray(scales, dtype=float).ravel())
     k0 = int(np.argmin(np.abs(scales - 1.0)))
     bounds = (float(first_window[0]), float(first_window[1]))
@@ -182,7 +193,7 @@ def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, ma
         t0 = time.perf_counter()
         m = scaling.model_at(model, scales[k])
         pts, msgs, npts, flows = [], [], 0, 0
-        for p, msg, n, f in _run_windows(m, kw, windows, workers):
+        for p, msg, n, f in _run_windows(m, kw, windows, workers, split):
             pts += p
             msgs.append(msg)
             npts += n
@@ -256,8 +267,10 @@ def join_curves(loads, scaling: LoadScaling, max_jump: float) -> tuple:
     return tuple(out)
 
 
-def curves_for_map(study: Study, scene, scaling: LoadScaling, scales) -> BifurcationCurves:
-    """The curves over the loads of a [map] (its speed range is the first window)."""
+def curves_for_map(study: Study, scene, scaling: LoadScaling, scales,
+                   split=None) -> BifurcationCurves:
+    """The curves over the loads of a [map] (its speed range is the first window); under
+    MPI collective, every rank computing windows."""
     cfg = scene.map
     t0 = time.perf_counter()
     steps = dict(ds=cfg.curve_ds, ds_min=min(1e-3, cfg.curve_ds), ds_max=cfg.curve_ds_max,
@@ -267,7 +280,7 @@ def curves_for_map(study: Study, scene, scaling: LoadScaling, scales) -> Bifurca
                                 integration=integration_options(scene, study=study),
                                 tol=scene.shooting.tol, steps=steps,
                                 transient_periods=cfg.curve_transient_periods,
-                                period_tol=cfg.period_tol, workers=cfg.workers)
+                                period_tol=cfg.period_tol, workers=cfg.workers, split=split)
     return BifurcationCurves(loads=loads, curves=join_curves(loads, scaling, 2 * cfg.curve_margin),
                              torque_nominal=scaling.torque_nominal,
                              twist_nominal=scaling.twist_nominal,

@@ -34,6 +34,7 @@ import numpy as np
 from ..pipeline.executors import broadcast, run_units, under_mpi
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..pipeline.resume import PartialStore, fingerprint
+from ..pipeline.wall_split import WallSplit
 from ..solvers.integrator.contact_eval import contact_history
 from ..solvers.integrator.integrate import integrate
 from ..solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
@@ -49,6 +50,12 @@ __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
            "grid_array"]
 
 PARTIAL_NAME = "map.partial.jsonl"
+#: what the map does on one process (summary.json's serial_part)
+SERIAL_PART = ("not shared among the workers: the load scaling and the resume file before "
+               "the walks; stacking each load row and the summary after them")
+CURVES_PART = ("; between the LP / PD curves' loads, which follow one another (a load's "
+               "windows are placed around the last load's points; the windows of one load are "
+               "work units, phase 'curves')")
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,11 +178,12 @@ def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
 
 def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, options, *,
                 out=None, root: bool = True, callback=None, force_periods: int = 4,
-                force_samples: int = 128) -> OperatingMap:
+                force_samples: int = 128, split=None) -> OperatingMap:
     """The map of ``study`` over ``rpm`` x load factors ``scales`` with the sweep settings
     ``settings`` (:class:`~vibrogear.config.options.SweepOptions`) and integrator
     ``options``.  ``out``: folder of the partial file (None: not resumable);
-    ``callback(row, record)`` after each new point."""
+    ``callback(row, record)`` after each new point; ``split``: a
+    :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the units."""
     wall = time.perf_counter()
     rpm = np.asarray(rpm, dtype=float).ravel()
     scales = np.asarray(scales, dtype=float).ravel()
@@ -217,8 +225,11 @@ def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, optio
         if callback is not None:
             callback(row, rec)
 
-    run_units(partial(_walk, model, scaling, settings, kw, extra), units, workers=settings.workers,
-              on_result=on_result, describe=_describe_unit)
+    # a unit's cost: its points still to compute (the longest go first)
+    run = run_units if split is None else partial(split.run, "walks")
+    run(partial(_walk, model, scaling, settings, kw, extra), units, workers=settings.workers,
+        on_result=on_result, costs=[len(u[3]) - len(u[6]) for u in units],
+        describe=_describe_unit)
     if under_mpi() and not root:
         return broadcast(None)
     records = {**done, **new}
@@ -248,6 +259,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.map
     if study.gearbox is None:
         raise NumericalFailure("map: needs a gearbox scene")
+    split = WallSplit(SERIAL_PART + (CURVES_PART if cfg.curves else ""))
     scaling = load_scaling(study.gearbox, scene.gearbox)
     values = cfg.load_values()
     scales = (scaling.scale_of_twist(values) if cfg.load_kind == "twist"
@@ -258,7 +270,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     total = len(cfg.directions) * rpm.size * scales.size
     with ctx.progress(total, "map") as bar:
         res = compute_map(study, scaling, rpm, scales, SweepOptions.of(cfg), opts, out=ctx.out,
-                          root=ctx.root, force_periods=cfg.force_periods,
+                          root=ctx.root, split=split, force_periods=cfg.force_periods,
                           force_samples=cfg.force_samples,
                           callback=lambda k, rec: bar.update(
                               1, f"{scaling.torque(scales[k]):.4g} N m "
@@ -269,9 +281,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         raise NumericalFailure(f"map: all {failed} points failed; first: "
                                f"{res.rows[0].message[0]}")
     curves = None
-    if cfg.curves and ctx.root:
+    if cfg.curves:              # collective under MPI: every rank computes windows
         from .bifurcation_curves import curves_for_map
-        curves = curves_for_map(study, scene, scaling, scales)
+        curves = curves_for_map(study, scene, scaling, scales, split=split)
         res = dataclasses.replace(res, curves=curves)
     res = dataclasses.replace(res, load_kind=cfg.load_kind)
     summary = map_summary(res, scaling)
@@ -279,6 +291,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         summary["curves"] = curves.summary()
     if res.note:
         summary["resume"] = res.note
+    summary.update(split.summary())
     return AnalysisOutcome(summary=summary, result=res, solver=res.outcome,
                            partial_files=(ctx.out / PARTIAL_NAME,) if ctx.root else ())
 

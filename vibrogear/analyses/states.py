@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from ..config.options import SweepOptions
-from ..pipeline.executors import broadcast, run_units
+from ..pipeline.executors import broadcast, effective_workers, run_units, unit_size
+from ..pipeline.wall_split import WallSplit
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ..pipeline.resume import PartialStore
 from ..solvers.sequential.motion import MOTION_LEGEND
@@ -100,10 +101,11 @@ def _describe(param_name, unit) -> str:
 
 
 def census(model, params, cfg, *, options, scales, store=None, done=None, progress=None,
-           root: bool = True) -> tuple[dict, dict]:
+           root: bool = True, split=None) -> tuple[dict, dict]:
     """Settle the starts of every grid value (module docstring, steps 1-2); returns
     ({grid index: [PointRecord]}, {"rounds", "new", "stopped_early"}).  ``done``: {(i, k):
-    record} already settled (resumed).  Collective under MPI: every rank calls it."""
+    record} already settled (resumed); ``split``: a :class:`~vibrogear.pipeline.wall_split.WallSplit`
+    that times the units.  Collective under MPI: every rank calls it."""
     settings = SweepOptions.of(cfg)
     done = dict(done or {})
     P = len(params)
@@ -114,11 +116,16 @@ def census(model, params, cfg, *, options, scales, store=None, done=None, progre
         upto = min(upto + round_size, cfg.starts)
         units = None
         if root:
+            todo = {i: [k for k in range(upto) if (i, k) not in done] for i in active}
+            n_todo = sum(len(v) for v in todo.values())
+            w = effective_workers(n_todo, cfg.workers)
+            # at most `batch` starts a unit; smaller where the workers would otherwise
+            # run out of units before the end (the last units leave the others idle)
+            size = cfg.batch if w == 1 else unit_size(n_todo, w, cfg.batch)
             units = []
             for i in active:
-                todo = [k for k in range(upto) if (i, k) not in done]
-                for a in range(0, len(todo), cfg.batch):
-                    units.append((i, float(params[i]), tuple(todo[a:a + cfg.batch]),
+                for a in range(0, len(todo[i]), size):
+                    units.append((i, float(params[i]), tuple(todo[i][a:a + size]),
                                   scales[i]))
         units = broadcast(units)
 
@@ -131,10 +138,10 @@ def census(model, params, cfg, *, options, scales, store=None, done=None, progre
                 progress(i, rec)
 
         if units:
-            run_units(partial(_settle_unit, model, settings, options, cfg.seed), units,
-                      workers=cfg.workers, on_result=on_result,
-                      costs=[len(u[2]) for u in units],
-                      describe=partial(_describe, model.param_name))
+            run = run_units if split is None else partial(split.run, "census")
+            run(partial(_settle_unit, model, settings, options, cfg.seed), units,
+                workers=cfg.workers, on_result=on_result, costs=[len(u[2]) for u in units],
+                describe=partial(_describe, model.param_name))
             new += sum(len(u[2]) for u in units)
         rounds += 1
         still = None
@@ -155,6 +162,38 @@ def census(model, params, cfg, *, options, scales, store=None, done=None, progre
     return by_point, {"rounds": rounds, "new": new, "stopped_early": early}
 
 
+def _group(by_point, params, model, cfg, study):
+    """Rank 0's grouping of the settled starts: (attractors, settled and failed per grid
+    value, the records, the starts' table, its wall seconds)."""
+    t0 = time.perf_counter()
+    attractors, n_ok, n_failed = [], [], []
+    for i, p in enumerate(params):
+        atts, k, f = cluster_point(by_point[i], i, p, n_modes=model.n_modes,
+                                   cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
+        attractors += atts
+        n_ok.append(k)
+        n_failed.append(f)
+    t_cluster = time.perf_counter() - t0
+    if sum(n_ok) == 0:
+        first = next((r for recs in by_point.values() for r in recs), None)
+        raise NumericalFailure("states: every start failed" + (
+            f"; first: {study.param_name} = {first.param:g}: {first.message}" if first else ""))
+    recs = [r for v in by_point.values() for r in v]
+    which = {(a.point, k): j for j, a in enumerate(attractors) for k in a.members}
+    starts = {"point": np.array([i for i, v in by_point.items() for _ in v], int),
+              "index": np.array([r.index for v in by_point.values() for r in v], int),
+              "wall_s": np.array([r.wall_time for v in by_point.values() for r in v], float)}
+    starts["attractor"] = np.array([which.get((i, k), -1) for i, k in
+                                    zip(starts["point"], starts["index"])], int)
+    return attractors, n_ok, n_failed, recs, starts, t_cluster
+
+
+#: what the census does without sharing it among the workers (summary.json's serial_part)
+SERIAL_PART = ("not shared among the workers: the start states and the resume file before "
+               "the census; the grouping into attractors, the choice of each wave of branches, "
+               "the comparison with the sweep and the summary after it")
+
+
 def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     from .states_branches import compare_with_sweep, continue_branches, refine_orbits
     from .states_summary import states_summary
@@ -163,6 +202,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     model = study.model
     params = grid(cfg)
     wall = time.perf_counter()
+    split = WallSplit(SERIAL_PART)
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
                                study=study)
     scales = [start_scales(model, float(p), study.start(float(p)),
@@ -184,41 +224,30 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     with ctx.progress(len(params) * cfg.starts - resumed, "states") as bar:
         by_point, info = census(
             model, params, cfg, options=opts, scales=scales, store=store, done=done,
-            root=ctx.root, progress=lambda i, rec: bar.update(
+            root=ctx.root, split=split, progress=lambda i, rec: bar.update(
                 1, f"{params[i]:.4g} {study.param_unit} P{rec.period_n}"))
     t_census = time.perf_counter() - wall
-    if not ctx.root:            # rank 0 groups, refines, continues and reports
+    try:
+        grouped = _group(by_point, params, model, cfg, study) if ctx.root else None
+    except BaseException:
+        broadcast(None)         # the other ranks leave (they wait for the orbits' units)
+        raise
+    if broadcast(ctx.root and grouped is not None) is not True:
         return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
-    t0 = time.perf_counter()
-    attractors, n_ok, n_failed = [], [], []
-    for i, p in enumerate(params):
-        atts, k, f = cluster_point(by_point[i], i, p, n_modes=model.n_modes,
-                                   cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
-        attractors += atts
-        n_ok.append(k)
-        n_failed.append(f)
-    t_cluster = time.perf_counter() - t0
-    if sum(n_ok) == 0:
-        first = next((r for recs in by_point.values() for r in recs), None)
-        raise NumericalFailure("states: every start failed" + (
-            f"; first: {study.param_name} = {first.param:g}: {first.message}" if first else ""))
-    recs = [r for v in by_point.values() for r in v]
-    which = {(a.point, k): j for j, a in enumerate(attractors) for k in a.members}
-    starts = {"point": np.array([i for i, v in by_point.items() for _ in v], int),
-              "index": np.array([r.index for v in by_point.values() for r in v], int),
-              "wall_s": np.array([r.wall_time for v in by_point.values() for r in v], float)}
-    starts["attractor"] = np.array([which.get((i, k), -1) for i, k in
-                                    zip(starts["point"], starts["index"])], int)
+    attractors, n_ok, n_failed, recs, starts, t_cluster = grouped or ([], [], [], [], {}, 0.0)
     timings = {ph: float(sum(r.timings.get(ph, 0.0) for r in recs)) for ph in PHASES}
     timings["clustering"] = t_cluster
     t0 = time.perf_counter()
-    refine_orbits(study, scene, attractors, workers=cfg.workers)
+    refine_orbits(study, scene, attractors, workers=cfg.workers, split=split, root=ctx.root)
     timings["orbits"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     branches, notes = (), ()
     if cfg.branches:
-        branches, notes = continue_branches(study, scene, attractors, previous or {})
+        branches, notes = continue_branches(study, scene, attractors, previous or {},
+                                            workers=cfg.workers, split=split, root=ctx.root)
     timings["branches"] = time.perf_counter() - t0
+    if not ctx.root:            # rank 0 compares and reports
+        return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
     sweep = compare_with_sweep(study, attractors, (previous or {}).get("sweep"))
     timings["census_wall"] = t_census
     timings["total_wall"] = time.perf_counter() - wall
@@ -231,6 +260,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                           study=study, branches=tuple(branches), branch_notes=tuple(notes),
                           sweep=sweep, timings=timings, counters=counters, starts=starts)
     summary = states_summary(result, cfg, opts, info)
+    summary.update(split.summary())
     if store is not None and store.note:
         summary["resume"] = store.note
     return AnalysisOutcome(summary=summary, result=result,

@@ -3,14 +3,13 @@
 * :func:`refine_orbits`: each periodic attractor is shot over its n periods from its settled
   state (:func:`~vibrogear.solvers.periodic.shooting.shoot`, the continuation's own
   shooting and tolerances): its extrema become the orbit's (located by the integrator, as
-  a branch point's), its stability the Floquet multipliers'.  Run as work units on local
-  processes; under MPI on rank 0 alone, in turn (the other ranks have left after the
-  census).
+  a branch point's), its stability the Floquet multipliers'.  One work unit per attractor,
+  on local processes or every MPI rank.
 * :func:`continue_branches`: pseudo-arclength continuation both ways from each periodic
   attractor through which no branch found so far passes (:func:`.sweep_branches.on_branch`:
   branches of this run's continuation, then those continued here, in grid order), within
-  the census's range.  Branches that the sweep path never reaches (isolas) appear here with
-  their LP / PD / NS.
+  the census's range, each half-branch a work unit (in waves: :func:`continue_branches`).
+  Branches that the sweep path never reaches (isolas) appear here with their LP / PD / NS.
 * :func:`compare_with_sweep`: whether the sweep (this run's, or ``sweep.npz`` in the output
   folder) passes through each attractor: some direction's sweep, linearly interpolated at
   the attractor's parameter between two good points, has the same periodicity (periodic or
@@ -30,7 +29,7 @@ from functools import partial
 import numpy as np
 
 from ..config.options import ContinuationOptions, ShootingOptions
-from ..pipeline.executors import run_units, under_mpi
+from ..pipeline.executors import broadcast, effective_workers, run_units
 from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ..solvers.periodic.shooting import shoot
 from .states_cluster import RANGE_OVERLAP, shared_range
@@ -60,12 +59,24 @@ def _shoot_unit(model, opts, shooting, unit, emit):
     return k
 
 
-def refine_orbits(study, scene, attractors, *, workers=None) -> None:
+def _run(split, name, fn, units, **kw):
+    if split is None:
+        return run_units(fn, units, **kw) if units else []
+    return split.run(name, fn, units, **kw)
+
+
+def refine_orbits(study, scene, attractors, *, workers=None, split=None, root=True) -> None:
     """Shoot every periodic attractor (module docstring); sets ``refined``, ``qmin``,
-    ``qmax``, ``u0``, ``stable``, ``max_multiplier`` in place."""
+    ``qmax``, ``u0``, ``stable``, ``max_multiplier`` in place.  One work unit per attractor,
+    the longest orbits (most periods) first; collective under MPI (every rank calls it, the
+    ranks other than 0 with ``root`` False and no attractors).  ``split``: a
+    :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the units."""
     opts, shooting = _orbit_options(study, scene)
-    units = [(k, a.param, a.u0, a.period_n) for k, a in enumerate(attractors)
-             if a.period_n > 0 and a.u0 is not None]
+    units = None
+    if root:
+        units = [(k, a.param, a.u0, a.period_n) for k, a in enumerate(attractors)
+                 if a.period_n > 0 and a.u0 is not None]
+    units = broadcast(units)
 
     def on_result(_i, item):
         k, ok, u0, qmin, qmax, stable, mu, _msg = item
@@ -75,12 +86,8 @@ def refine_orbits(study, scene, attractors, *, workers=None) -> None:
             a.qmin_err = a.qmax_err = 0.0
             a.stable, a.max_multiplier = stable, mu
 
-    fn = partial(_shoot_unit, study.model, opts, shooting)
-    if under_mpi():         # rank 0 alone gets here (the census was collective): serial
-        for unit in units:
-            fn(unit, lambda item: on_result(0, item))
-    elif units:
-        run_units(fn, units, workers=workers, on_result=on_result)
+    _run(split, "orbits", partial(_shoot_unit, study.model, opts, shooting), units,
+         workers=workers, on_result=on_result, costs=[u[3] for u in units])
 
 
 def _this_run_branches(previous) -> list:
@@ -89,12 +96,10 @@ def _this_run_branches(previous) -> list:
     return list(getattr(res, "branches", ()) or ())
 
 
-def continue_branches(study, scene, attractors, previous) -> tuple[list, list]:
-    """(branches, notes): the branches continued from attractors (module docstring)."""
+def _branch_settings(study, scene):
+    """(integration options, shooting options, ContinuationOptions) of the branches."""
     cfg = scene.states
     lo, hi = float(cfg.param_min), float(cfg.param_max)
-    if not hi > lo:
-        return [], [{"note": "one grid value: no range to continue in"}]
     opts, shooting = _orbit_options(study, scene)
     cont = getattr(scene, "continuation", None)
     grid_step = (hi - lo) / max(cfg.n_points - 1, 1)
@@ -110,33 +115,86 @@ def continue_branches(study, scene, attractors, previous) -> tuple[list, list]:
     steps["ds_max"] = max(steps["ds_max"], steps["ds"])
     options = ContinuationOptions(param_min=lo, param_max=hi, max_points=cfg.branch_max_points,
                                   period_doubling_branch=False, **steps)
-    known = _this_run_branches(previous)
-    found, notes = [], []
-    for a in sorted(attractors, key=lambda a: (a.param, -a.count)):
-        if not (a.period_n > 0 and a.refined):
+    return opts, shooting, options
+
+
+def _half_unit(model, opts, tol, options, unit, _emit):
+    """One half-branch (u0, param, period_n, direction, parameter scale): its Branch."""
+    u0, param, n, sign, scale = unit
+    method = PseudoArclength(integration=opts, tol=tol, param_scale=scale)
+    got = continuation(PeriodicOrbitProblem(model, u0, param, n_periods=n, direction=sign),
+                       method, options)
+    return got.branches[0]
+
+
+def continue_branches(study, scene, attractors, previous, *, workers=None, split=None,
+                      root=True) -> tuple[list, list]:
+    """(branches, notes): the branches continued from attractors (module docstring).
+
+    Each half-branch is a work unit.  Which attractors need a branch depends on the branches
+    found before them (in grid order), so they go in waves: a wave is the next attractors
+    that no branch found so far passes through, as many as give each worker a half-branch;
+    after it, each is kept or dropped in order exactly as one after the other would (a
+    dropped one's branch is work done in a worker that had nothing else to do).  With one
+    worker a wave is one attractor: the serial order itself.  The branches, notes and their
+    order are the same for any number of workers.  Collective under MPI (every rank calls
+    it, the ranks other than 0 with ``root`` False; they get ([], []))."""
+    cfg = scene.states
+    lo, hi = float(cfg.param_min), float(cfg.param_max)
+    if not hi > lo:
+        return [], [{"note": "one grid value: no range to continue in"}]
+    opts, shooting, options = _branch_settings(study, scene)
+    fn = partial(_half_unit, study.model, opts, shooting.tol, options)
+    w = effective_workers(2 * max(len(attractors or ()), 1), workers)
+    per_wave = max(1, (w + 1) // 2)
+    known = _this_run_branches(previous) if root else []
+    cands = []
+    if root:
+        cands = [a for a in sorted(attractors, key=lambda a: (a.param, -a.count))
+                 if a.period_n > 0 and a.refined]
+    found, notes, pos = [], [], 0
+
+    def scale_of(a):
+        if not study.balance_arclength:
+            return 1.0
+        return (hi - lo) / max(float(np.linalg.norm(a.u0)), 1e-300)
+
+    while True:
+        wave = []
+        if root:
+            try:
+                while pos < len(cands) and len(wave) < per_wave:
+                    a = cands[pos]
+                    if not on_branch(known + found, a.period_n, a.param, a.qmax, 1e-3):
+                        wave.append(a)
+                    pos += 1
+            except BaseException:
+                broadcast([])               # the other ranks leave the loop, then raise
+                raise
+        units = broadcast([(a.u0, a.param, a.period_n, sign, scale_of(a))
+                           for a in wave for sign in (-1, 1)] if root else None)
+        if not units:
+            break
+        halves = _run(split, "branches", fn, units, workers=workers,
+                      costs=[u[2] for u in units])
+        if not root:
             continue
-        item = {study.param_name: a.param, "period_n": a.period_n, "qmax": a.qmax,
-                "stable": a.stable}
-        if on_branch(known + found, a.period_n, a.param, a.qmax, 1e-3):
-            continue
-        scale = 1.0
-        if study.balance_arclength:
-            scale = (hi - lo) / max(float(np.linalg.norm(a.u0)), 1e-300)
-        method = PseudoArclength(integration=opts, tol=shooting.tol, param_scale=scale)
-        item["halves"] = []
-        for sign in (-1, 1):
-            got = continuation(PeriodicOrbitProblem(study.model, a.u0, a.param,
-                                                    n_periods=a.period_n, direction=sign),
-                               method, options)
-            br = got.branches[0]
-            item["halves"].append({"branch": len(found), "points": len(br.points),
-                                   "status": br.status.text, "message": br.message,
-                                   "special_points": [
-                                       {"label": p.label, study.param_name: float(p.param)}
-                                       for p in br.points if p.label]})
-            if br.points:
-                found.append(br)
-        notes.append(item)
+        for j, a in enumerate(wave):
+            # the first of a wave passes (nothing found since it was picked); the others
+            # are checked against the branches of those before them, as in turn
+            if j and on_branch(known + found, a.period_n, a.param, a.qmax, 1e-3):
+                continue
+            item = {study.param_name: a.param, "period_n": a.period_n, "qmax": a.qmax,
+                    "stable": a.stable, "halves": []}
+            for br in halves[2 * j:2 * j + 2]:
+                item["halves"].append({"branch": len(found), "points": len(br.points),
+                                       "status": br.status.text, "message": br.message,
+                                       "special_points": [
+                                           {"label": p.label, study.param_name: float(p.param)}
+                                           for p in br.points if p.label]})
+                if br.points:
+                    found.append(br)
+            notes.append(item)
     return found, notes
 
 

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 from ..pipeline.resume import PartialStore, fingerprint
+from ..pipeline.wall_split import WallSplit
 from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
 from ..status import Status
 from ..solvers.sequential.record_json import json_number as _num, record_from_json, record_to_json
@@ -28,6 +29,10 @@ from .study import Study, integration_options
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME", "motion_summary"]
 
 PARTIAL_NAME = "sweep.partial.jsonl"
+#: what the sweep does on one process (summary.json's serial_part)
+SERIAL_PART = ("not shared among the workers: the static start and the resume file before "
+               "the walks; stacking the points, their spectral evidence and the summary after "
+               "them")
 #: sweep settings that do not change the results (left out of the resume signature)
 _NOT_IN_SIGNATURE = ("workers", "callback", "done")
 
@@ -79,13 +84,14 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
 
 def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     cfg = scene.sweep
+    split = WallSplit(SERIAL_PART)
     lo, hi = cfg.param_range()
     params = np.linspace(lo, hi, cfg.n_points)
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, study=study)
     total = len(cfg.directions) * params.size
     with ctx.progress(total, "sweep") as bar:
         res, store, resumed = resumable_sweep(
-            study.model, params, ctx.out, physics=study.physics, root=ctx.root,
+            study.model, params, ctx.out, physics=study.physics, root=ctx.root, split=split,
             callback=lambda rec: bar.update(1, f"{rec.param:.4g} {study.param_unit} "
                                                f"P{rec.period_n}"),
             settings=SweepOptions.of(cfg), options=opts, u0=study.start(params[0]))
@@ -112,6 +118,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "jumps_down": jumps(res.param[~up], res.qmax[~up]),
     }
     summary.update(motion_summary(res, cfg.transient_periods + cfg.extra_transient_periods))
+    summary.update(split.summary())
     if store is not None and store.note:
         summary["resume"] = store.note
     # stopped: keep the partial file

@@ -38,7 +38,7 @@ from .units_base import (UnitError, _deliver, _run_serial, _transportable, in_un
                          inside_unit, deferred_stop, raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
-           "default_workers", "blas_threads"]
+           "default_workers", "effective_workers", "unit_size", "blas_threads"]
 
 log = logging.getLogger(__name__)
 
@@ -64,6 +64,27 @@ def blas_threads(n: int):
 
 def default_workers(n_units: int) -> int:
     return max(1, min(int(n_units), os.cpu_count() or 1))
+
+
+def effective_workers(n_units: int, workers: int | None = None) -> int:
+    """How many processes or ranks compute ``n_units`` units: the MPI ranks, the local
+    processes (at most one per unit) or 1 (serial, or a run_units inside a unit)."""
+    kind = backend_for(n_units, workers)
+    if kind == "mpi":
+        size = os.environ.get("OMPI_COMM_WORLD_SIZE", os.environ.get("PMI_SIZE", "1"))
+        return max(1, int(size))
+    if kind == "processes":
+        return default_workers(n_units) if workers is None else min(int(workers), int(n_units))
+    return 1
+
+
+def unit_size(n_items: int, workers: int, cap: int, per_worker: int = 16) -> int:
+    """Items per work unit for ``n_items`` independent items of similar cost on ``workers``
+    workers: at most ``cap``, and small enough that each worker gets about ``per_worker``
+    units, so that the last units to finish leave the others idle for a fraction
+    1 / per_worker of the run at most (at least 1)."""
+    n, w = max(int(n_items), 1), max(int(workers), 1)
+    return max(1, min(int(cap), -(-n // (w * int(per_worker)))))
 
 
 def backend_for(n_units: int, workers: int | None = None) -> str:

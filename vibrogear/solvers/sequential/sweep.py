@@ -162,7 +162,7 @@ def _walk_unit(model, settings, kw, unit, emit) -> int:
 def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
           options: IntegrationOptions = IntegrationOptions(), u0=None, callback=None,
           done=None, cluster_tol: float = 1e-3, keep_states: bool = False,
-          settle: bool = True) -> SweepResult:
+          settle: bool = True, split=None) -> SweepResult:
     """Sequential continuation of ``model`` over ``params`` in independent units (see the
     module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
 
@@ -184,6 +184,7 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
     {(direction, index): PointRecord} of points already finished (e.g. read back from
     a partial file): they are not recomputed, and their end states seed the next point
     exactly as in an uninterrupted run.  Results do not depend on ``workers``.
+    ``split``: a :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the units.
     """
     wall = time.perf_counter()
     params = np.asarray(params, dtype=float).ravel()
@@ -214,10 +215,10 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
 
     # a unit's cost: its points still to compute (a resumed sweep's part-done units are
     # shorter; the longest go first, the short ones fill the end)
-    run_units(partial(_walk_unit, model, settings, kw), todo, workers=settings.workers,
-              on_result=on_result,
-              costs=[len(u[1]) - len(u[4]) for u in todo],
-              describe=partial(_describe_unit, model.param_name))
+    run = run_units if split is None else partial(split.run, "walks")
+    run(partial(_walk_unit, model, settings, kw), todo, workers=settings.workers,
+        on_result=on_result, costs=[len(u[1]) - len(u[4]) for u in todo],
+        describe=partial(_describe_unit, model.param_name))
     if under_mpi() and not is_root():
         return broadcast(None)                  # rank 0's result, identical everywhere
     records = [r for d, idx in layout for i in idx
