@@ -65,7 +65,7 @@ def refine_orbits(study, scene, attractors, *, workers=None) -> None:
     ``qmax``, ``u0``, ``stable``, ``max_multiplier`` in place."""
     opts, shooting = _orbit_options(study, scene)
     units = [(k, a.param, a.u0, a.period_n) for k, a in enumerate(attractors)
-             if a.period_n > 0 and a.u0 is not None]
+             if a.period_n > 0 and a.u0 is not None and not study.model.multi_frequency]
 
     def on_result(_i, item):
         k, ok, u0, qmin, qmax, stable, mu, _msg = item
@@ -95,6 +95,9 @@ def continue_branches(study, scene, attractors, previous) -> tuple[list, list]:
     lo, hi = float(cfg.param_min), float(cfg.param_max)
     if not hi > lo:
         return [], [{"note": "one grid value: no range to continue in"}]
+    if study.model.multi_frequency:
+        return [], [{"note": "multi-frequency forcing (no common excitation period within "
+                     "the period limit): no periodic orbit to continue"}]
     opts, shooting = _orbit_options(study, scene)
     cont = getattr(scene, "continuation", None)
     grid_step = (hi - lo) / max(cfg.n_points - 1, 1)
