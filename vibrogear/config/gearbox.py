@@ -510,13 +510,31 @@ class GearboxConfig:
         return tuple(tuple(h * r for h in range(1, m.excitation_harmonics + 1))
                      for m, r in zip(self.meshes, self.mesh_frequency_ratios()))
 
+    def mesh_period(self) -> int:
+        """Mesh periods of meshes[0] after which the meshes' excitation repeats: the least
+        common multiple of the denominators of every excited mesh's frequency ratio."""
+        return math.lcm(1, *(r.denominator for r, m in zip(self.mesh_frequency_ratios(),
+                                                            self.meshes)
+                             if m.excitation_harmonics))
+
     def common_period(self) -> int:
-        """The common excitation period in mesh periods of meshes[0]: the least common
-        multiple of the denominators of every excited mesh's frequency ratio and of the
-        torque orders' (1: every source repeats each mesh period)."""
-        dens = [r.denominator for r, m in zip(self.mesh_frequency_ratios(), self.meshes)
-                if m.excitation_harmonics]
-        return math.lcm(1, *dens, order_period(torque_order_ratios(self)))
+        """The common excitation period in mesh periods of meshes[0]: the meshes' period
+        and the torque orders' together (1: every source repeats each mesh period)."""
+        return math.lcm(self.mesh_period(), order_period(torque_order_ratios(self)))
+
+    def period_limit(self) -> int:
+        """The longest common period the solvers span whole (shooting, continuation, the
+        sampling of sweep, states and map): MAX_COMMON_PERIOD where the meshes' own period
+        exceeds it, else MAX_ORDER_PERIOD (torque orders alone: a shaft order repeats once
+        per revolution, z mesh periods, and engine-order studies shoot over it)."""
+        return MAX_COMMON_PERIOD if self.mesh_period() > MAX_COMMON_PERIOD \
+            else MAX_ORDER_PERIOD
+
+    @property
+    def multi_frequency(self) -> bool:
+        """The excitation has no common period within :meth:`period_limit`: the solvers
+        sample per mesh period of meshes[0], and nothing is shot."""
+        return self.common_period() > self.period_limit()
 
     def period_sources(self) -> str:
         """The excitation's sources in words, for messages: each excited mesh with its
@@ -536,18 +554,16 @@ class GearboxConfig:
     def check_common_period(self, analyses, path: str = "gearbox") -> None:
         """Refuse the analyses that shoot over the common excitation period (continuation,
         a map with LP/PD curves: ``analyses`` lists those that do) beyond the period limit
-        MAX_COMMON_PERIOD, naming the meshes and their tooth counts; the others sample
+        (:meth:`period_limit`), naming the meshes and their tooth counts; the others sample
         per mesh period."""
-        P = self.common_period()
-        if P <= MAX_COMMON_PERIOD:
-            return
         what = [a for a in analyses if a in SHOOTING_ANALYSES]
-        if not what:
+        if not what or not self.multi_frequency:
             return
+        P, lim = self.common_period(), self.period_limit()
         raise ConfigError(f"{path}.meshes", f"{', '.join(what)} needs a common excitation "
                           f"period: the sources ({self.period_sources()} of meshes[0]'s mesh "
                           f"frequency) repeat together only every {P} mesh periods of "
-                          f"meshes[0] (the limit for shooting is {MAX_COMMON_PERIOD}); "
+                          f"meshes[0] (the limit for shooting is {lim}); "
                           "time_response, sweep, runup, nvh and states run (sampled per mesh "
                           "period: multi-frequency forced); or set excite = false on all but "
                           "one stage")

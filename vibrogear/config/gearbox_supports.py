@@ -17,12 +17,12 @@ __all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS"
 #: torque orders per coupling, the largest denominator of an order (0.5: 2, 1/3: 3, ...),
 #: and the longest whole excitation period the orders may make, in mesh periods
 MAX_TORQUE_ORDERS, MAX_ORDER_DENOMINATOR, MAX_ORDER_PERIOD = 20, 12, 1000
-#: the period limit: the longest common excitation period (meshes at their own mesh
-#: frequencies, torque orders), in mesh periods of meshes[0], that shooting, continuation
-#: and the stroboscopic sampling of sweep, states and map span whole.  Beyond it shooting
-#: and continuation are refused (a periodic orbit of 17+ mesh periods costs 17x a period
-#: and more per Newton step, with the monodromy of the whole period), and the sampling
-#: solvers sample per mesh period of meshes[0]: the response is "multi-frequency forced".
+#: the period limit of the meshes: where the meshes exciting at their own mesh frequencies
+#: repeat together only after more mesh periods of meshes[0] than this, shooting and
+#: continuation are refused (an orbit of 17+ mesh periods costs as many periods per flow,
+#: with the monodromy of the whole period) and the sampling solvers (sweep, states, map, nvh)
+#: sample per mesh period of meshes[0]: the response is "multi-frequency forced".  Torque
+#: orders alone keep their whole period up to MAX_ORDER_PERIOD.
 MAX_COMMON_PERIOD = 16
 
 

@@ -6,7 +6,7 @@ given by designation, boundary dimensions or element set (with the element set a
 formula).  ``vibrogear check`` and ``vibrogear import`` print these lines."""
 from __future__ import annotations
 
-from ..config.gearbox_supports import MAX_COMMON_PERIOD, torque_order_ratios
+from ..config.gearbox_supports import torque_order_ratios
 
 __all__ = ["derived_lines"]
 
@@ -67,10 +67,10 @@ def _order_lines(cfg) -> list[str]:
         out.append(f"gearbox.meshes[{i}] {m.name!r} ({za}/{zb} teeth): mesh frequency "
                    f"{r.numerator}/{r.denominator} of meshes[0]'s; {state}")
     P = cfg.common_period()
-    if P > MAX_COMMON_PERIOD:
+    if cfg.multi_frequency:
         out.append(f"excitation: the sources ({cfg.period_sources()}) repeat together only "
                    f"every {P} mesh periods of meshes[0] (period limit "
-                   f"{MAX_COMMON_PERIOD}): sweep, states, map and nvh sample per mesh period "
+                   f"{cfg.period_limit()}): sweep, states, map and nvh sample per mesh period "
                    "(the response is multi-frequency forced); continuation is refused; "
                    "time response and run-up count mesh periods")
     elif P > 1:

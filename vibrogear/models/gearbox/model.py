@@ -36,7 +36,7 @@ from fractions import Fraction
 import numpy as np
 
 from ...config.base import ConfigError
-from ...config.gearbox_supports import MAX_COMMON_PERIOD, torque_order_ratios
+from ...config.gearbox_supports import torque_order_ratios
 from ...config.layout import shaft_bore
 from ...config.options import RPM as RPM_PARAMETER
 from ...config.rotor import FreeGearConfig, DiscConfig, RotorConfig
@@ -243,7 +243,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
                          monitor=0, name=cfg.name, param_name=RPM_PARAMETER.name, blocks=blocks,
                          order_forcing=[o[:3] for o in orders],
                          mesh_orders=[float(o) for o in slot_orders],
-                         period_limit=MAX_COMMON_PERIOD)
+                         period_limit=cfg.period_limit())
     t_end = time.perf_counter()
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
@@ -356,8 +356,8 @@ def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
         laws.append((k_mesh, (hc, hs) + ((m.te_cos, m.te_sin) if m.excite else ((), ()))))
     orders, slots = mesh_slots(cfg, [law for _, law in laws])
 
-    def spread(values, idx):
-        row = np.zeros(len(orders))
+    def spread(values, idx):        # up to the last slot given (meshes[0]: as given)
+        row = np.zeros(idx[len(values) - 1] + 1 if len(values) else 0)
         row[list(idx[:len(values)])] = values
         return tuple(float(v) for v in row)
 
