@@ -221,3 +221,34 @@ def test_continuation_beyond_the_period_limit_is_refused_by_name(scenes, capsys,
     text = capsys.readouterr().out
     assert "repeat together only every 80 mesh periods" in text
     assert "multi-frequency forced" in text
+
+
+def test_time_response_beyond_the_limit_has_each_stages_lines(scenes):
+    """z3 = 23 (G2 at 23/80, no common period within the limit): a time response from the
+    static equilibrium, 160 mesh periods settled, 320 recorded (bins of 1/320 of G1's mesh
+    frequency: G2's 23/80 is bin 92), Hann window: G2's lines at 23/80 and 46/80 stand out,
+    and with G1 excite = false nothing is left at G1's 1 and 2 (bins 320, 640)."""
+    rpm, settle, rec, n = 3000.0, 160, 320, 32
+
+    def spectrum(overrides):
+        sc = load_scene(scenes[1], ("scene.analyses=['time_response']",) + overrides)
+        r = build_gearbox(sc).reduced
+        assert r.multi_frequency
+        T = r.base_period(rpm)
+        u0 = np.concatenate([static_equilibrium(r, rpm).x, np.zeros(r.n_modes)])
+        opts = IntegrationOptions(rtol=1e-9, atol=1e-14)
+        t = settle * T + np.arange(rec * n) * T / n
+        tr = integrate(r, rpm, u0, 0.0, t[-1], t_eval=t, options=opts)
+        assert tr.ok
+        delta = tr.u[:, :r.n_modes] @ r.contacts.directions[:2].T
+        delta = delta - delta.mean(axis=0)
+        return np.abs(np.fft.rfft(delta * np.hanning(t.size)[:, None], axis=0))
+
+    both = spectrum(())
+    g2 = list(range(88, 97))                    # around bin 92 (Hann: the line spans 3 bins)
+    assert both[92, 1] > 100 * np.median(both[40:80, 1])       # G2's own line on G2
+    assert both[320, 0] > 100 * np.median(both[40:80, 0])      # G1's own line on G1
+    off = spectrum(("gearbox.meshes[0].excite=false",))
+    assert off[92].max() > 1e3 * max(off[319:322].max(), off[639:642].max()), \
+        (off[g2].max(axis=0), off[319:322], off[639:642])
+    assert off[184].max() > 1e3 * off[639:642].max()          # G2's 2nd harmonic, not G1's
