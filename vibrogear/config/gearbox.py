@@ -215,10 +215,15 @@ class MeshConfig:
                         "stiffness variation, no transmission error): one source at a time")
     damping: float = spec(0.0, ge=0.0, doc="mesh damping while in contact [N s/m]")
     backlash: float = spec(ge=0.0, lt=0.01, doc="circumferential backlash on the line of action [m]")
-    stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
-    stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
-    te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics [m]")
-    te_sin: tuple[float, ...] = spec((), max_len=50)
+    stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0, doc="mesh "
+                                            "stiffness harmonics of this mesh's own mesh "
+                                            "frequency, relative to the mean (accepted while "
+                                            "the series' minimum over a mesh period stays > 0)")
+    stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0, doc="as "
+                                            "stiffness_cos, sine terms")
+    te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics of "
+                                     "this mesh's own mesh frequency [m]")
+    te_sin: tuple[float, ...] = spec((), max_len=50, doc="as te_cos, sine terms [m]")
     # gear data of ISO 6336-1 (used by stiffness = "iso6336", else only reported)
     profile_shift_a: float = spec(0.0, ge=-1.0, le=2.0, doc="profile shift coefficient x of "
                                   "gear_a [-]")
