@@ -83,9 +83,8 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import ClassVar
-
 from fractions import Fraction
+from typing import ClassVar
 
 import numpy as np
 

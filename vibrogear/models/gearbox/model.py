@@ -4,22 +4,24 @@ Subsystems: one free-free shaft per ``[[gearbox.shafts]]`` (Timoshenko rotor wit
 discs, fixed gears and free gears; master modes incl. rigid-body modes) and, when the scene
 has ``[housing]``, the housing fixed at its base (master modes and their values at the
 rolling-element points of the bores).  Couplings in physical coordinates
-(:mod:`vibrogear.models.gearbox.couplings`): gear meshes (dead zone with backlash, mesh stiffness
-and transmission-error harmonics, each mesh at its own mesh frequency: :func:`mesh_slots`), rolling elements (one-sided Hertzian
-contacts with clearance, journal node to bore point, or to ground without housing), linear
-links (axial bearing springs, radial bearing damping, spring bearings, external torsional
-couplings; :mod:`vibrogear.models.gearbox.supports`).  :func:`build_gearbox` joins them by
+(:mod:`vibrogear.models.gearbox.couplings`): gear meshes (dead zone with backlash, mesh
+stiffness and transmission-error harmonics, each mesh at its own mesh frequency:
+:func:`mesh_slots`), rolling elements (one-sided Hertzian contacts with clearance, journal
+node to bore point, or to ground without housing), linear links (axial bearing springs,
+radial bearing damping, spring bearings, external torsional couplings;
+:mod:`vibrogear.models.gearbox.supports`).  :func:`build_gearbox` joins them by
 :func:`~vibrogear.models.gearbox.synthesis.synthesize`.
 
 Mesh stiffness: a number [N/m] along the tooth normal, or ``"iso6336"``: ISO 6336-1 method B
-from the gear data (:mod:`vibrogear.models.gearbox.iso6336`; ``k_normal`` and, on every mesh, the
-single/double contact harmonics unless the user gives harmonics), or two levels
-(``stiffness_levels``, :func:`~vibrogear.models.gearbox.mesh_law.level_harmonics`).  The ISO values of every
-mesh whose gear data lie in the method's range are kept in ``GearboxModel.mesh_stiffness``
-next to the user's value.  Profile-shifted pairs (x_a + x_b != 0) mesh on their working
-pitch cylinders (zero backlash), which fix the centre distance.  Static load: the
-twist-angle torques, free-gear drag and, with ``[gearbox] gravity``, the weight of the
-shafts with their discs and gears (``M g``; not the housing's own weight).
+from the gear data (:mod:`vibrogear.models.gearbox.iso6336`; ``k_normal`` and, on every
+mesh, the single/double contact harmonics unless the user gives harmonics), or two levels
+(``stiffness_levels``, :func:`~vibrogear.models.gearbox.mesh_law.level_harmonics`).  The ISO
+values of every mesh whose gear data lie in the method's range are kept in
+``GearboxModel.mesh_stiffness`` next to the user's value.  Profile-shifted pairs
+(x_a + x_b != 0) mesh on their working pitch cylinders (zero backlash), which fix the centre
+distance.  Static load: the twist-angle torques, free-gear drag and, with ``[gearbox]
+gravity``, the weight of the shafts with their discs and gears (``M g``; not the housing's
+own weight).
 
 The coordinates q are deviations from the steady rigid-body rotation fixed by the motor and
 load discs (they spin at omega_s with prescribed angles), so the paper's spin velocities of
