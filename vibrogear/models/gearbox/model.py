@@ -17,11 +17,11 @@ from the gear data (:mod:`vibrogear.models.gearbox.iso6336`; ``k_normal`` and, o
 mesh, the single/double contact harmonics unless the user gives harmonics), or two levels
 (``stiffness_levels``, :func:`~vibrogear.models.gearbox.mesh_law.level_harmonics`).  The ISO
 values of every mesh whose gear data lie in the method's range are kept in
-``GearboxModel.mesh_stiffness`` next to the user's value.  Profile-shifted pairs
-(x_a + x_b != 0) mesh on their working pitch cylinders (zero backlash), which fix the centre
-distance.  Static load: the twist-angle torques, free-gear drag and, with ``[gearbox]
-gravity``, the weight of the shafts with their discs and gears (``M g``; not the housing's
-own weight).
+``GearboxModel.mesh_stiffness``
+next to the user's value.  Profile-shifted pairs (x_a + x_b != 0) mesh on their working
+pitch cylinders (zero backlash), which fix the centre distance.  Static load: the
+twist-angle torques, free-gear drag and, with ``[gearbox] gravity``, the weight of the
+shafts with their discs and gears (``M g``; not the housing's own weight).
 
 The coordinates q are deviations from the steady rigid-body rotation fixed by the motor and
 load discs (they spin at omega_s with prescribed angles), so the paper's spin velocities of
