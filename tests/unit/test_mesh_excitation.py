@@ -215,6 +215,13 @@ def test_continuation_beyond_the_period_limit_is_refused_by_name(scenes, capsys,
     out = tmp_path / "o"
     assert main(["continue", str(scenes[1]), "--quiet", "--out", str(out)]) == 2
     assert not out.exists()
+    # a map with LP/PD curves shoots too (gear_pair.toml: [map] curves = true); without them
+    # it samples
+    assert main(["map", str(scenes[1]), "--quiet", "--out", str(out)]) == 2
+    assert "map needs a common excitation period" in capsys.readouterr().err
+    assert main(["check", str(scenes[1]), "--set", "scene.analyses=['map']",
+                 "--set", "map.curves=false"]) == 0
+    capsys.readouterr()
     # the analyses that sample run: check passes and states the period
     ok = ["--set", "scene.analyses=['time_response', 'sweep', 'nvh']"]
     assert main(["check", str(scenes[1]), *ok]) == 0
