@@ -23,6 +23,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.models.gearbox.model import build_gearbox
+from vibrogear.models.validate import validate_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import ShootingOptions, shoot
 from vibrogear.solvers.static import static_equilibrium
@@ -206,22 +207,26 @@ def test_each_stage_excites_at_its_own_mesh_frequency_and_shooting_closes(scenes
 
 def test_continuation_beyond_the_period_limit_is_refused_by_name(scenes, capsys, tmp_path):
     with pytest.raises(ConfigError) as exc:           # gear_pair.toml lists continuation
-        load_scene(scenes[1])
+        validate_scene(load_scene(scenes[1]))
     msg = str(exc.value)
     assert exc.value.path == "gearbox.meshes"
     assert "'G2' (23/46 teeth) at 23/80" in msg and "80 mesh periods" in msg
     assert main(["check", str(scenes[1])]) == 2
-    assert "continuation needs a common excitation period" in capsys.readouterr().err
+    assert "continuation: shooting needs a common excitation period" in capsys.readouterr().err
     out = tmp_path / "o"
     assert main(["continue", str(scenes[1]), "--quiet", "--out", str(out)]) == 2
     assert not out.exists()
+    capsys.readouterr()
     # a map with LP/PD curves shoots too (gear_pair.toml: [map] curves = true); without them
     # it samples
     assert main(["map", str(scenes[1]), "--quiet", "--out", str(out)]) == 2
-    assert "map needs a common excitation period" in capsys.readouterr().err
+    assert "map (its LP/PD curves): shooting needs" in capsys.readouterr().err
     assert main(["check", str(scenes[1]), "--set", "scene.analyses=['map']",
                  "--set", "map.curves=false"]) == 0
     capsys.readouterr()
+    # the verbs that sample run on the same file (the CLI checks the verb alone)
+    assert main(["time", str(scenes[1]), "--set", "time_response.periods=4", "--quiet",
+                 "--out", str(tmp_path / "t")]) == 0
     # the analyses that sample run: check passes and states the period
     ok = ["--set", "scene.analyses=['time_response', 'sweep', 'nvh']"]
     assert main(["check", str(scenes[1]), *ok]) == 0

@@ -564,7 +564,8 @@ class GearboxConfig:
         if not what or not self.multi_frequency:
             return
         P, lim = self.common_period(), self.period_limit()
-        raise ConfigError(f"{path}.meshes", f"{', '.join(what)} needs a common excitation "
+        names = ", ".join("map (its LP/PD curves)" if a == "map" else a for a in what)
+        raise ConfigError(f"{path}.meshes", f"{names}: shooting needs a common excitation "
                           f"period: the sources ({self.period_sources()} of meshes[0]'s mesh "
                           f"frequency) repeat together only every {P} mesh periods of "
                           f"meshes[0] (the limit for shooting is {lim}); "

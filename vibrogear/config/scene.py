@@ -110,11 +110,6 @@ class Scene:
         if self.states is not None:
             with errs.catch():
                 self.states.check_model(self.impact_pair, self.gearbox, "states")
-        if self.gearbox is not None:            # shooting needs a common excitation period
-            with errs.catch():
-                self.gearbox.check_common_period(
-                    [a for a in self.scene.analyses if a == "continuation" or (
-                        a == "map" and self.map is not None and self.map.curves)], "gearbox")
         from .layout import check_layout        # checks across sections, in one place
         with errs.catch():
             check_layout(self)

@@ -311,8 +311,9 @@ def _mesh_geometry(cfg, i, axes, gear_p):
 
 def check_layout(scene) -> None:
     """The gearbox checks that need no FE model (shaft axes, mesh planes and centre
-    distances, ISO 6336 mesh stiffness, the speed range of master_modes = "frequency"),
-    run by the scene's validation so that ``vibrogear check`` reports them."""
+    distances, ISO 6336 mesh stiffness, the speed range of master_modes = "frequency", the
+    common excitation period of the analyses that shoot), run by the scene's validation so
+    that ``vibrogear check`` reports them."""
     cfg = scene.gearbox
     _, gear_p = cfg.speed_ratios()
     axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
@@ -322,6 +323,11 @@ def check_layout(scene) -> None:
         _mesh_geometry(cfg, i, axes, gear_p)
         if m.iso6336 or m.stiffness_levels:
             _mesh_law(cfg, i)
+    # shooting needs a common excitation period (the analyses this run does: a verb alone
+    # for `vibrogear sweep` etc., so a scene listing continuation still sweeps)
+    map_ = getattr(scene, "map", None)
+    cfg.check_common_period([a for a in scene.scene.analyses if a == "continuation" or (
+        a == "map" and map_ is not None and map_.curves)], "gearbox")
 
 
 def mesh_slots(cfg, laws) -> tuple[tuple, tuple]:
