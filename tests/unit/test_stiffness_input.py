@@ -179,3 +179,14 @@ def test_levels_shape_and_order_are_checked(tmp_path):
     with pytest.raises(ConfigError) as exc:
         load_scene(GEAR_PAIR, ("gearbox.meshes[0].double_contact_share=0.5",))
     assert exc.value.path == "gearbox.meshes[0].double_contact_share"
+
+
+def test_a_helical_pair_needs_the_share_given(tmp_path):
+    p = _levels_file(tmp_path)
+    x = 0.12 + 0.002 * 120 / (2 * math.cos(math.radians(15.0)))    # the centre distance
+    sc = load_scene(p, ("gearbox.gears[0].helix_angle=15.0", "gearbox.gears[1].helix_angle=15.0",
+                        f"gearbox.shafts[1].x={x!r}"))
+    with pytest.raises(ConfigError) as exc:
+        mesh_law(sc.gearbox, 0)
+    assert exc.value.path == "gearbox.meshes[0].double_contact_share"
+    assert "helical" in str(exc.value)

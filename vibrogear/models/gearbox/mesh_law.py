@@ -77,9 +77,13 @@ def mesh_law(cfg, i) -> tuple[float, tuple, tuple, dict]:
     if m.stiffness_levels:
         share = m.double_contact_share
         if share is None:
-            if iso is None or not 1.0 < iso.eps_alpha < 2.0:
+            if iso is None or not 1.0 < iso.eps_alpha < 2.0 or iso.eps_beta > 0.0:
                 why = (f"ISO 6336's contact ratio is not available ({note})" if iso is None
-                       else f"eps_alpha = {iso.eps_alpha:.4g} is not between 1 and 2")
+                       else f"eps_alpha = {iso.eps_alpha:.4g} is not between 1 and 2"
+                       if not 1.0 < iso.eps_alpha < 2.0 else
+                       f"the pair is helical (eps_beta = {iso.eps_beta:.4g}): the contact "
+                       f"lines sweep the face and no single share follows from eps_alpha "
+                       f"(eps_alpha - 1 = {iso.eps_alpha - 1.0:.4g})")
                 raise ConfigError(f"{path}.double_contact_share", f"missing: the default "
                                   f"share eps_alpha - 1 needs a contact ratio between 1 and "
                                   f"2; {why}; give the share of the mesh period with two "
