@@ -344,8 +344,6 @@ BAD = [
 ]
 BAD_FREE = [
     (["gearbox.gears.3.free=true"], "gearbox.meshes[1]", "two free gears"),
-    (["gearbox.meshes.1.te_cos=[1e-6]"], "gearbox.meshes[1]", "only meshes[0]"),
-    (["gearbox.meshes.1.stiffness_cos=[0.1]"], "gearbox.meshes[1]", "only meshes[0]"),
 ]
 
 

@@ -120,7 +120,14 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
             "resonance_speeds_rpm": crit, "wall_s": wall,
             "mesh_stiffness": gm.mesh_stiffness_summary(),
             "torque_orders": list(gm.torque_orders),
-            "excitation_period_mesh_periods": gm.reduced.period_multiple,
+            # the forcing's common period (None: longer than the model's limit) and the
+            # period the sweep, states and map sample (1 where multi-frequency)
+            "excitation_period_mesh_periods": gm.reduced.forcing_period_multiple,
+            "sampled_period_mesh_periods": gm.reduced.period_multiple,
+            "multi_frequency": gm.reduced.multi_frequency,
+            "mesh_frequency_ratios": {m.name: f"{r.numerator}/{r.denominator}" for m, r in
+                                      zip(scene.gearbox.meshes,
+                                          scene.gearbox.mesh_frequency_ratios())},
             "build_timings_s": gm.timings,
             "error_estimate": {"note": "linearised reduced model; see reduction_accuracy"}}
     return AnalysisOutcome(summary=summary, result=result)

@@ -150,10 +150,12 @@ def _bearings(study: Study):
 
 
 def _record(study: Study, p: float, u0, R: int, S: int, opts):
-    """The trajectory over R whole mesh periods from ``u0`` with S samples per period."""
-    T = study.model.excitation_period(p)
-    t = np.arange(R * S) * (T / S)
-    return t, R * T, integrate(study.model, p, u0, 0.0, R * T, t_eval=t, options=opts)
+    """The trajectory over R whole excitation periods from ``u0`` (R P mesh periods, P the
+    model's period_multiple: 1 unless torque orders or meshes at their own frequencies make
+    the excitation's period longer) with S samples per mesh period."""
+    P, T = study.model.period_multiple, study.model.base_period(p)
+    t = np.arange(R * P * S) * (T / S)
+    return t, R * P * T, integrate(study.model, p, u0, 0.0, R * P * T, t_eval=t, options=opts)
 
 
 def _signals(study: Study, p: float, t, u, mesh, bearings) -> dict:
@@ -207,7 +209,8 @@ def branch_spectra(study: Study, scene, continuation, mesh, bearings, smap
     pts = [(b, i, br.n_periods, pt) for b, br in enumerate(continuation.branches)
            for i, pt in enumerate(br.points)]
     N = int(np.lcm.reduce([n for _, _, n, _ in pts])) if pts else 1
-    K = N * S // 2 + 1
+    P = study.model.period_multiple          # mesh periods per excitation period
+    K = N * P * S // 2 + 1
     rows, recs, warnings = [], {"dte": [], "mesh_force": [], "bearing_force": []}, []
     parseval, erp, erp_bins = {k: 0.0 for k in recs}, [], []
     for b, i, n, pt in pts:
@@ -237,9 +240,9 @@ def branch_spectra(study: Study, scene, continuation, mesh, bearings, smap
     model = study.model
     return BranchSpectra(
         rpm=rpm, branch=branch, index=index, stable=stable.astype(bool), n_periods=n_per,
-        order=np.arange(K) / N,
+        order=np.arange(K) / (N * P),
         freq_hz=np.outer(model.excitation_frequency(rpm) / (2 * np.pi * study.time_unit_s),
-                         np.arange(K) / N),
+                         np.arange(K) / (N * P)),
         amplitudes={k: np.array(v) for k, v in recs.items()}, parseval=parseval,
         closure=closure, first_pass=_first_pass(rpm, branch),
         erp_w=np.array(erp) if smap is not None else None,
@@ -302,7 +305,8 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
             branch, more = branch_spectra(study, scene, cont.result.result, mesh, bearings,
                                           smap)
             warnings.extend(more)
-    order = np.arange(R * S // 2 + 1) / R
+    P = model.period_multiple                # R whole excitation periods of P mesh periods
+    order = np.arange(R * P * S // 2 + 1) / (R * P)
     mesh_hz, shaft_hz, shaft_names = order_lines(scene.gearbox, rpm)
     f1_hz = model.excitation_frequency(rpm) / (2 * np.pi * study.time_unit_s)
     amplitudes = {k: np.array(v) for k, v in records.items()}
@@ -310,7 +314,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
         "sweep") else np.full(rpm.size, -1, dtype=np.int64)
     modes_hz, modes_rpm = natural_frequencies(previous)
     lines, evidence, lines_summary = label_points(
-        scene, rpm, f1_hz, np.outer(f1_hz, order), amplitudes, R * S, classes, modes_hz,
+        scene, rpm, f1_hz, np.outer(f1_hz, order), amplitudes, R * P * S, classes, modes_hz,
         cfg.max_order * float(np.max(mesh_hz)))
     lines_summary["modes_rpm"] = modes_rpm
     names = {"dte": tuple(gm.contacts[j].name for j in mesh),
@@ -328,7 +332,8 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                     surface=smap, velocity_fields=fields, study=study, branch=branch, ods=ods)
     summary = {"status": "ok" if not warnings else "partial", "points": int(rpm.size),
                "source": source, "record_periods": R, "samples_per_period": S,
-               "resolution_orders": 1.0 / R, "window": "none (whole mesh periods)",
+               "resolution_orders": 1.0 / (R * P),
+               "window": "none (whole excitation periods)",
                "parseval_max_rel_error": parseval, "settle_wall_s": t_settle,
                "lines": lines_summary, "points_evidence": point_summary(rpm, classes, evidence,
                                                                       lines.get("dte")),

@@ -151,12 +151,15 @@ def _response(gm, scene, cfg):
     from ..solvers.sequential.motion import classify_period, deformation_statistics
 
     r, rpm = gm.reduced, cfg.rpm
-    T = r.excitation_period(rpm)
+    # mesh periods of meshes[0] (the documented unit), the record rounded up to whole
+    # excitation periods of P mesh periods (P > 1: torque orders or meshes at their own
+    # frequencies)
+    T, P = r.base_period(rpm), r.period_multiple
     opts = integration_options(scene, section=scene.reduction_accuracy)
     warm = integrate(r, rpm, _start(gm, rpm), 0.0, cfg.transient_periods * T, options=opts)
     if not warm.ok:
         return None, warm, {}, 0
-    R = cfg.record_periods
+    R = -(-cfg.record_periods // P) * P
     t_eval = np.arange(1, _SAMPLES * R + 1) * (T / _SAMPLES)
     t_eval[-1] = R * T
     tr = integrate(r, rpm, warm.u_end, 0.0, R * T, t_eval=t_eval, options=opts)
@@ -167,7 +170,9 @@ def _response(gm, scene, cfg):
     n, _ = classify_period(tr.u[_SAMPLES - 1::_SAMPLES], min(8, R // 2), 1e-4,
                            split=r.n_modes)
     stats = deformation_statistics(delta[0, :-1], _SAMPLES, period_n=n)
-    stats.update(_contact_statistics(r, rpm, warm.u_end, tr, t_eval, T, n, opts))
+    # the metrics count per base period of a window given in excitation periods P T
+    stats.update(_contact_statistics(r, rpm, warm.u_end, tr, t_eval, P * T,
+                                     n // P if n % P == 0 else n, opts))
     tr = _with_wall(tr, warm)
     return delta[0], tr, stats, int(n)
 

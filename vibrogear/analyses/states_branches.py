@@ -75,7 +75,7 @@ def refine_orbits(study, scene, attractors, *, workers=None, split=None, root=Tr
     units = None
     if root:
         units = [(k, a.param, a.u0, a.period_n) for k, a in enumerate(attractors)
-                 if a.period_n > 0 and a.u0 is not None]
+                 if a.period_n > 0 and a.u0 is not None and not study.model.multi_frequency]
     units = broadcast(units)
 
     def on_result(_i, item):
@@ -143,6 +143,9 @@ def continue_branches(study, scene, attractors, previous, *, workers=None, split
     lo, hi = float(cfg.param_min), float(cfg.param_max)
     if not hi > lo:
         return [], [{"note": "one grid value: no range to continue in"}]
+    if study.model.multi_frequency:
+        return [], [{"note": "multi-frequency forcing (no common excitation period within "
+                     "the period limit): no periodic orbit to continue"}]
     opts, shooting, options = _branch_settings(study, scene)
     fn = partial(_half_unit, study.model, opts, shooting.tol, options)
     w = effective_workers(2 * max(len(attractors or ()), 1), workers)

@@ -9,9 +9,11 @@ its node at rotor coordinate ``position`` lies at housing y = ``y0 + position``.
 
 Speeds.  The driving shaft is ``shafts[0]``; it spins about +Z at the scene's speed (rpm).
 The other shafts' speed ratios follow from the tooth counts of the fixed gears that mesh
-(external pairs reverse the sense).  The excitation (mesh stiffness harmonics and the
-kinematic transmission error) belongs to ``meshes[0]``; its mesh frequency is the
-excitation frequency of every analysis.
+(external pairs reverse the sense).  Every mesh excites (its stiffness variation and
+kinematic transmission error) at its own mesh frequency, z_j p_j / (z_0 p_0) times that of
+``meshes[0]`` (an exact fraction of the tooth counts), the base frequency of every
+analysis; the excitation repeats after the common period (:meth:`GearboxConfig.common_period`).
+``excite = false`` makes a mesh a constant spring at its mean stiffness.
 
 ```toml
 [gearbox]
@@ -44,6 +46,10 @@ name = "G1"; gear_a = "z1"; gear_b = "z2"   # gear_a drives gear_b
 pressure_angle = 20.0       # normal pressure angle [deg]
 stiffness = 4e8             # mean mesh stiffness [N/m], or "iso6336" (ISO 6336-1 method B
                             # from teeth, module, helix, pressure angle and:)
+# stiffness_levels = [3.0e8, 5.2e8]  # instead of stiffness: [k_single, k_double] [N/m], a
+# double_contact_share = 0.557       # square wave (default share: eps_alpha - 1, ISO 6336)
+# level_terms = 20          # Fourier terms of the square wave (Fejer-weighted)
+excite = true               # false: a constant spring (no stiffness variation, no TE)
 profile_shift_a = 0.0       # profile shift coefficients x [-]
 profile_shift_b = 0.0
 face_width = 0.025          # [m] (default: the smaller gear width)
@@ -77,17 +83,52 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import ClassVar
+
+import numpy as np
 
 from .base import ConfigError, ErrorList, spec
 from .options import RPM, Parameter
-from .gearbox_supports import (BEARING_EXPONENTS, MAX_ORDER_PERIOD, ExternalCouplingConfig,
-                               GearboxBearingConfig, order_period, torque_order_ratios)
+from .gearbox_supports import (BEARING_EXPONENTS, MAX_COMMON_PERIOD, MAX_ORDER_PERIOD,
+                               ExternalCouplingConfig, GearboxBearingConfig, order_period,
+                               torque_order_ratios)
 from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections, with_nodes_at
 from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
-           "ExternalCouplingConfig", "BEARING_EXPONENTS"]
+           "ExternalCouplingConfig", "BEARING_EXPONENTS", "MAX_COMMON_PERIOD",
+           "stiffness_wave_minimum", "SHOOTING_ANALYSES"]
+
+#: the analyses that shoot periodic orbits over the common excitation period: refused
+#: beyond the period limit (MAX_COMMON_PERIOD)
+SHOOTING_ANALYSES = ("continuation", "map")
+
+
+def stiffness_wave_minimum(cos, sin=()) -> tuple[float, float]:
+    """(min over a mesh period of k(t)/k_mean = 1 + sum_h a_h cos(h theta) + b_h sin(h theta),
+    where: theta / 2 pi in [0, 1)): a grid of 64 points per harmonic (at least 256), the
+    lowest refined by Newton steps on k' = 0 (the actual minimum, not a bound)."""
+    H = max(len(cos), len(sin))
+    if H == 0:
+        return 1.0, 0.0
+    a, b = np.zeros(H), np.zeros(H)
+    a[:len(cos)], b[:len(sin)] = cos, sin
+    h = np.arange(1, H + 1, dtype=float)
+    theta = np.linspace(0.0, 2 * np.pi, max(256, 64 * H), endpoint=False)
+    k = 1.0 + np.cos(np.outer(theta, h)) @ a + np.sin(np.outer(theta, h)) @ b
+    t = float(theta[int(np.argmin(k))])
+    best = float(k.min())
+    for _ in range(8):
+        c, sn = np.cos(h * t), np.sin(h * t)
+        d1 = float(h @ (-a * sn + b * c))
+        d2 = float((h * h) @ (-a * c - b * sn))
+        if d2 <= 0.0:
+            break
+        t -= d1 / d2
+        val = 1.0 + float(np.cos(h * t) @ a + np.sin(h * t) @ b)
+        best = min(best, val)
+    return best, (t / (2 * np.pi)) % 1.0
 
 @dataclass(frozen=True, kw_only=True)
 class ShaftConfig:
@@ -154,15 +195,34 @@ class MeshConfig:
     gear_b: str = spec(doc="driven gear of the pair")
     pressure_angle: float = spec(20.0, gt=0.0, lt=45.0, doc="normal pressure angle [deg]")
     hand: int = spec(1, choices=(1, -1), doc="helix hand of gear_a (helical pairs)")
-    stiffness: float | str = spec(gt=0.0, le=1e13, doc="mean mesh stiffness [N/m] along the "
-                                  "normal, or \"iso6336\" (from the gear data, ISO 6336-1 "
-                                  "method B)")
+    stiffness: float | str | None = spec(None, gt=0.0, le=1e13, doc="mean mesh stiffness "
+                                         "[N/m] along the normal, or \"iso6336\" (from the "
+                                         "gear data, ISO 6336-1 method B); or give "
+                                         "stiffness_levels")
+    stiffness_levels: tuple[float, ...] = spec((), max_len=2, gt=0.0, le=1e13, doc="instead "
+                                               "of stiffness: [k_single, k_double] [N/m], the "
+                                               "mesh stiffness with one and with two tooth "
+                                               "pairs in contact (a square wave)")
+    double_contact_share: float | None = spec(None, gt=0.0, lt=1.0, doc="with "
+                                              "stiffness_levels: the share of the mesh period "
+                                              "with two pairs in contact (default: eps_alpha "
+                                              "- 1 of ISO 6336-1's contact ratio)")
+    level_terms: int = spec(20, ge=1, le=50, doc="with stiffness_levels: Fourier terms of "
+                            "the square wave (Fejer-weighted: no overshoot; the peak "
+                            "stiffness error is reported)")
+    excite: bool = spec(True, doc="false: a constant spring at the mean stiffness (no "
+                        "stiffness variation, no transmission error): one source at a time")
     damping: float = spec(0.0, ge=0.0, doc="mesh damping while in contact [N s/m]")
     backlash: float = spec(ge=0.0, lt=0.01, doc="circumferential backlash on the line of action [m]")
-    stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
-    stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0)
-    te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics [m]")
-    te_sin: tuple[float, ...] = spec((), max_len=50)
+    stiffness_cos: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0, doc="mesh "
+                                            "stiffness harmonics of this mesh's own mesh "
+                                            "frequency, relative to the mean (accepted while "
+                                            "the series' minimum over a mesh period stays > 0)")
+    stiffness_sin: tuple[float, ...] = spec((), max_len=50, gt=-1.0, lt=1.0, doc="as "
+                                            "stiffness_cos, sine terms")
+    te_cos: tuple[float, ...] = spec((), max_len=50, doc="transmission error harmonics of "
+                                     "this mesh's own mesh frequency [m]")
+    te_sin: tuple[float, ...] = spec((), max_len=50, doc="as te_cos, sine terms [m]")
     # gear data of ISO 6336-1 (used by stiffness = "iso6336", else only reported)
     profile_shift_a: float = spec(0.0, ge=-1.0, le=2.0, doc="profile shift coefficient x of "
                                   "gear_a [-]")
@@ -189,14 +249,57 @@ class MeshConfig:
                               f"or \"iso6336\", got {self.stiffness!r}")
         if self.gear_a == self.gear_b:
             raise ConfigError(f"{path}.gear_b", "must differ from gear_a")
-        amp = sum(abs(a) for a in self.stiffness_cos + self.stiffness_sin)
-        if amp >= 1.0:
-            raise ConfigError(f"{path}.stiffness_cos", f"sum of |harmonics| must be < 1 (mesh "
-                              f"stiffness stays positive), got {amp:g}")
+        if self.stiffness is None and not self.stiffness_levels:
+            raise ConfigError(f"{path}.stiffness", "missing required key: give stiffness "
+                              "(a number [N/m] or \"iso6336\") or stiffness_levels = "
+                              "[k_single, k_double] [N/m]")
+        if self.stiffness_levels:
+            self._check_levels(path)
+        elif self.double_contact_share is not None:
+            raise ConfigError(f"{path}.double_contact_share", "goes with stiffness_levels "
+                              "(the square wave's double-contact share)")
+        low, where = stiffness_wave_minimum(self.stiffness_cos, self.stiffness_sin)
+        if low <= 0.0:
+            raise ConfigError(f"{path}.stiffness_cos", f"the mesh stiffness goes negative: "
+                              f"its minimum over a mesh period is {low:.3g} x the mean (at "
+                              f"{where:.3f} of the period); lower the harmonics")
+
+    def _check_levels(self, path: str) -> None:
+        p = f"{path}.stiffness_levels"
+        if len(self.stiffness_levels) != 2:
+            raise ConfigError(p, f"expected [k_single, k_double] (2 numbers, N/m), got "
+                              f"{len(self.stiffness_levels)}")
+        if self.stiffness is not None:
+            raise ConfigError(p, "give the stiffness once: stiffness (mean, with "
+                              "stiffness_cos/sin) or stiffness_levels, not both")
+        if self.stiffness_cos or self.stiffness_sin:
+            raise ConfigError(p, "give the stiffness variation once: stiffness_levels (a "
+                              "square wave) or stiffness_cos/stiffness_sin (its Fourier "
+                              "series with stiffness), not both")
+        k1, k2 = self.stiffness_levels
+        if k2 < k1:
+            raise ConfigError(p, f"k_double (two pairs in contact) must be >= k_single, got "
+                              f"[{k1:g}, {k2:g}] N/m")
 
     @property
     def has_excitation(self) -> bool:
-        return any(self.stiffness_cos + self.stiffness_sin + self.te_cos + self.te_sin)
+        return any(self.stiffness_cos + self.stiffness_sin + self.te_cos + self.te_sin) or \
+            bool(self.stiffness_levels and self.stiffness_levels[0] != self.stiffness_levels[1])
+
+    @property
+    def excitation_harmonics(self) -> int:
+        """Harmonics of its own mesh frequency this mesh excites at (0: none, or excite =
+        false): its stiffness terms (given, the square wave's level_terms, or ISO 6336's
+        iso_harmonics) and its transmission-error terms."""
+        if not self.excite:
+            return 0
+        n = max(len(self.te_cos), len(self.te_sin), len(self.stiffness_cos),
+                len(self.stiffness_sin))
+        if self.stiffness_levels:
+            n = max(n, self.level_terms if self.has_excitation else 0)
+        elif self.iso6336 and not (self.stiffness_cos or self.stiffness_sin):
+            n = max(n, self.iso_harmonics)
+        return n
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -328,10 +431,6 @@ class GearboxConfig:
             if abs(ga.helix_angle - gb.helix_angle) > 1e-9:
                 raise ConfigError(f"{p}.gear_b", f"helix angle {gb.helix_angle:g} differs from "
                                   f"gear_a's {ga.helix_angle:g} (the hand is the mesh's `hand`)")
-            if i > 0 and m.has_excitation:
-                raise ConfigError(f"{p}.stiffness_cos", "only meshes[0] (whose mesh frequency is "
-                                  "the excitation frequency) may carry stiffness or "
-                                  "transmission-error harmonics")
         if self.meshes:
             first = self.meshes[0]
             ga = self.gears[self.gear_index(first.gear_a, "")]
@@ -360,7 +459,12 @@ class GearboxConfig:
         """(shaft spin / driving-shaft spin per shaft, gear spin / driving-shaft spin per
         gear): fixed-gear meshes carry the kinematics from shafts[0]; a free gear takes the
         speed of the fixed gear it meshes with."""
-        shaft_p: list[float | None] = [1.0] + [None] * (len(self.shafts) - 1)
+        shaft_p, gear_p = self.exact_speed_ratios(path)
+        return [float(p) for p in shaft_p], [float(p) for p in gear_p]
+
+    def exact_speed_ratios(self, path: str = "gearbox") -> tuple[list[Fraction], list[Fraction]]:
+        """:meth:`speed_ratios` as exact fractions of the tooth counts."""
+        shaft_p: list[Fraction | None] = [Fraction(1)] + [None] * (len(self.shafts) - 1)
         gear_shaft = [self.shaft_index(g.shaft, "") for g in self.gears]
         pairs = [(self.gear_index(m.gear_a, ""), self.gear_index(m.gear_b, ""))
                  for m in self.meshes]
@@ -373,10 +477,10 @@ class GearboxConfig:
                     continue
                 pa, pb = shaft_p[gear_shaft[a]], shaft_p[gear_shaft[b]]
                 if pa is not None and pb is None:
-                    shaft_p[gear_shaft[b]] = -pa * ga.teeth / gb.teeth
+                    shaft_p[gear_shaft[b]] = -pa * Fraction(ga.teeth, gb.teeth)
                     changed = True
                 elif pb is not None and pa is None:
-                    shaft_p[gear_shaft[a]] = -pb * gb.teeth / ga.teeth
+                    shaft_p[gear_shaft[a]] = -pb * Fraction(gb.teeth, ga.teeth)
                     changed = True
         for i, p in enumerate(shaft_p):
             if p is None:
@@ -389,7 +493,82 @@ class GearboxConfig:
                 raise ConfigError(f"{path}.meshes[{i}]", f"mesh of two free gears ({ga.name!r}, "
                                   f"{gb.name!r}) has no defined speed")
             if ga.free:
-                gear_p[a] = -gear_p[b] * gb.teeth / ga.teeth
+                gear_p[a] = -gear_p[b] * Fraction(gb.teeth, ga.teeth)
             elif gb.free:
-                gear_p[b] = -gear_p[a] * ga.teeth / gb.teeth
-        return [float(p) for p in shaft_p], [float(p) for p in gear_p]
+                gear_p[b] = -gear_p[a] * Fraction(ga.teeth, gb.teeth)
+        return shaft_p, gear_p
+
+    def mesh_frequency_ratios(self) -> tuple[Fraction, ...]:
+        """Per mesh: its mesh frequency over that of meshes[0], an exact fraction
+        z_j |p_j| / (z_0 |p_0|) (z the teeth of gear_a, p its speed ratio)."""
+        if not self.meshes:
+            return ()
+        _, gear_p = self.exact_speed_ratios()
+        f = [abs(gear_p[k]) * self.gears[k].teeth
+             for k in (self.gear_index(m.gear_a, "") for m in self.meshes)]
+        return tuple(x / f[0] for x in f)
+
+    def mesh_excitation_orders(self) -> tuple[tuple[Fraction, ...], ...]:
+        """Per mesh: the orders (over meshes[0]'s mesh frequency, exact) of the harmonics
+        it excites, h r_j for h = 1 .. its excitation_harmonics (none with excite = false)."""
+        return tuple(tuple(h * r for h in range(1, m.excitation_harmonics + 1))
+                     for m, r in zip(self.meshes, self.mesh_frequency_ratios()))
+
+    def mesh_period(self) -> int:
+        """Mesh periods of meshes[0] after which the meshes' excitation repeats: the least
+        common multiple of the denominators of every excited mesh's frequency ratio."""
+        return math.lcm(1, *(r.denominator for r, m in zip(self.mesh_frequency_ratios(),
+                                                            self.meshes)
+                             if m.excitation_harmonics))
+
+    def common_period(self) -> int:
+        """The common excitation period in mesh periods of meshes[0]: the meshes' period
+        and the torque orders' together (1: every source repeats each mesh period)."""
+        return math.lcm(self.mesh_period(), order_period(torque_order_ratios(self)))
+
+    def period_limit(self) -> int:
+        """The longest common period the solvers span whole (shooting, continuation, the
+        sampling of sweep, states and map): MAX_COMMON_PERIOD where the meshes' own period
+        exceeds it, else MAX_ORDER_PERIOD (torque orders alone: a shaft order repeats once
+        per revolution, z mesh periods, and engine-order studies shoot over it)."""
+        return MAX_COMMON_PERIOD if self.mesh_period() > MAX_COMMON_PERIOD \
+            else MAX_ORDER_PERIOD
+
+    @property
+    def multi_frequency(self) -> bool:
+        """The excitation has no common period within :meth:`period_limit`: the solvers
+        sample per mesh period of meshes[0], and nothing is shot."""
+        return self.common_period() > self.period_limit()
+
+    def period_sources(self) -> str:
+        """The excitation's sources in words, for messages: each excited mesh with its
+        tooth counts and frequency ratio, and the torque orders' period."""
+        out = []
+        for m, r in zip(self.meshes, self.mesh_frequency_ratios()):
+            if not m.excitation_harmonics:
+                continue
+            za = self.gears[self.gear_index(m.gear_a, "")].teeth
+            zb = self.gears[self.gear_index(m.gear_b, "")].teeth
+            out.append(f"mesh {m.name!r} ({za}/{zb} teeth) at {r.numerator}/{r.denominator}")
+        P = order_period(torque_order_ratios(self))
+        if P > 1:
+            out.append(f"the torque orders every {P} mesh periods")
+        return "; ".join(out)
+
+    def check_common_period(self, analyses, path: str = "gearbox") -> None:
+        """Refuse the analyses that shoot over the common excitation period (continuation,
+        a map with LP/PD curves: ``analyses`` lists those that do) beyond the period limit
+        (:meth:`period_limit`), naming the meshes and their tooth counts; the others sample
+        per mesh period."""
+        what = [a for a in analyses if a in SHOOTING_ANALYSES]
+        if not what or not self.multi_frequency:
+            return
+        P, lim = self.common_period(), self.period_limit()
+        names = ", ".join("map (its LP/PD curves)" if a == "map" else a for a in what)
+        raise ConfigError(f"{path}.meshes", f"{names}: shooting needs a common excitation "
+                          f"period: the sources ({self.period_sources()} of meshes[0]'s mesh "
+                          f"frequency) repeat together only every {P} mesh periods of "
+                          f"meshes[0] (the limit for shooting is {lim}); "
+                          "time_response, sweep, runup, nvh and states run (sampled per mesh "
+                          "period: multi-frequency forced); or set excite = false on all but "
+                          "one stage")

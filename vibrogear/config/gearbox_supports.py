@@ -12,11 +12,18 @@ from .bearing_catalogue import ElementSet, boundary_dimensions, element_set
 
 __all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS",
            "MAX_TORQUE_ORDERS", "MAX_ORDER_DENOMINATOR", "MAX_ORDER_PERIOD",
-           "torque_order_ratios", "order_period"]
+           "MAX_COMMON_PERIOD", "torque_order_ratios", "order_period"]
 
 #: torque orders per coupling, the largest denominator of an order (0.5: 2, 1/3: 3, ...),
 #: and the longest whole excitation period the orders may make, in mesh periods
 MAX_TORQUE_ORDERS, MAX_ORDER_DENOMINATOR, MAX_ORDER_PERIOD = 20, 12, 1000
+#: the period limit of the meshes: where the meshes exciting at their own mesh frequencies
+#: repeat together only after more mesh periods of meshes[0] than this, shooting and
+#: continuation are refused (an orbit of 17+ mesh periods costs as many periods per flow,
+#: with the monodromy of the whole period) and the sampling solvers (sweep, states, map, nvh)
+#: sample per mesh period of meshes[0]: the response is "multi-frequency forced".  Torque
+#: orders alone keep their whole period up to MAX_ORDER_PERIOD.
+MAX_COMMON_PERIOD = 16
 
 
 def _check_order(term, path: str) -> None:
@@ -46,12 +53,12 @@ def torque_order_ratios(gearbox) -> tuple[tuple, ...]:
     an exact fraction; the excitation repeats after lcm(denominators of n) mesh periods."""
     if not any(c.torque_orders for c in gearbox.couplings):
         return ()
-    shaft_p, _ = gearbox.speed_ratios()
+    shaft_p, _ = gearbox.exact_speed_ratios()
     m0 = gearbox.meshes[0] if gearbox.meshes else None
     z = gearbox.gears[gearbox.gear_index(m0.gear_a, "")].teeth if m0 else 1
     out = []
     for i, c in enumerate(gearbox.couplings):
-        p_s = Fraction(abs(shaft_p[gearbox.shaft_index(c.shaft, "")])).limit_denominator(10 ** 6)
+        p_s = abs(shaft_p[gearbox.shaft_index(c.shaft, "")])
         out += [(i, order, amp, phase, order * p_s / z) for order, amp, phase in c.order_terms()]
     return tuple(out)
 

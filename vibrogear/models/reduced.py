@@ -28,7 +28,12 @@ engine-order torque fluctuation adds slots at rational multiples of the mesh fre
 n = k p_s / z).  The
 excitation is then periodic with period_multiple = P base periods, P the least common
 denominator of the n_h, and ``excitation_period`` is that whole period P 2 pi / W: the
-solvers that sample, shoot or settle over "a period" use the period of the forcing.
+solvers that sample, shoot or settle over "a period" use the period of the forcing.  A
+gearbox whose meshes excite at their own mesh frequencies adds slots h z_j p_j / (z_0 p_0)
+of each mesh j; where the common period exceeds the model's ``period_limit`` (base periods),
+the solvers sample, settle and count per base period instead (``period_multiple`` 1,
+``multi_frequency`` True: the forcing does not repeat within a sampled period; its true
+common period is ``forcing_period_multiple``, None when longer than MAX_PERIOD_MULTIPLE).
 """
 from __future__ import annotations
 
@@ -141,6 +146,9 @@ class ReducedModel:
     length_unit: str = ""
     #: (H,) multiple of W of each harmonic slot (None: 1, 2, ..., H)
     harmonic_orders: np.ndarray | None = None
+    #: the longest common excitation period [base periods] that the solvers span whole (None:
+    #: no limit); beyond it they sample per base period (module docstring)
+    period_limit: int | None = None
 
     def __post_init__(self):
         m = self.omega2.shape[0]
@@ -148,7 +156,15 @@ class ReducedModel:
         orders = np.arange(1.0, H0 + 1.0) if self.harmonic_orders is None \
             else self.harmonic_orders
         object.__setattr__(self, "harmonic_orders", _arr(orders, (H0,)))
-        object.__setattr__(self, "_period_multiple", period_multiple(self.harmonic_orders))
+        try:
+            P = period_multiple(self.harmonic_orders)
+        except ValueError:
+            if self.period_limit is None:
+                raise
+            P = None            # no common period within MAX_PERIOD_MULTIPLE base periods
+        object.__setattr__(self, "_forcing_period", P)
+        whole = P is not None and (self.period_limit is None or P <= self.period_limit)
+        object.__setattr__(self, "_period_multiple", P if whole else 1)
         object.__setattr__(self, "omega2", _arr(self.omega2, (m,)))
         object.__setattr__(self, "damping", _arr(self.damping, (m,)))
         H = self.forcing.Fc.shape[0]
@@ -183,8 +199,22 @@ class ReducedModel:
     @property
     def period_multiple(self) -> int:
         """Base periods 2 pi / W in one period of the excitation (1 unless some harmonic
-        order is fractional)."""
+        order is fractional), the period the solvers sample, shoot and settle over; 1 where
+        the common period exceeds ``period_limit`` (``multi_frequency``)."""
         return self._period_multiple
+
+    @property
+    def forcing_period_multiple(self) -> int | None:
+        """The forcing's true common period in base periods (None: longer than
+        MAX_PERIOD_MULTIPLE); equal to ``period_multiple`` unless ``multi_frequency``."""
+        return self._forcing_period
+
+    @property
+    def multi_frequency(self) -> bool:
+        """True where the solvers sample per base period of a forcing that does not repeat
+        within it (its common period beyond ``period_limit``): a response that follows
+        it is multi-frequency forced, and there is no periodic orbit to shoot."""
+        return self._forcing_period != self._period_multiple
 
     def base_period(self, param: float) -> float:
         """2 pi / W: the mesh period of a gearbox (the excitation period unless a harmonic

@@ -4,8 +4,9 @@ frequency criterion with the static contribution of the truncated modes kept.
 ``[gearbox] master_modes = "frequency"``: shaft s keeps all its free modes up to
 ``frequency_factor`` x its highest excitation frequency, the largest of (mesh frequency x
 harmonics) over the meshes whose gears it carries, at the scene's highest speed
-(:func:`highest_speed`); the excitation mesh (``meshes[0]``) counts its stiffness /
-transmission-error harmonics (or ISO 6336's ``iso_harmonics``), the others their tooth-pass
+(:func:`highest_speed`); every mesh counts the harmonics of its own mesh frequency it
+excites (stiffness / transmission-error harmonics, ISO 6336's ``iso_harmonics`` or the
+square wave's ``level_terms``; none with ``excite = false``), at least its tooth-pass
 frequency.  ``static_correction`` (default on with "frequency") adds the static deflection
 shapes under the shaft's coupling forces (:func:`~vibrogear.models.rotor.model.static_correction`),
 so the coupling stiffness stays the full shaft's; with "frequency" their pseudo-modes are
@@ -40,10 +41,9 @@ def highest_speed(scene) -> float:
 
 
 def _harmonics(m) -> int:
-    n = max(len(m.stiffness_cos), len(m.stiffness_sin), len(m.te_cos), len(m.te_sin))
-    if m.iso6336 and not (m.stiffness_cos or m.stiffness_sin):
-        n = max(n, m.iso_harmonics)
-    return max(n, 1)
+    """The highest harmonic of its own mesh frequency a mesh excites (at least 1: its
+    tooth-pass frequency)."""
+    return max(m.excitation_harmonics, 1)
 
 
 def excitation_frequencies_hz(cfg, rpm: float) -> np.ndarray:
@@ -53,7 +53,7 @@ def excitation_frequencies_hz(cfg, rpm: float) -> np.ndarray:
     for i, m in enumerate(cfg.meshes):
         ka, kb = cfg.gear_index(m.gear_a, ""), cfg.gear_index(m.gear_b, "")
         ga = cfg.gears[ka]
-        f = ga.teeth * abs(gear_p[ka]) * rpm / 60.0 * (_harmonics(m) if i == 0 else 1)
+        f = ga.teeth * abs(gear_p[ka]) * rpm / 60.0 * _harmonics(m)
         for k in (ka, kb):
             s = cfg.shaft_index(cfg.gears[k].shaft, "")
             out[s] = max(out[s], f)

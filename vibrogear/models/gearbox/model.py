@@ -4,17 +4,20 @@ Subsystems: one free-free shaft per ``[[gearbox.shafts]]`` (Timoshenko rotor wit
 discs, fixed gears and free gears; master modes incl. rigid-body modes) and, when the scene
 has ``[housing]``, the housing fixed at its base (master modes and their values at the
 rolling-element points of the bores).  Couplings in physical coordinates
-(:mod:`vibrogear.models.gearbox.couplings`): gear meshes (dead zone with backlash, mesh stiffness
-and transmission-error harmonics on ``meshes[0]``), rolling elements (one-sided Hertzian
-contacts with clearance, journal node to bore point, or to ground without housing), linear
-links (axial bearing springs, radial bearing damping, spring bearings, external torsional
-couplings; :mod:`vibrogear.models.gearbox.supports`).  :func:`build_gearbox` joins them by
+(:mod:`vibrogear.models.gearbox.couplings`): gear meshes (dead zone with backlash, mesh
+stiffness and transmission-error harmonics, each mesh at its own mesh frequency:
+:func:`mesh_slots`), rolling elements (one-sided Hertzian contacts with clearance, journal
+node to bore point, or to ground without housing), linear links (axial bearing springs,
+radial bearing damping, spring bearings, external torsional couplings;
+:mod:`vibrogear.models.gearbox.supports`).  :func:`build_gearbox` joins them by
 :func:`~vibrogear.models.gearbox.synthesis.synthesize`.
 
 Mesh stiffness: a number [N/m] along the tooth normal, or ``"iso6336"``: ISO 6336-1 method B
-from the gear data (:mod:`vibrogear.models.gearbox.iso6336`; ``k_normal`` and, on ``meshes[0]``, the
-single/double contact harmonics unless the user gives harmonics).  The ISO values of every
-mesh whose gear data lie in the method's range are kept in ``GearboxModel.mesh_stiffness``
+from the gear data (:mod:`vibrogear.models.gearbox.iso6336`; ``k_normal`` and, on every
+mesh, the single/double contact harmonics unless the user gives harmonics), or two levels
+(``stiffness_levels``, :func:`~vibrogear.models.gearbox.mesh_law.level_harmonics`).  The ISO
+values of every mesh whose gear data lie in the method's range are kept in
+``GearboxModel.mesh_stiffness``
 next to the user's value.  Profile-shifted pairs (x_a + x_b != 0) mesh on their working
 pitch cylinders (zero backlash), which fix the centre distance.  Static load: the
 twist-angle torques, free-gear drag and, with ``[gearbox] gravity``, the weight of the
@@ -30,6 +33,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -200,7 +204,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
         housing_sub, hm = _housing_subsystem(scene, housing_count)
     t_housing = time.perf_counter()
     contacts, links, forces = [], [], []
-    mc, records = _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
+    mc, records, slot_orders = _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof)
     contacts += mc
     bc, bl, blocks = _bearings(scene, cfg, rotors, hm)
     contacts += bc
@@ -239,7 +243,9 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     reduced = synthesize(subsystems, contacts, links, static_force, omega_ref=OMEGA_REF,
                          omega_per_param=teeth * RPM / OMEGA_REF, spin_per_param=RPM,
                          monitor=0, name=cfg.name, param_name=RPM_PARAMETER.name, blocks=blocks,
-                         order_forcing=[o[:3] for o in orders])
+                         order_forcing=[o[:3] for o in orders],
+                         mesh_orders=[float(o) for o in slot_orders],
+                         period_limit=cfg.period_limit())
     t_end = time.perf_counter()
     return GearboxModel(reduced=reduced, subsystems=tuple(subsystems), contacts=tuple(contacts),
                         links=tuple(links), static_force=static_force,
@@ -311,8 +317,9 @@ def _mesh_geometry(cfg, i, axes, gear_p):
 
 def check_layout(scene) -> None:
     """The gearbox checks that need no FE model (shaft axes, mesh planes and centre
-    distances, ISO 6336 mesh stiffness, the speed range of master_modes = "frequency"),
-    run by the scene's validation so that ``vibrogear check`` reports them."""
+    distances, ISO 6336 mesh stiffness, the speed range of master_modes = "frequency", the
+    common excitation period of the analyses that shoot), run by the scene's validation so
+    that ``vibrogear check`` reports them."""
     cfg = scene.gearbox
     _, gear_p = cfg.speed_ratios()
     axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
@@ -320,27 +327,68 @@ def check_layout(scene) -> None:
         highest_speed(scene)                 # the criterion needs the scene's speed range
     for i, m in enumerate(cfg.meshes):
         _mesh_geometry(cfg, i, axes, gear_p)
-        if m.iso6336:
+        if m.iso6336 or m.stiffness_levels:
             _mesh_law(cfg, i)
+    # shooting needs a common excitation period (the analyses this run does: a verb alone
+    # for `vibrogear sweep` etc., so a scene listing continuation still sweeps)
+    map_ = getattr(scene, "map", None)
+    cfg.check_common_period([a for a in scene.scene.analyses if a == "continuation" or (
+        a == "map" and map_ is not None and map_.curves)], "gearbox")
+
+
+def mesh_slots(cfg, laws) -> tuple[tuple, tuple]:
+    """(orders, per mesh its slot indices): the harmonic slots of the meshes' excitation,
+    as multiples of meshes[0]'s mesh frequency (exact fractions): 1 .. H_0 (meshes[0]'s
+    harmonics, at least one slot), then each further mesh's harmonics h r_j (r_j its mesh
+    frequency over meshes[0]'s) where no slot has that order yet.  ``laws``: per mesh
+    (stiffness_cos, stiffness_sin, te_cos, te_sin) as it excites."""
+    ratios = cfg.mesh_frequency_ratios()
+    counts = [max(map(len, law)) for law in laws]
+    orders = [Fraction(h) for h in range(1, max(counts[:1] + [1]) + 1)]
+    where = {o: k for k, o in enumerate(orders)}
+    slots = []
+    for r, n in zip(ratios, counts):
+        idx = []
+        for h in range(1, n + 1):
+            o = h * r
+            if o not in where:
+                where[o] = len(orders)
+                orders.append(o)
+            idx.append(where[o])
+        slots.append(tuple(idx))
+    return tuple(orders), tuple(slots)
 
 
 def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
-    out, records = [], []
+    """The mesh contacts with their harmonics laid out over the mesh slots
+    (:func:`mesh_slots`: each mesh at its own mesh frequency), the records, the slots'
+    orders."""
+    out, records, laws = [], [], []
     for i, m in enumerate(cfg.meshes):
-        geom, (sa, ka), (sb, kb) = _mesh_geometry(cfg, i, axes, gear_p)
-        ga, gb = cfg.gears[ka], cfg.gears[kb]
         k_mesh, hc, hs, rec = _mesh_law(cfg, i)
         records.append(rec)
+        laws.append((k_mesh, (hc, hs) + ((m.te_cos, m.te_sin) if m.excite else ((), ()))))
+    orders, slots = mesh_slots(cfg, [law for _, law in laws])
+
+    def spread(values, idx):        # up to the last slot given (meshes[0]: as given)
+        row = np.zeros(idx[len(values) - 1] + 1 if len(values) else 0)
+        row[list(idx[:len(values)])] = values
+        return tuple(float(v) for v in row)
+
+    for i, (m, (k_mesh, law), idx) in enumerate(zip(cfg.meshes, laws, slots)):
+        geom, (sa, ka), (sb, kb) = _mesh_geometry(cfg, i, axes, gear_p)
+        ga, gb = cfg.gears[ka], cfg.gears[kb]
         parts = []
         for s, g, k, c in ((sa, ga, ka, geom.c_a), (sb, gb, kb, geom.c_b)):
             rotor = rotors[s]
             node = rotor.node_at(g.position)
-            idx = list(rotor.node_dofs(node)[:5]) + [_gear_psi(rotor, node, k, free_dof)]
-            parts.append((s, idx, c))
-        law = mesh_contact_parameters(k_mesh, m.backlash, m.damping, hc, hs, m.te_cos, m.te_sin)
-        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), **law, kind="mesh",
-                              group=m.name))
-    return out, records
+            idx_ = list(rotor.node_dofs(node)[:5]) + [_gear_psi(rotor, node, k, free_dof)]
+            parts.append((s, idx_, c))
+        hc, hs, tc, ts = (spread(v, idx) for v in law)
+        law_ = mesh_contact_parameters(k_mesh, m.backlash, m.damping, hc, hs, tc, ts)
+        out.append(ContactLaw(name=m.name, vector=PhysicalVector.of(*parts), **law_,
+                              kind="mesh", group=m.name))
+    return out, records, orders
 
 
 def external_couplings(cfg, rotors, shaft_p):

@@ -137,12 +137,15 @@ def _harmonics(laws, name: str, H: int) -> np.ndarray:
 def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None, *,
                omega_ref: float, omega_per_param: float, spin_per_param: float,
                monitor: int = 0, name: str = "gearbox", param_name: str = "rpm",
-               blocks=(), order_forcing=()) -> ReducedModel:
+               blocks=(), order_forcing=(), mesh_orders=None,
+               period_limit=None) -> ReducedModel:
     """Assemble the reduced model (see the module docstring); ``static_force`` is the
     constant external load (twist-angle torques, weight), in physical units; ``blocks``
     (:class:`LinearBlock`) add general low-rank rows after the links; ``order_forcing``:
     (n, cos force, sin force) PhysicalVectors of forcing at n times the base frequency W
-    (a torque order), each its own harmonic slot after the mesh harmonics 1..H."""
+    (a torque order), each its own harmonic slot after the mesh harmonics 1..H;
+    ``mesh_orders``: the orders of the contacts' harmonic slots (default 1..H), each contact's
+    harmonics given over all of them; ``period_limit``: the ReducedModel's."""
     offsets = subsystem_offsets(subsystems)
     m = int(offsets[-1])
     w = np.concatenate([2 * np.pi * s.freqs_hz for s in subsystems]) / omega_ref
@@ -185,6 +188,8 @@ def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None,
 
     H = max([len(getattr(c, a)) for c in contacts for a in
              ("stiffness_cos", "stiffness_sin", "error_cos", "error_sin")] + [1])
+    if mesh_orders is not None:
+        H = len(mesh_orders)
     F0 = np.zeros(m) if static_force is None else \
         modal_vector(static_force, subsystems, offsets) / omega_ref ** 2
     K = len(order_forcing)
@@ -192,7 +197,9 @@ def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None,
     for k, (_, fc, fs) in enumerate(order_forcing):
         Fc[H + k] = modal_vector(fc, subsystems, offsets) / omega_ref ** 2
         Fs[H + k] = modal_vector(fs, subsystems, offsets) / omega_ref ** 2
-    orders = np.concatenate([np.arange(1.0, H + 1.0), [float(o[0]) for o in order_forcing]])
+    orders = np.concatenate([np.arange(1.0, H + 1.0) if mesh_orders is None else
+                             np.asarray(mesh_orders, dtype=float),
+                             [float(o[0]) for o in order_forcing]])
     forcing = Forcing(F0, Fc, Fs)
     H = H + K
     if contacts:
@@ -216,4 +223,4 @@ def synthesize(subsystems, contacts, links, static_force: PhysicalVector | None,
                         param_name=param_name,
                         state_names=names + tuple(f"d/dt {n}" for n in names),
                         time_unit_s=1.0 / omega_ref, force_unit_n=omega_ref ** 2,
-                        length_unit="m", harmonic_orders=orders)
+                        length_unit="m", harmonic_orders=orders, period_limit=period_limit)

@@ -73,6 +73,8 @@ def conservative_model(model: ReducedModel) -> tuple[ReducedModel, float]:
     out = dataclasses.replace(model, damping=np.zeros_like(model.damping), coupling=coupling,
                               forcing=forcing, contacts=contacts, omega_per_param=1.0,
                               spin_per_param=0.0, param_name="omega",
+                              harmonic_orders=None,    # no forcing: the free period alone
+                              period_limit=None,
                               name=f"{model.name} (conservative)")
     return out, skew
 

@@ -7,7 +7,8 @@ phase by dphi = 2 pi / chunks_per_period at a constant parameter p_k:
 
 * chunk k starts at the accumulated phase phi_k = k dphi and lasts dt_k = dphi / W_k; it is
   integrated over the model's local time [t0, t0 + dt_k] with t0 = (phi_k mod 2 pi P) / W_k
-  (P = the model's period_multiple: 2 pi P is the excitation's whole period in phase),
+  (P = the forcing's common period in base periods, ``forcing_period_multiple``: 2 pi P is the
+  excitation's whole period in phase),
   so the excitation cos(n_h W_k t) continues the phase of the chunk before (the state is
   carried over unchanged);
 * ``midpoint=True`` (default): W_k = W(t_k + dt_k / 2), the speed at the chunk's midpoint
@@ -150,6 +151,13 @@ class RampResult:
         return self.t.size // self.samples_per_period
 
 
+
+def _phase_periods(model) -> int:
+    """Base periods after which the forcing's phase repeats: its common period (also where
+    the sampling solvers use base periods, ``multi_frequency``); a long count where it has
+    none within the model's limit (the phase then simply accumulates)."""
+    return model.forcing_period_multiple or 2 ** 40
+
 def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
          options: IntegrationOptions = IntegrationOptions(), chunks_per_period: int = 4,
          samples_per_period: int = 64, midpoint: bool = True, settle_periods: int = 0,
@@ -176,9 +184,11 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
     a_W = model.omega_per_param
     if settle_periods > 0:
         p0 = float(profile.params[0])
-        # whole excitation periods, so that the chunks continue its phase from 0
-        whole = -(-settle_periods // model.period_multiple)
-        tr = integrate(model, p0, run.u, 0.0, whole * model.excitation_period(p0),
+        # whole excitation periods, so that the chunks continue its phase from 0 (the
+        # forcing's own common period, also where the solvers sample per base period)
+        P = model.forcing_period_multiple or 1     # none: the slow phases restart there
+        whole = -(-settle_periods // P) * P
+        tr = integrate(model, p0, run.u, 0.0, whole * model.base_period(p0),
                        options=options)
         run.settle_steps = tr.steps
         run.add(tr)
@@ -206,7 +216,7 @@ def ramp(model: ReducedModel, profile: SpeedProfile, u0, *,
             W = a_W * float(profile.at(t + 0.5 * dt)) if midpoint else W
             n = min(spc, int(np.floor(W * dt / dphi_s * (1 - 1e-12))) + 1)
         p = W / a_W
-        t0 = (k % (chunks_per_period * model.period_multiple)) * dphi / W
+        t0 = (k % (chunks_per_period * _phase_periods(model))) * dphi / W
         t_eval = t0 + np.arange(n) * dphi_s / W
         chunk_model = model if inertia_force is None else _with_inertia(
             model, inertia_force, _chunk_slope(profile, slopes, t, dt), accelerated)
@@ -297,7 +307,7 @@ def _result(model, profile, rows, run: _Run, sps, cpp, midpoint, wall) -> RampRe
     # e'(t) = W_k de/dphase
     W = held * model.omega_per_param
     e, de = harmonic_series(ct.error_cos[rows], ct.error_sin[rows], 1.0,
-                            np.mod(phase, 2 * np.pi * model.period_multiple),
+                            np.mod(phase, 2 * np.pi * _phase_periods(model)),
                             orders=model.harmonic_orders)
     delta = cx - e
     delta_dot = cv - de * W

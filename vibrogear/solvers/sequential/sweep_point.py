@@ -255,7 +255,9 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
     clock.lap("lyapunov")
     orbit = None
-    near = near_periods(states) if n == 0 and settings.shoot else ()
+    # (no orbit to shoot where the samples are per mesh period of a multi-frequency forcing)
+    near = near_periods(states) if n == 0 and settings.shoot and \
+        not model.multi_frequency else ()
     if near and motion_class(n, ci, budget_used=settled_by == "budget") != CHAOTIC:
         # a slow transient or an attractor without a period? (orbit_check.py; a positive
         # exponent has already shown chaos)
