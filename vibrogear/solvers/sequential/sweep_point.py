@@ -60,8 +60,10 @@ from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
 from .record_window import RecordWindow, record_extrema, record_window
-from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
-                     metrics_with_errors, monitored_deformation, motion_class)
+from .motion import (CHAOTIC, FAILED, _monitored_rows, batch_blocks, best_defect,
+                     classify_period, contact_groups, count_clusters, metrics_with_errors,
+                     monitored_deformation, monitored_quantities, motion_class, period_defect,
+                     resolutions, resolved_period)
 from ...status import Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
@@ -161,15 +163,101 @@ def _metrics(model, param, u_rec, rec: RecordWindow, groups, R, T, n) -> dict:
                                period_n=n)
 
 
-def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
-    """period_n of each contact group from its deformations and rates alone."""
+def _group_periods(model, param, T, strob, groups, max_period, period_tol,
+                   resolved=None) -> dict:
+    """period_n of each contact group: a mesh's from its deformation and force at the
+    engineering resolution (``resolved``: (samples, resolutions) of
+    :func:`_resolution_test`), or, where those do not repeat, from its deformations and
+    rates within period_tol, as a bearing's."""
     out = {}
     t = np.zeros(strob.shape[0])          # period ends are at phase 0
     d, dd, _ = contact_kinematics(model, param, t, strob)
     for key, (_kind, idx) in groups.items():
-        s = np.hstack([d[idx].T, dd[idx].T])
-        out[f"period_n_{key}"] = classify_period(s, max_period, period_tol, split=len(idx))[0]
+        n = 0
+        if resolved is not None and f"delta_{key}" in resolved[0]:
+            mine = {k: resolved[0][k] for k in (f"delta_{key}", f"force_{key}")}
+            n = resolved_period(mine, resolved[1], max_period)[0]
+        if n == 0:
+            s = np.hstack([d[idx].T, dd[idx].T])
+            n = classify_period(s, max_period, period_tol, split=len(idx))[0]
+        out[f"period_n_{key}"] = n
     return out
+
+
+def _resolution_test(model, param, states, rec: RecordWindow, settings):
+    """(n, defect in resolutions, samples, resolutions) of the engineering-resolution
+    test: the stroboscopic samples of every monitored quantity
+    (:func:`~.motion.monitored_quantities`) against its resolution
+    (:func:`~.motion.resolutions`, from the quantity's range over the record's dense
+    samples)."""
+    q = monitored_quantities(model, param, np.zeros(len(states)), states)
+    samples = {k: v for k, (v, _kind) in q.items()}
+    kinds = {k: kind for k, (_v, kind) in q.items()}
+    ranges = {}
+    for k, v in samples.items():
+        lo, hi = (rec.ranges or {}).get(k, (math.inf, -math.inf))
+        ranges[k] = max(hi, float(np.max(v))) - min(lo, float(np.min(v)))
+    res = resolutions(model, ranges, kinds, rel=settings.resolution_rel,
+                      length_m=settings.resolution_length, force_n=settings.resolution_force)
+    n, defect = resolved_period(samples, res, settings.max_period)
+    return n, defect, samples, res
+
+
+def _monitored_name(model) -> str:
+    """The monitored deformation's name among the monitored quantities."""
+    if model.contacts.count == 0:
+        return "x0"
+    rows = _monitored_rows(model)
+    return "delta_" + next(k for k, j in rows.items() if j == model.monitor)
+
+
+def _qmax_error(rec: RecordWindow) -> float:
+    """Batch-means error of the monitored deformation's largest value: the standard error
+    of the mean of the block maxima over at most 8 blocks of the record's chunks."""
+    c = np.asarray(rec.chunk_max if rec.chunk_max is not None else [], dtype=float)
+    if c.size < 2 or not np.all(np.isfinite(c)):
+        return math.nan
+    L, B = batch_blocks(c.size, 0, 8)
+    if B < 2:
+        return math.nan
+    blocks = c[:L * B].reshape(B, L).max(axis=1)
+    return float(np.std(blocks, ddof=1) / math.sqrt(B))
+
+
+def _exponent(model, param, chunks, v0, options, T, chunk, counts):
+    """(exponent, interval, message) of Benettin's method on a record's chunks from the
+    tangent ``v0`` (:mod:`~.lyapunov`), in units of the model's time."""
+    scale = state_scale(np.vstack([chunks[0][0]] + [c[1] for c in chunks]), model.n_modes)
+    v, logs = v0, []
+    for start, ends, _ in chunks:
+        g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale, options=options)
+        counts[2] += calls
+        if st != Status.OK:
+            return math.nan, (math.nan, math.nan), \
+                f"Lyapunov exponent not determined: {st.message}"
+        logs.append(g)
+    lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+    return lam, ci, "ok"
+
+
+def _resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor) -> dict:
+    """The class's evidence at engineering resolution and the exponent in physical units:
+    ``resolution_period_n`` (0: the samples do not repeat within the resolution),
+    ``resolution_defect`` (the samples' largest difference at that period, in
+    resolutions; where none: the least over n, how many resolutions they spread),
+    ``qmax_res`` (the monitored deformation's resolution), ``qmax_err`` (batch means of
+    its largest value), ``lyapunov_per_s`` / ``lyapunov_lo_per_s`` (the exponent and its
+    95 % lower bound in 1/s) and ``lyapunov_per_period`` / ``lyapunov_lo_per_period`` /
+    ``lyapunov_floor_per_period`` (per excitation period: the log growth over one period;
+    the floor, the change at rtol / 10; NaN where not computed)."""
+    per_s = 1.0 / model.time_unit_s
+    return {"resolution_period_n": int(n_res),
+            "resolution_defect": float(res_defect),
+            "qmax_res": float(res.get(_monitored_name(model), math.nan)),
+            "qmax_err": _qmax_error(rec),
+            "lyapunov_per_s": float(lam) * per_s, "lyapunov_lo_per_s": float(ci[0]) * per_s,
+            "lyapunov_per_period": float(lam) * T, "lyapunov_lo_per_period": float(ci[0]) * T,
+            "lyapunov_floor_per_period": float(floor) * T}
 
 
 def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
@@ -232,31 +320,36 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
     clock.lap("record")
 
-    # ---- class and evidence
+    # ---- class and evidence: a period at the engineering resolution, else within
+    # period_tol on the full state
+    n_res, res_defect, res_samples, res = _resolution_test(model, param, states, rec, settings)
     n, defect = classify_period(states, max_period, period_tol, split=m)
-    lam, ci = math.nan, (math.nan, math.nan)
+    if n_res > 0:
+        n, defect = n_res, period_defect(states, n_res, split=m)
+    lam, ci, floor = math.nan, (math.nan, math.nan), math.nan
     msg = "ok"
+    P = model.period_multiple
     if n == 0 and settings.lyapunov and len(chunks) >= 2:
         scale = state_scale(np.vstack([u_rec, states]), m)
         # start along the last step of the stroboscopic map: the slowest direction
-        v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
-                              u_rec.size, index)
-        logs = []
-        for start, ends, _ in chunks:
-            g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
-                                            options=options)
-            counts[2] += calls
-            if st != Status.OK:
-                msg = f"Lyapunov exponent not determined: {st.message}"
-                logs = []
-                break
-            logs.append(g)
-        if logs:
-            lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+        v0 = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
+                               u_rec.size, index)
+        lam, ci, msg = _exponent(model, param, chunks, v0, options, T, chunk, counts)
+        if math.isfinite(ci[0]) and ci[0] > 0.0:
+            # its noise floor: the same estimate on the same record at rtol / 10; chaotic
+            # only where the lower bound exceeds the change
+            fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
+            rec_f = record_window(model, param, u_rec, R, T, chunk, groups, fine, counts,
+                                  has_monitor)
+            lam_f = math.nan
+            if not isinstance(rec_f, tuple):
+                lam_f = _exponent(model, param, rec_f.chunks, v0, fine, T, chunk, counts)[0]
+            floor = abs(lam_f - lam) if math.isfinite(lam_f) else math.inf
     clock.lap("lyapunov")
     orbit = None
     near = near_periods(states) if n == 0 and settings.shoot else ()
-    if near and motion_class(n, ci, budget_used=settled_by == "budget") != CHAOTIC:
+    if near and motion_class(n, ci, budget_used=settled_by == "budget",
+                             floor=floor) != CHAOTIC:
         # a slow transient or an attractor without a period? (orbit_check.py; a positive
         # exponent has already shown chaos)
         orbit = check_orbit(model, param, seed, period_tol=period_tol, options=options,
@@ -267,18 +360,24 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                             has_monitor)
             if not isinstance(again, tuple):
                 n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
+                r2 = _resolution_test(model, param, again.states, again, settings)
+                if r2[0] > 0:
+                    n2, d2 = r2[0], period_defect(again.states, r2[0], split=m)
                 if n2 > 0:
                     u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
                     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
+                    n_res, res_defect, res_samples, res = r2
                     lam, ci = math.nan, (math.nan, math.nan)   # periodic: multipliers instead
+                    floor = math.nan
     clock.lap("orbit_check")
-    cls = motion_class(n, ci, budget_used=settled_by == "budget")
-    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
-        if has_monitor else {}
+    budget_used = settled_by == "budget"
+    cls = motion_class(n, ci, budget_used=budget_used, floor=floor, period_multiple=P)
+    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol,
+                             (res_samples, res)) if has_monitor else {}
     for key in list(metrics):
         gn = metrics[key]
         metrics[key.replace("period_n_", "motion_class_")] = motion_class(
-            gn, ci, budget_used=settled_by == "budget") if gn > 0 else cls
+            gn, ci, budget_used=budget_used, floor=floor, period_multiple=P) if gn > 0 else cls
     if has_monitor:
         metrics.update(_metrics(model, param, u_rec, rec, groups, R, T, n))
         if rec.lost_events:
@@ -287,6 +386,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                        for k, v in metrics.items()}
     if orbit is not None:
         metrics.update(orbit.as_metrics())
+    metrics.update(_resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor))
     clock.lap("metrics")
     if settings.second_tolerance and cls == CHAOTIC:
         # two records of a chaotic motion diverge whatever the tolerance: their difference
