@@ -155,6 +155,39 @@ def test_hysteresis_band_and_jump_events():
     jumps = [e for e in f["events"] if e["kind"] == "jump"]
     assert sorted(e["direction"] for e in jumps) == ["down", "down"]    # onto and off the
     assert sorted(e["at"] for e in jumps) == [450.0, 650.0]              # upper state
+    # a file with the per-speed array (sweep.npz since hysteresis_<mesh>): the band's rule
+    # reads it as written, 20 um up-down difference at 500 and 600 rpm
+    arrays["hysteresis_G1"] = np.zeros(20)
+    arrays["hysteresis_G1"][[4, 5, 14, 15]] = 20e-6
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"monitored": "G1"}},
+                        FindingsConfig())
+    hyst = [b for b in f["bands"] if b["quantity"].startswith("hysteresis")]
+    assert [(b["from"], b["to"], b["metric"], b["op"], b["direction"]) for b in hyst] == \
+        [(500.0, 600.0, "hysteresis_G1", ">", "both")]
+    assert "compare" not in hyst[0]
+    assert check_bands_recompute(arrays, f) >= 1
+
+
+def test_jump_below_resolution_or_batch_error_is_not_reported():
+    """The three-stage model's 'qmax changes from 1.49 to 1.49 um': a change of 5 nm over a
+    run whose qmax spans 5 nm is 100 % of the range, but it is within the 1 nm / 1e-3
+    resolution only where qmax_res says so, and within the batch-means errors where those
+    are larger; a change above both is still a jump."""
+    q = np.full(20, 1.49e-6)
+    q[[5, 14]] = 1.495e-6                         # up and down at 600 rpm: +5 nm
+    arrays = _sweep(np.ones(10), np.ones(10))
+    arrays["qmax"] = q
+    rules = FindingsConfig()
+
+    def jumps(res, err):
+        a = {**arrays, "qmax_res": np.full(20, res), "qmax_err": np.full(20, err)}
+        f = derive_findings({"sweep.npz": a}, {"sweep": {"monitored": "G1"}}, rules)
+        return [e for e in f["events"] if e["kind"] == "jump"]
+
+    assert len(jumps(0.0, 0.0)) == 4                # old files: relative to the span only
+    assert jumps(10e-9, 0.0) == []                  # 5 nm below a 10 nm resolution
+    assert jumps(1e-9, 3e-9) == []                  # 5 nm below 3 + 3 nm batch-means error
+    assert len(jumps(1e-9, 1e-9)) == 4              # 5 nm above both: jumps
 
 
 def test_no_response_over_speed_gives_no_verdict(tmp_path):

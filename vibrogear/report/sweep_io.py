@@ -59,7 +59,8 @@ CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impac
 
 #: (pattern of a column name less its ``_err`` / ``_tol_err`` companion suffix, unit); the
 #: units a model's length, time and energy units fill in
-_UNITS = ((r"qmin|qmax", "{length}"), (r"impact_velocity_(rms|max)_.+", "{length}/s"),
+_UNITS = ((r"qmin|qmax|qmax_res|hysteresis_.+", "{length}"),
+          (r"lyapunov(_lo)?_per_s", "1/s"), (r"lyapunov(_lo|_floor)?_per_period", "1/period"), (r"impact_velocity_(rms|max)_.+", "{length}/s"),
           (r"rattle_.+", "{energy}"), (r"impacts(_drive_.+|_back_.+)?", "1/period"),
           (r"lyapunov(_lo|_hi)?", "1/{time}"), (r"wall_time", "s"),
           (r"transient_used", "periods"))
@@ -115,7 +116,25 @@ def _extra(result) -> dict:
         v = np.asarray(v)
         out[k] = v if v.dtype.kind == "i" else _finite(v)
     out.update(result.spectral)
+    out.update(hysteresis_arrays(result))
     return out
+
+
+def hysteresis_arrays(result) -> dict:
+    """``hysteresis_<monitored>``: per point, |qmax up - qmax down| at its speed (the same
+    value on the up and the down point; 0 where either failed or the sweep ran one way)."""
+    key = getattr(result, "monitored", "") or "monitored"
+    param = np.asarray(result.param, float)
+    d = np.asarray(result.direction, str)
+    ok = (np.asarray(result.status) == 0) & np.isfinite(np.asarray(result.qmax, float))
+    q = np.asarray(result.qmax, float)
+    h = np.zeros(param.size)
+    if np.any(d == "up") and np.any(d == "down"):
+        for k in range(param.size):
+            other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
+            if ok[k] and other.size:
+                h[k] = abs(q[k] - q[other[0]])
+    return {f"hysteresis_{key}": h}
 
 
 def sweep_arrays(result) -> dict:
