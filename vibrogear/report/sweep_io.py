@@ -5,9 +5,18 @@
   losses per excitation period), plus ``index``, ``status``, ``ok``, ``defect``,
   ``clusters``, ``u_end`` and the scalar error estimates; the motion class with its
   evidence: ``motion_class`` (int code) and ``motion_class_legend`` (its names, see
-  :mod:`vibrogear.solvers.sequential.motion`), ``lyapunov`` (largest exponent, per model time unit;
-  0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2, its 95 %
-  interval), ``transient_used`` (periods), ``settled_by``; per contact group
+  :mod:`vibrogear.solvers.sequential.motion`), ``lyapunov`` (largest exponent, in 1 / the model's
+  time unit; 0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2,
+  its 95 % interval), the same in physical terms: ``lyapunov_per_s`` and
+  ``lyapunov_lo_per_s`` [1/s], ``lyapunov_per_period``, ``lyapunov_lo_per_period`` and
+  ``lyapunov_floor_per_period`` (per excitation period; the floor: the change of the
+  exponent at rtol / 10, computed where the lower bound is above 0); the class's
+  resolution evidence: ``resolution_period_n`` (the period at which every mesh
+  deformation and force repeats within its resolution, 0: none), ``resolution_defect``
+  (their largest difference in resolutions), ``qmax_res`` (the monitored deformation's
+  resolution) and ``qmax_err`` (batch-means error of qmax); ``hysteresis_<mesh>``
+  (|qmax up - qmax down| at each point's speed, the monitored mesh's; 0 where either
+  failed); ``transient_used`` (periods), ``settled_by``; per contact group
   ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics
   (``impacts_drive_<mesh>``, ``impacts_back_<mesh>``, ``impact_velocity_rms_<mesh>``,
   ``impact_velocity_max_<mesh>``, ``contact_fraction_<mesh>``, ``rattle_<mesh>``,

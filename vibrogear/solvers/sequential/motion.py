@@ -1,12 +1,32 @@
 """Motion classes with evidence and the rattle / contact metrics of a sweep point.
 
-Motion classes (integer codes, :data:`MOTION_LEGEND`):
+A class is a claim about the quantities an engineer reads, at a stated resolution: the
+deformation and the force of every gear mesh (every two-sided contact) and of the monitored
+contact (:func:`monitored_quantities`; a model without contacts: its first coordinate).
+Each quantity's resolution is ``resolution_rel`` (default 1e-3) of its range over the
+record window (dense samples, 16 per base period), but not below an absolute floor:
+``resolution_length`` (1 nm) for a deformation, ``resolution_force`` (1 N) for a force
+(models with physical units; the nondimensional impact pair has no floor)
+(:func:`resolutions`, ``[sweep]``).  Bearings' rolling elements are not monitored: where
+they switch contact at sub-nanometre amplitude without moving a mesh by its resolution,
+the gearbox is periodic.  Bearing loads are not recorded by the sweep.
 
-* ``PERIODIC`` (1): the stroboscopic samples repeat with a period n <= max_period
-  (``period_n`` gives n; evidence: the periodicity defect);
-* ``QUASI_PERIODIC`` (2): no period, the transient stopped because its statistics
-  settled, and the 95 % interval of the largest Lyapunov exponent contains 0;
-* ``CHAOTIC`` (3): no period, and the interval lies above 0;
+Motion classes (integer codes, :data:`MOTION_LEGEND`), relative to the excitation period
+T (the common period of all forcing frequencies, ``ReducedModel.excitation_period``):
+
+* ``PERIODIC`` (1): the stroboscopic samples (one per T) of every monitored quantity repeat
+  within its resolution with a period n <= max_period (:func:`resolved_period`), or the
+  full state repeats within ``period_tol`` (:func:`classify_period`, the stricter test);
+  ``period_n`` gives n;
+* ``MULTI_FREQUENCY`` (6, "multi-frequency forced"): period 1 where the forcing has
+  several frequencies (T spans ``period_multiple`` > 1 base periods): the response follows
+  the forcing; seen one base period at a time it would look quasi-periodic;
+* ``QUASI_PERIODIC`` (2): no period at the resolution, the transient stopped because its
+  statistics settled, and the 95 % interval of the largest Lyapunov exponent reaches 0 or
+  its noise floor;
+* ``CHAOTIC`` (3): no period at the resolution, and the interval's lower bound exceeds 0
+  and the exponent's noise floor: the change of the exponent when the same record is
+  integrated again at rtol / 10 (and the same estimate made on it);
 * ``NOT_SETTLED`` (4): no period, not chaotic, and either the interval lies below 0 (the
   motion still converges: a transient longer than the budget, or a period > max_period)
   or the transient budget was used up;
@@ -16,7 +36,8 @@ Motion classes (integer codes, :data:`MOTION_LEGEND`):
 
 Per contact group (each gear mesh, i.e. each two-sided contact; each bearing, its
 one-sided rolling-element contacts grouped by the name before ':') the period is
-classified again on the group's deformations alone: the loaded mesh can be period-1
+classified again on the group's own quantities (a mesh: its deformation and force at the
+resolution; else, and for a bearing, its deformations and rates within period_tol): the loaded mesh can be period-1
 while a free gear rattles; a group without a period of its own takes the point's class.
 
 Contact metrics over a record window of P excitation periods, from the integrator's

@@ -104,7 +104,8 @@ class PointRecord:
     wall_time: float = 0.0
     states: np.ndarray | None = None   # (R, n) Poincare samples of the full state (optional)
     motion_class: int = FAILED         # motion.MOTION_LEGEND index
-    lyapunov: float = math.nan         # largest Lyapunov exponent (per model time unit)
+    lyapunov: float = math.nan         # largest Lyapunov exponent (1 / model time unit;
+    #: metrics lyapunov_per_s [1/s], lyapunov_per_period [per excitation period])
     lyapunov_ci: tuple = (math.nan, math.nan)   # its 95 % interval
     transient_used: int = 0            # transient periods integrated
     settled_by: str = ""               # "map", "statistics", "budget"
