@@ -15,9 +15,9 @@ Motion classes (integer codes, :data:`MOTION_LEGEND`), relative to the excitatio
 T (the common period of all forcing frequencies, ``ReducedModel.excitation_period``):
 
 * ``PERIODIC`` (1): the stroboscopic samples (one per T) of every monitored quantity repeat
-  within its resolution with a period n <= max_period (:func:`resolved_period`), or the
-  full state repeats within ``period_tol`` (:func:`classify_period`, the stricter test);
-  ``period_n`` gives n;
+  within its resolution with a period n <= max_period (:func:`resolved_period`; n > 1
+  only after a settled transient, not where the budget ran out), or the full state repeats
+  within ``period_tol`` (:func:`classify_period`, the stricter test); ``period_n`` gives n;
 * ``MULTI_FREQUENCY`` (6, "multi-frequency forced"): period 1 where the forcing has
   several frequencies (T spans ``period_multiple`` > 1 base periods): the response follows
   the forcing; seen one base period at a time it would look quasi-periodic;
@@ -409,7 +409,8 @@ def resolutions(model: ReducedModel, ranges: dict, kinds: dict, *, rel: float = 
 def resolved_period(samples: dict, res: dict, max_period: int) -> tuple[int, float]:
     """(n, defect): the smallest n <= max_period at which the stroboscopic samples of
     every quantity agree with those n periods later within its resolution:
-    max_k |q_{k+n} - q_k| <= res_q for every q of ``samples`` {name: (R,)}; ``defect``
+    max_k |q_{k+n} - q_k| <= res_q for every q of ``samples`` {name: (R,)} (and, for n > 1,
+    differ at each divisor of n by more than 10 resolutions); ``defect``
     the largest of those differences in units of the resolution (<= 1).  Where no n
     qualifies: (0, the least over n of that largest difference, > 1: how many resolutions
     the samples spread); (0, nan) when a sample is not finite.""" 
@@ -418,15 +419,19 @@ def resolved_period(samples: dict, res: dict, max_period: int) -> tuple[int, flo
         return 0, math.nan
     R = qs[0].size
     scale = [float(res[k]) for k in samples]
-    best = math.inf
+    best, worst_at = math.inf, {}
     for n in range(1, min(int(max_period), R - 1) + 1):
         worst = 0.0
         for q, r in zip(qs, scale):
             d = float(np.max(np.abs(q[n:] - q[:-n])))
             worst = max(worst, d / r if r > 0 else (0.0 if d == 0 else math.inf))
-        if worst <= 1.0:
-            return n, worst
+        worst_at[n] = worst
         best = min(best, worst)
+        # as classify_period: a period-n cycle is resolved from each shorter divisor cycle
+        # by 10 resolutions; a slowly decaying free vibration whose frequency is a rational
+        # multiple of the excitation's passes at n > 1 while n = 1 nearly passes
+        if worst <= 1.0 and all(worst_at[d] > 10.0 for d in range(1, n) if n % d == 0):
+            return n, worst
     return 0, best
 
 

@@ -324,6 +324,11 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     # ---- class and evidence: a period at the engineering resolution, else within
     # period_tol on the full state
     n_res, res_defect, res_samples, res = _resolution_test(model, param, states, rec, settings)
+    if n_res > 1 and settled_by == "budget":
+        # a free vibration still decaying at a rational multiple of the excitation
+        # frequency repeats after n > 1 periods within the resolution: a period n > 1 needs
+        # a settled transient (its distance from a period no longer shrinking)
+        n_res = 0
     n, defect = classify_period(states, max_period, period_tol, split=m)
     if n_res > 0:
         n, defect = n_res, period_defect(states, n_res, split=m)
