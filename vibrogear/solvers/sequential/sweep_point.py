@@ -330,6 +330,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         # a settled transient (its distance from a period no longer shrinking)
         n_res = 0
     n, defect = classify_period(states, max_period, period_tol, split=m)
+    strict = n > 0
     if n_res > 0:
         n, defect = n_res, period_defect(states, n_res, split=m)
     lam, ci, floor = math.nan, (math.nan, math.nan), math.nan
@@ -353,7 +354,10 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             floor = abs(lam_f - lam) if math.isfinite(lam_f) else math.inf
     clock.lap("lyapunov")
     orbit = None
-    near = near_periods(states) if n == 0 and settings.shoot else ()
+    # shot too: a point periodic at the resolution whose transient ran out of budget (its
+    # record still drifts within the resolution; on the orbit its extrema are exact)
+    unsettled = n == 0 or (not strict and settled_by == "budget")
+    near = near_periods(states) if unsettled and settings.shoot else ()
     if near and motion_class(n, ci, budget_used=settled_by == "budget",
                              floor=floor) != CHAOTIC:
         # a slow transient or an attractor without a period? (orbit_check.py; a positive
