@@ -296,3 +296,26 @@ def test_branch_events_state_the_stability_on_each_side():
     assert "jumps" in ev[("LP", 200.0)]["evidence"]
     assert ev[("NS", 250.0)]["stability"] == "unstable → unstable"
     assert ev[("LP", 300.0)]["stability"] == "unstable → stable"
+
+
+def test_chaotic_evidence_in_physical_units_and_multi_frequency_band():
+    """A chaotic band quotes the exponent's lower bound in 1/s and per excitation period with
+    its noise floor (no 'per time unit'); a multi-frequency forced band is 'fine' and
+    recomputes from motion_class == 6."""
+    cls = np.array([3, 3, 6, 6] + [1] * 6 + [1] * 6 + [6, 6, 3, 3])
+    arrays = _sweep(np.ones(10), np.ones(10), cls=cls)
+    arrays["lyapunov_ci"] = np.tile([0.05, 0.07], (20, 1))
+    arrays["lyapunov_lo_per_s"] = np.full(20, 314.0)
+    arrays["lyapunov_lo_per_period"] = np.full(20, 0.8)
+    arrays["lyapunov_floor_per_period"] = np.full(20, 0.2)
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"monitored": "G1"}},
+                        FindingsConfig())
+    chaos = [b for b in f["bands"] if b["quantity"] == "chaotic motion"]
+    assert [(b["from"], b["to"], b["direction"]) for b in chaos] == [(100.0, 200.0, "both")]
+    text = chaos[0]["evidence"]
+    assert "314 1/s" in text and "0.80 per excitation period" in text and "floor 0.20" in text
+    assert "time unit" not in text
+    multi = [b for b in f["bands"] if b["quantity"] == "multi-frequency forced motion"]
+    assert [(b["from"], b["to"], b["severity"], b["metric"], b["threshold"]) for b in multi] == \
+        [(300.0, 400.0, "fine", "motion_class", 6)]
+    assert check_bands_recompute(arrays, f) >= 2
