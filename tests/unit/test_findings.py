@@ -319,3 +319,17 @@ def test_chaotic_evidence_in_physical_units_and_multi_frequency_band():
     assert [(b["from"], b["to"], b["severity"], b["metric"], b["threshold"]) for b in multi] == \
         [(300.0, 400.0, "fine", "motion_class", 6)]
     assert check_bands_recompute(arrays, f) >= 2
+
+
+def test_summary_jumps_honour_resolution_and_errors():
+    """summary.json's jumps_up / jumps_down (analyses/sweep.py) follow the same rule as the
+    findings' jump events: 5 nm steps on a 5 nm span are jumps only above the resolution
+    and the batch-means errors."""
+    from vibrogear.analyses.sweep import jumps
+
+    p = np.arange(5) * 100.0
+    q = np.array([1.49, 1.49, 1.495, 1.495, 1.49]) * 1e-6
+    assert jumps(p, q) == [150.0, 350.0]
+    assert jumps(p, q, res=np.full(5, 1e-8)) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, 3e-9)) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, np.nan)) == [150.0, 350.0]
