@@ -76,8 +76,8 @@ from ..integrator.contact_eval import contact_kinematics
 
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
            "MULTI_FREQUENCY", "MOTION_LEGEND", "monitored_quantities", "resolutions",
-           "resolved_period", "period_defect", "motion_class", "contact_groups", "window_metrics",
-           "metrics_with_errors", "classify_period", "count_clusters",
+           "resolved_period", "period_defect", "monitored_name", "motion_class",
+           "contact_groups", "window_metrics", "metrics_with_errors", "classify_period", "count_clusters",
            "monitored_deformation", "best_defect", "deformation_statistics", "batch_blocks"]
 
 FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC, MULTI_FREQUENCY = range(7)
@@ -368,6 +368,14 @@ def _monitored_rows(model: ReducedModel) -> dict:
                 key += "_"
             rows[key] = j
     return rows
+
+
+def monitored_name(model: ReducedModel) -> str:
+    """The monitored deformation's name among :func:`monitored_quantities`
+    (``delta_<contact>``; ``x0`` without contacts)."""
+    if model.contacts.count == 0:
+        return "x0"
+    return "delta_" + next(k for k, j in _monitored_rows(model).items() if j == model.monitor)
 
 
 def monitored_quantities(model: ReducedModel, param: float, t, states) -> dict:

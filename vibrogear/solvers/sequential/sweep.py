@@ -35,7 +35,8 @@ from ...config.options import SweepOptions
 from ...models.reduced import ReducedModel
 from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
-from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
+from .motion import (MOTION_LEGEND, classify_period, count_clusters, monitored_deformation,
+                     monitored_name)
 from .strob_evidence import spectral_evidence
 from ...status import Outcome, Status
 from .sweep_point import PHASES, PointRecord, run_point
@@ -244,9 +245,7 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
 def monitored_key(model: ReducedModel) -> str:
     """The monitored contact's name as the per-contact arrays spell it (``x0`` without
     contacts)."""
-    from .sweep_point import _monitored_name
-
-    return _monitored_name(model).removeprefix("delta_")
+    return monitored_name(model).removeprefix("delta_")
 
 
 def assemble_result(records, *, n_states: int, record_periods: int, options, period_tol,

@@ -60,7 +60,7 @@ from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
 from .record_window import RecordWindow, record_extrema, record_window
-from .motion import (CHAOTIC, FAILED, _monitored_rows, batch_blocks, best_defect,
+from .motion import (CHAOTIC, FAILED, batch_blocks, best_defect, monitored_name,
                      classify_period, contact_groups, count_clusters, metrics_with_errors,
                      monitored_deformation, monitored_quantities, motion_class, period_defect,
                      resolutions, resolved_period)
@@ -204,14 +204,6 @@ def _resolution_test(model, param, states, rec: RecordWindow, settings):
     return n, defect, samples, res
 
 
-def _monitored_name(model) -> str:
-    """The monitored deformation's name among the monitored quantities."""
-    if model.contacts.count == 0:
-        return "x0"
-    rows = _monitored_rows(model)
-    return "delta_" + next(k for k, j in rows.items() if j == model.monitor)
-
-
 def _qmax_error(rec: RecordWindow) -> float:
     """Batch-means error of the monitored deformation's largest value: the standard error
     of the mean of the block maxima over at most 8 blocks of the record's chunks."""
@@ -254,7 +246,7 @@ def _resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor) -
     per_s = 1.0 / model.time_unit_s
     return {"resolution_period_n": int(n_res),
             "resolution_defect": float(res_defect),
-            "qmax_res": float(res.get(_monitored_name(model), math.nan)),
+            "qmax_res": float(res.get(monitored_name(model), math.nan)),
             "qmax_err": _qmax_error(rec),
             "lyapunov_per_s": float(lam) * per_s, "lyapunov_lo_per_s": float(ci[0]) * per_s,
             "lyapunov_per_period": float(lam) * T, "lyapunov_lo_per_period": float(ci[0]) * T,
