@@ -23,13 +23,19 @@ periods T, so its end state is again at phase 0.
   record_periods // 8) periods (at least 1; one integrator call each, the blocks of the
   exponent's interval): stroboscopic samples, extrema of the monitored deformation (located
   by the integrator), located contact events.
-* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
-  is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
-  (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
-  trajectory per chunk) decides chaotic / quasi-periodic / not settled.  Per contact
-  group, the period again on the group's deformations alone.
-* **Orbit check** (``shoot``, :mod:`~.orbit_check`): a point without a period is first shot
-  from its settled state (periods 1 and 2).  A stable orbit makes it periodic
+* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples, at the
+  engineering resolution (every mesh deformation and force within ``resolution_rel`` of
+  its range over the record, or 1 nm / 1 N; the record's dense samples give the ranges) or
+  within ``period_tol`` on the full state; where there is none and ``lyapunov`` is on, the
+  largest Lyapunov exponent over the record window (:mod:`~.lyapunov`: each record chunk is
+  the reference trajectory, one perturbed trajectory per chunk) decides chaotic /
+  quasi-periodic / not settled; where its lower bound is above 0, the same estimate is
+  repeated on the record integrated again at rtol / 10, and the change is its noise floor,
+  which the lower bound must exceed for chaos.  Per contact group, the period again on the
+  group's own quantities.
+* **Orbit check** (``shoot``, :mod:`~.orbit_check`): a point without a period (or periodic
+  at the resolution only, its transient budget used up) is first shot from its settled
+  state (periods 1 and 2).  A stable orbit makes it periodic
   (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
