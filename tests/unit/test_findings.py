@@ -155,6 +155,39 @@ def test_hysteresis_band_and_jump_events():
     jumps = [e for e in f["events"] if e["kind"] == "jump"]
     assert sorted(e["direction"] for e in jumps) == ["down", "down"]    # onto and off the
     assert sorted(e["at"] for e in jumps) == [450.0, 650.0]              # upper state
+    # a file with the per-speed array (sweep.npz since hysteresis_<mesh>): the band's rule
+    # reads it as written, 20 um up-down difference at 500 and 600 rpm
+    arrays["hysteresis_G1"] = np.zeros(20)
+    arrays["hysteresis_G1"][[4, 5, 14, 15]] = 20e-6
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"monitored": "G1"}},
+                        FindingsConfig())
+    hyst = [b for b in f["bands"] if b["quantity"].startswith("hysteresis")]
+    assert [(b["from"], b["to"], b["metric"], b["op"], b["direction"]) for b in hyst] == \
+        [(500.0, 600.0, "hysteresis_G1", ">", "both")]
+    assert "compare" not in hyst[0]
+    assert check_bands_recompute(arrays, f) >= 1
+
+
+def test_jump_below_resolution_or_batch_error_is_not_reported():
+    """The three-stage model's 'qmax changes from 1.49 to 1.49 um': a change of 5 nm over a
+    run whose qmax spans 5 nm is 100 % of the range, but it is within the 1 nm / 1e-3
+    resolution only where qmax_res says so, and within the batch-means errors where those
+    are larger; a change above both is still a jump."""
+    q = np.full(20, 1.49e-6)
+    q[[5, 14]] = 1.495e-6                         # up and down at 600 rpm: +5 nm
+    arrays = _sweep(np.ones(10), np.ones(10))
+    arrays["qmax"] = q
+    rules = FindingsConfig()
+
+    def jumps(res, err):
+        a = {**arrays, "qmax_res": np.full(20, res), "qmax_err": np.full(20, err)}
+        f = derive_findings({"sweep.npz": a}, {"sweep": {"monitored": "G1"}}, rules)
+        return [e for e in f["events"] if e["kind"] == "jump"]
+
+    assert len(jumps(0.0, 0.0)) == 4                # old files: relative to the span only
+    assert jumps(10e-9, 0.0) == []                  # 5 nm below a 10 nm resolution
+    assert jumps(1e-9, 3e-9) == []                  # 5 nm below 3 + 3 nm batch-means error
+    assert len(jumps(1e-9, 1e-9)) == 4              # 5 nm above both: jumps
 
 
 def test_no_response_over_speed_gives_no_verdict(tmp_path):
@@ -263,3 +296,40 @@ def test_branch_events_state_the_stability_on_each_side():
     assert "jumps" in ev[("LP", 200.0)]["evidence"]
     assert ev[("NS", 250.0)]["stability"] == "unstable → unstable"
     assert ev[("LP", 300.0)]["stability"] == "unstable → stable"
+
+
+def test_chaotic_evidence_in_physical_units_and_multi_frequency_band():
+    """A chaotic band quotes the exponent's lower bound in 1/s and per excitation period with
+    its noise floor (no 'per time unit'); a multi-frequency forced band is 'fine' and
+    recomputes from motion_class == 6."""
+    cls = np.array([3, 3, 6, 6] + [1] * 6 + [1] * 6 + [6, 6, 3, 3])
+    arrays = _sweep(np.ones(10), np.ones(10), cls=cls)
+    arrays["lyapunov_ci"] = np.tile([0.05, 0.07], (20, 1))
+    arrays["lyapunov_lo_per_s"] = np.full(20, 314.0)
+    arrays["lyapunov_lo_per_period"] = np.full(20, 0.8)
+    arrays["lyapunov_floor_per_period"] = np.full(20, 0.2)
+    f = derive_findings({"sweep.npz": arrays}, {"sweep": {"monitored": "G1"}},
+                        FindingsConfig())
+    chaos = [b for b in f["bands"] if b["quantity"] == "chaotic motion"]
+    assert [(b["from"], b["to"], b["direction"]) for b in chaos] == [(100.0, 200.0, "both")]
+    text = chaos[0]["evidence"]
+    assert "314 1/s" in text and "0.80 per excitation period" in text and "floor 0.20" in text
+    assert "time unit" not in text
+    multi = [b for b in f["bands"] if b["quantity"] == "multi-frequency forced motion"]
+    assert [(b["from"], b["to"], b["severity"], b["metric"], b["threshold"]) for b in multi] == \
+        [(300.0, 400.0, "fine", "motion_class", 6)]
+    assert check_bands_recompute(arrays, f) >= 2
+
+
+def test_summary_jumps_honour_resolution_and_errors():
+    """summary.json's jumps_up / jumps_down (analyses/sweep.py) follow the same rule as the
+    findings' jump events: 5 nm steps on a 5 nm span are jumps only above the resolution
+    and the batch-means errors."""
+    from vibrogear.analyses.sweep import jumps
+
+    p = np.arange(5) * 100.0
+    q = np.array([1.49, 1.49, 1.495, 1.495, 1.49]) * 1e-6
+    assert jumps(p, q) == [150.0, 350.0]
+    assert jumps(p, q, res=np.full(5, 1e-8)) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, 3e-9)) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, np.nan)) == [150.0, 350.0]

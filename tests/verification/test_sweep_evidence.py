@@ -104,6 +104,13 @@ def test_lyapunov_positive_on_chaotic_impact_pair():
     s = sweep(model, [Om], SweepOptions(directions=("up",), transient_periods=200, record_periods=64, extra_transient_periods=0), options=OPT, u0=u)
     assert s.motion_class[0] == CHAOTIC and s.period_n[0] == 0
     assert s.lyapunov_ci[0][0] > 0.0
+    # the lower bound is above the exponent's noise floor: the change when the same record
+    # is integrated again at rtol / 10 (per excitation period both)
+    g = s.metrics
+    assert 0.0 <= g["lyapunov_floor_per_period"][0] < g["lyapunov_lo_per_period"][0]
+    assert g["lyapunov_lo_per_period"][0] == pytest.approx(s.lyapunov_ci[0][0] * T)
+    # samples spread by many resolutions (1e-3 of the range: no floor on this model)
+    assert g["resolution_period_n"][0] == 0 and g["resolution_defect"][0] > 10
 
 
 @pytest.mark.parametrize("prm,Om,n", [(P_A, 0.8, 1), (P_B, 0.85, 2)],

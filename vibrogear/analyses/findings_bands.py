@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..config.numbers import fmt, fmt_param, range_text
-from ..solvers.sequential.motion import CHAOTIC, NOT_SETTLED, APERIODIC, QUASI_PERIODIC
+from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MULTI_FREQUENCY, NOT_SETTLED,
+                                        QUASI_PERIODIC)
 
 __all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands", "map_bands",
            "mesh_and_bearing_names", "PARAM_UNITS"]
@@ -263,16 +264,34 @@ def _motion_bands(arrays, rules, kw) -> list[Band]:
     out = []
     lyap = "lyapunov_ci" in arrays
 
+    def exponent(idx) -> str:
+        """The exponent's 95 % lower bound in 1/s and per excitation period, with its noise
+        floor (files written before these arrays: per excitation period not known)."""
+        parts = []
+        if "lyapunov_lo_per_s" in arrays and kw["param_unit"] == "rpm":
+            parts.append(f"{_span_text(np.asarray(arrays['lyapunov_lo_per_s'], float)[idx])}"
+                         " 1/s")
+        if "lyapunov_lo_per_period" in arrays:
+            txt = f"{_span_text(np.asarray(arrays['lyapunov_lo_per_period'], float)[idx])} " \
+                  "per excitation period"
+            if "lyapunov_floor_per_period" in arrays:
+                fl = np.asarray(arrays["lyapunov_floor_per_period"], float)[idx]
+                txt += f", above its noise floor {_span_text(fl)} (the change at rtol / 10)"
+            parts.append(txt)
+        return "; ".join(parts)
+
     def chaos(idx):
         text = f"chaotic at {_points(idx.size)}"
         if lyap:
-            lo = np.asarray(arrays["lyapunov_ci"], float)[idx, 0]
-            text += "; largest Lyapunov exponent > 0 with 95 % confidence (lower bound " \
-                    f"{_span_text(lo)} per time unit)"
+            ev = exponent(idx)
+            text += "; the stroboscopic samples do not repeat within the resolution and the " \
+                    "largest Lyapunov exponent is > 0 with 95 % confidence" + \
+                    (f" (lower bound {ev})" if ev else "")
         return text
 
     def torus(idx):
-        text = f"quasi-periodic at {_points(idx.size)} (Lyapunov interval contains 0)"
+        text = f"quasi-periodic at {_points(idx.size)} (no period within the resolution; " \
+               "Lyapunov interval reaches 0 or its noise floor)"
         if "base_f2_order" in arrays:
             nu = np.asarray(arrays["base_f2_order"], float)[idx]
             nu = nu[nu > 0]
@@ -289,7 +308,11 @@ def _motion_bands(arrays, rules, kw) -> list[Band]:
                                           f"budget at {_points(idx.size)}"),
                                          ("aperiodic motion", APERIODIC, rules.not_settled,
                                           lambda idx: f"no period found at {_points(idx.size)} "
-                                          "(no Lyapunov exponent computed)")):
+                                          "(no Lyapunov exponent computed)"),
+                                         ("multi-frequency forced motion", MULTI_FREQUENCY,
+                                          "fine", lambda idx: f"follows the forcing's "
+                                          f"frequencies at {_points(idx.size)}: it repeats "
+                                          "every common excitation period")):
         out += _bands(arrays, dict(quantity=quantity, where="gearbox" if kw["param_unit"]
                                    == "rpm" else "system", metric="motion_class", op="==",
                                    threshold=code, severity=severity), ev, **kw)
@@ -309,12 +332,20 @@ def _motion_bands(arrays, rules, kw) -> list[Band]:
 
 def _hysteresis(arrays, rules, param_unit, scale, unit,
                 monitored) -> tuple[list[Band], list[dict]]:
-    """Jumps per direction (events) and the band where up and down differ."""
+    """Jumps per direction (events) and the band where up and down differ.
+
+    A jump: neighbouring points of one direction whose qmax differs by more than
+    ``jump_rel`` of its range over the run, than the resolution of either point
+    (``qmax_res``) and than the sum of their batch-means errors (``qmax_err``).  The band:
+    ``hysteresis_<mesh>`` (|qmax up - qmax down| per speed, sweep.npz) above
+    ``hysteresis_rel`` of the qmax range or the largest resolution, whichever is larger."""
     param = np.asarray(arrays["param"], float)
     d = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
     ok = np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
     qmax = np.asarray(arrays["qmax"], float)
     span = float(np.ptp(qmax[ok])) if np.any(ok) else 0.0
+    res = np.asarray(arrays.get("qmax_res", np.zeros(param.size)), float)
+    err = np.asarray(arrays.get("qmax_err", np.zeros(param.size)), float)
     events = []
     for direction in ("up", "down"):
         sel = np.flatnonzero((d == direction) & ok)
@@ -322,7 +353,9 @@ def _hysteresis(arrays, rules, param_unit, scale, unit,
         if direction == "down":
             sel = sel[::-1]
         for a, b in zip(sel[:-1], sel[1:]):
-            if span > 0 and abs(qmax[b] - qmax[a]) > rules.jump_rel * span:
+            step = abs(qmax[b] - qmax[a])
+            if span > 0 and step > rules.jump_rel * span and step > max(res[a], res[b]) \
+                    and step > err[a] + err[b]:
                 events.append({"kind": "jump", "at": float(0.5 * (param[a] + param[b])),
                                "where": monitored, "direction": direction,
                                "evidence": f"going {direction}, qmax changes from "
@@ -331,24 +364,30 @@ def _hysteresis(arrays, rules, param_unit, scale, unit,
                                f"{param_unit}".replace("  ", " ")})
     if not (np.any(d == "up") and np.any(d == "down")) or span == 0:
         return [], events
-    grid = np.unique(param)
-    diff = np.zeros(grid.size)
-    both_ok = np.zeros(grid.size, bool)
-    for i, p in enumerate(grid):
-        u = np.flatnonzero((param == p) & (d == "up") & ok)
-        w = np.flatnonzero((param == p) & (d == "down") & ok)
-        if u.size and w.size:
-            diff[i] = abs(qmax[u[0]] - qmax[w[0]])
-            both_ok[i] = True
-    thr = rules.hysteresis_rel * span
-    mask = (diff > thr) & both_ok
+    key = next((k for k in arrays if k.startswith("hysteresis_")), None)
+    h = np.asarray(arrays[key], float) if key else _up_down_difference(param, d, ok, qmax)
+    # a file written before the array: the rule on qmax, compared up against down
+    metric, extra = (key, {}) if key else ("qmax", {"compare": "abs(up - down)"})
+    thr = max(rules.hysteresis_rel * span, float(np.max(res[ok], initial=0.0)))
+    grid, masks = grid_masks({**arrays, "_h": h}, "_h", ">", thr)
+    mask = masks["up"] & masks["down"]
     step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
     bands = []
     for i0, i1 in segments(mask):
+        idx = _select(arrays, grid, "both", i0, i1)
         bands.append(Band("hysteresis (up and down differ)", monitored, "both", float(grid[i0]),
-                          float(grid[i1]), rules.hysteresis, "qmax", ">", thr,
+                          float(grid[i1]), rules.hysteresis, metric, ">", thr,
                           f"up and down end in different states: qmax differs by up to "
-                          f"{fmt(diff[i0:i1 + 1].max() * scale, 2)} {unit}".rstrip(),
-                          edge_err=step, points=int(i1 - i0 + 1),
-                          extra={"compare": "abs(up - down)"}))
+                          f"{fmt(h[idx].max() * scale, 2)} {unit}".rstrip(),
+                          edge_err=step, points=int(i1 - i0 + 1), extra=extra))
     return bands, events
+
+
+def _up_down_difference(param, d, ok, qmax) -> np.ndarray:
+    """|qmax up - qmax down| per point at its speed (0 where either failed)."""
+    h = np.zeros(param.size)
+    for k in range(param.size):
+        other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
+        if ok[k] and other.size:
+            h[k] = abs(qmax[k] - qmax[other[0]])
+    return h

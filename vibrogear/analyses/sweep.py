@@ -43,13 +43,19 @@ class SweepStudyResult:
     study: Study
 
 
-def jumps(param, q, rel: float = 0.15) -> list[float]:
-    """Midpoints between successive sweep points whose q differs by > rel * range."""
+def jumps(param, q, rel: float = 0.15, res=None, err=None) -> list[float]:
+    """Midpoints between successive sweep points whose q differs by > rel * range, by more
+    than either point's resolution ``res`` and than the sum of their batch-means errors
+    ``err`` (NaN or absent: 0)."""
     q = np.asarray(q, float)
     ok = np.isfinite(q)
     span = np.ptp(q[ok]) if np.any(ok) else 0.0
+    z = np.zeros(q.size)
+    res = z if res is None else np.nan_to_num(np.asarray(res, float))
+    err = z if err is None else np.nan_to_num(np.asarray(err, float))
     return [0.5 * (param[k] + param[k - 1]) for k in range(1, len(q))
-            if ok[k] and ok[k - 1] and abs(q[k] - q[k - 1]) > rel * span > 0]
+            if ok[k] and ok[k - 1] and abs(q[k] - q[k - 1]) > rel * span > 0
+            and abs(q[k] - q[k - 1]) > max(res[k], res[k - 1], err[k] + err[k - 1])]
 
 
 def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callback=None,
@@ -114,8 +120,10 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "points_with_contact_loss": int(np.sum(res.impacts > 0)),
         "monitored": study.monitor.name or study.monitor.label,
         "point_wall_split_s": {k: round(v, 3) for k, v in res.timings.items()},
-        "jumps_up": jumps(res.param[up], res.qmax[up]),
-        "jumps_down": jumps(res.param[~up], res.qmax[~up]),
+        "jumps_up": jumps(res.param[up], res.qmax[up], res=_m(res, "qmax_res", up),
+                          err=_m(res, "qmax_err", up)),
+        "jumps_down": jumps(res.param[~up], res.qmax[~up], res=_m(res, "qmax_res", ~up),
+                            err=_m(res, "qmax_err", ~up)),
     }
     summary.update(motion_summary(res, cfg.transient_periods + cfg.extra_transient_periods))
     summary.update(split.summary())
@@ -126,6 +134,12 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     return AnalysisOutcome(summary=summary, result=SweepStudyResult(res, study),
                            partial_files=() if keep else (store.path,),
                            warnings=tuple(warnings), solver=res.outcome)
+
+
+def _m(res: SweepResult, key: str, sel):
+    """A metric of the selected points, or None where the sweep has none."""
+    v = res.metrics.get(key)
+    return None if v is None else np.asarray(v, float)[sel]
 
 
 def motion_summary(res: SweepResult, budget: int) -> dict:
@@ -139,6 +153,10 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
     chaotic = [{"param": float(res.param[k]), "direction": str(res.direction[k]),
                 "lyapunov": float(res.lyapunov[k]),
                 "lyapunov_ci": [float(c) for c in res.lyapunov_ci[k]],
+                **{name: _num(res.metrics[name][k]) for name in
+                   ("lyapunov_per_s", "lyapunov_lo_per_s", "lyapunov_per_period",
+                    "lyapunov_lo_per_period", "lyapunov_floor_per_period")
+                   if name in res.metrics},
                 "strob_flatness": float(ev["strob_flatness"][k])}
                for k in np.flatnonzero(res.motion_class == CHAOTIC)]
     # a quasi-periodic point names its base frequencies: the excitation's and f2
@@ -150,7 +168,8 @@ def motion_summary(res: SweepResult, budget: int) -> dict:
     used = res.transient_used[ok]
     metrics = {}
     for key, v in res.metrics.items():
-        if key.endswith("_err") or key.startswith(("period_n_", "motion_class_")):
+        if key.endswith("_err") or key.startswith(("period_n_", "motion_class_", "lyapunov",
+                                                   "resolution_", "qmax_")):
             continue
         v = np.where(ok, np.asarray(v, float), np.nan)
         if not np.any(np.isfinite(v)):

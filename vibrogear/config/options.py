@@ -136,6 +136,15 @@ class SweepOptions:
                                   "is reported as its tolerance error (<name>_tol_err); not on "
                                   "chaotic points, where two records differ by sampling alone "
                                   "(the batch-means <name>_err covers it; tol_err_measured = 0)")
+    resolution_rel: float = spec(1e-3, gt=0.0, lt=1.0, doc="engineering resolution of the "
+                                 "motion class, relative part: a point is periodic where the "
+                                 "stroboscopic samples of every mesh deformation and mesh force "
+                                 "repeat within this fraction of the quantity's range over the "
+                                 "record (or the absolute floors below, whichever is larger)")
+    resolution_length: float = spec(1e-9, ge=0.0, le=1e-3, doc="absolute floor of a "
+                                    "deformation's resolution [m] (models with physical units)")
+    resolution_force: float = spec(1.0, ge=0.0, le=1e6, doc="absolute floor of a force's "
+                                   "resolution [N] (models with physical units)")
     settle_window: int | None = spec(None, ge=4, le=100000, doc="periods per window of the "
                                      "transient's statistics test (three windows at least "
                                      "before a transient can stop; default max(record_periods, "

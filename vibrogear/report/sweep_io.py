@@ -5,9 +5,18 @@
   losses per excitation period), plus ``index``, ``status``, ``ok``, ``defect``,
   ``clusters``, ``u_end`` and the scalar error estimates; the motion class with its
   evidence: ``motion_class`` (int code) and ``motion_class_legend`` (its names, see
-  :mod:`vibrogear.solvers.sequential.motion`), ``lyapunov`` (largest exponent, per model time unit;
-  0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2, its 95 %
-  interval), ``transient_used`` (periods), ``settled_by``; per contact group
+  :mod:`vibrogear.solvers.sequential.motion`), ``lyapunov`` (largest exponent, in 1 / the model's
+  time unit; 0 with ``lyapunov_ok = False`` where not computed), ``lyapunov_ci`` (points x 2,
+  its 95 % interval), the same in physical terms: ``lyapunov_per_s`` and
+  ``lyapunov_lo_per_s`` [1/s], ``lyapunov_per_period``, ``lyapunov_lo_per_period`` and
+  ``lyapunov_floor_per_period`` (per excitation period; the floor: the change of the
+  exponent at rtol / 10, computed where the lower bound is above 0); the class's
+  resolution evidence: ``resolution_period_n`` (the period at which every mesh
+  deformation and force repeats within its resolution, 0: none), ``resolution_defect``
+  (their largest difference in resolutions), ``qmax_res`` (the monitored deformation's
+  resolution) and ``qmax_err`` (batch-means error of qmax); ``hysteresis_<mesh>``
+  (|qmax up - qmax down| at each point's speed, the monitored mesh's; 0 where either
+  failed); ``transient_used`` (periods), ``settled_by``; per contact group
   ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics
   (``impacts_drive_<mesh>``, ``impacts_back_<mesh>``, ``impact_velocity_rms_<mesh>``,
   ``impact_velocity_max_<mesh>``, ``contact_fraction_<mesh>``, ``rattle_<mesh>``,
@@ -59,7 +68,8 @@ CSV_COLUMNS = ("direction", "index", "param", "qmin", "qmax", "period_n", "impac
 
 #: (pattern of a column name less its ``_err`` / ``_tol_err`` companion suffix, unit); the
 #: units a model's length, time and energy units fill in
-_UNITS = ((r"qmin|qmax", "{length}"), (r"impact_velocity_(rms|max)_.+", "{length}/s"),
+_UNITS = ((r"qmin|qmax|qmax_res|hysteresis_.+", "{length}"),
+          (r"lyapunov(_lo)?_per_s", "1/s"), (r"lyapunov(_lo|_floor)?_per_period", "1/period"), (r"impact_velocity_(rms|max)_.+", "{length}/s"),
           (r"rattle_.+", "{energy}"), (r"impacts(_drive_.+|_back_.+)?", "1/period"),
           (r"lyapunov(_lo|_hi)?", "1/{time}"), (r"wall_time", "s"),
           (r"transient_used", "periods"))
@@ -115,7 +125,25 @@ def _extra(result) -> dict:
         v = np.asarray(v)
         out[k] = v if v.dtype.kind == "i" else _finite(v)
     out.update(result.spectral)
+    out.update(hysteresis_arrays(result))
     return out
+
+
+def hysteresis_arrays(result) -> dict:
+    """``hysteresis_<monitored>``: per point, |qmax up - qmax down| at its speed (the same
+    value on the up and the down point; 0 where either failed or the sweep ran one way)."""
+    key = getattr(result, "monitored", "") or "monitored"
+    param = np.asarray(result.param, float)
+    d = np.asarray(result.direction, str)
+    ok = (np.asarray(result.status) == 0) & np.isfinite(np.asarray(result.qmax, float))
+    q = np.asarray(result.qmax, float)
+    h = np.zeros(param.size)
+    if np.any(d == "up") and np.any(d == "down"):
+        for k in range(param.size):
+            other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
+            if ok[k] and other.size:
+                h[k] = abs(q[k] - q[other[0]])
+    return {f"hysteresis_{key}": h}
 
 
 def sweep_arrays(result) -> dict:

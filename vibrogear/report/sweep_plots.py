@@ -34,10 +34,11 @@ _STYLE = {"up": dict(color="tab:blue", marker="^", label="up"),
 #: categories of the band: (label, colour)
 _CATS = (("period 1", "#2ca02c"), ("period 2", "#98df8a"), ("period 3+", "#bcbd22"),
          ("quasi-periodic", "#1f77b4"), ("chaotic", "#d62728"), ("not settled", "#8c8c8c"),
-         ("not periodic (no exponent)", "#d9d9d9"), ("failed", "#000000"))
+         ("not periodic (no exponent)", "#d9d9d9"), ("failed", "#000000"),
+         ("multi-frequency forced", "#17becf"))
 # motion class codes (solvers.motion): 0 failed, 1 periodic, 2 QP, 3 chaotic,
-# 4 not settled, 5 no exponent
-_BY_CODE = {0: 7, 2: 3, 3: 4, 4: 5, 5: 6}
+# 4 not settled, 5 no exponent, 6 multi-frequency forced
+_BY_CODE = {0: 7, 2: 3, 3: 4, 4: 5, 5: 6, 6: 8}
 _LEGEND = dict(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=7, frameon=False,
                borderaxespad=0.0)
 

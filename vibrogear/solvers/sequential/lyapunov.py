@@ -12,8 +12,9 @@ log growth of |delta| is recorded at every period end; at the end of each chunk 
 difference is renormalised to length d0 and becomes the next direction.
 
 With g_k the log growth over period k and T the excitation period, the exponent is
-lambda = mean(g) / T (per unit of the model's time, like ln|mu| / T of a Floquet
-multiplier mu).  The first chunk aligns v with the leading direction and is left out;
+lambda = mean(g) / T (in 1 / the model's time unit, like ln|mu| / T of a Floquet
+multiplier mu; divided by ``ReducedModel.time_unit_s`` it is in 1/s, times T it is the
+log growth per excitation period).  The first chunk aligns v with the leading direction and is left out;
 the other chunks are the blocks of the interval: lambda_b = sum of g over block b /
 (chunk T), the estimate their mean and the 95 % interval mean +- t_{B-1} s / sqrt(B)
 (Student's t, s the standard deviation of the block estimates).  Norm: each state block
@@ -43,7 +44,7 @@ CHUNK = 4
 
 @dataclass(frozen=True, eq=False)
 class LyapunovResult:
-    exponent: float              # per unit of model time (NaN when undetermined)
+    exponent: float              # in 1 / model time unit (NaN when undetermined)
     ci: tuple[float, float]      # 95 % confidence interval (NaN when < 2 blocks)
     blocks: np.ndarray           # per-block estimates
     log_growth: np.ndarray       # (periods,) log growth per excitation period

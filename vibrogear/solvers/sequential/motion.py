@@ -1,12 +1,34 @@
 """Motion classes with evidence and the rattle / contact metrics of a sweep point.
 
-Motion classes (integer codes, :data:`MOTION_LEGEND`):
+A class is a claim about the quantities an engineer reads, at a stated resolution: the
+deformation and the force of every gear mesh (every two-sided contact) and of the monitored
+contact (:func:`monitored_quantities`; a model without contacts: its first coordinate).
+Each quantity's resolution is ``resolution_rel`` (default 1e-3) of its range over the
+record window (dense samples, 16 per base period), but not below an absolute floor:
+``resolution_length`` (1 nm) for a deformation, ``resolution_force`` (1 N) for a force
+(models with physical units; the nondimensional impact pair has no floor)
+(:func:`resolutions`, ``[sweep]``).  Bearings' rolling elements are not monitored: where
+they switch contact at sub-nanometre amplitude without moving a mesh by its resolution,
+the gearbox is periodic.  Bearing loads are not recorded by the sweep.
 
-* ``PERIODIC`` (1): the stroboscopic samples repeat with a period n <= max_period
-  (``period_n`` gives n; evidence: the periodicity defect);
-* ``QUASI_PERIODIC`` (2): no period, the transient stopped because its statistics
-  settled, and the 95 % interval of the largest Lyapunov exponent contains 0;
-* ``CHAOTIC`` (3): no period, and the interval lies above 0;
+Motion classes (integer codes, :data:`MOTION_LEGEND`), relative to the excitation period
+T (the common period of all forcing frequencies, ``ReducedModel.excitation_period``):
+
+* ``PERIODIC`` (1): the stroboscopic samples (one per T) of every monitored quantity repeat
+  within its resolution with a period n <= max_period (:func:`resolved_period`; n > 1
+  only after a settled transient, not where the budget ran out), or the full state repeats
+  within ``period_tol`` (:func:`classify_period`, the stricter test); ``period_n`` gives n;
+* ``MULTI_FREQUENCY`` (6, "multi-frequency forced"): period 1 where the forcing has
+  several frequencies (T spans ``period_multiple`` > 1 base periods), or, where the meshes'
+  common period exceeds the limit and the samples are per mesh period
+  (``multi_frequency``), no period and not chaotic: the response follows the forcing;
+  seen one base period at a time it would look quasi-periodic;
+* ``QUASI_PERIODIC`` (2): no period at the resolution, the transient stopped because its
+  statistics settled, and the 95 % interval of the largest Lyapunov exponent reaches 0
+  (on the record or on its rerun at rtol / 10);
+* ``CHAOTIC`` (3): no period at the resolution, and the interval's lower bound exceeds 0,
+  again when the same record is integrated at rtol / 10 and the estimate repeated on it
+  (the caller passes ``floor`` 0 where it does, infinity where it does not);
 * ``NOT_SETTLED`` (4): no period, not chaotic, and either the interval lies below 0 (the
   motion still converges: a transient longer than the budget, or a period > max_period)
   or the transient budget was used up;
@@ -16,7 +38,8 @@ Motion classes (integer codes, :data:`MOTION_LEGEND`):
 
 Per contact group (each gear mesh, i.e. each two-sided contact; each bearing, its
 one-sided rolling-element contacts grouped by the name before ':') the period is
-classified again on the group's deformations alone: the loaded mesh can be period-1
+classified again on the group's own quantities (a mesh: its deformation and force at the
+resolution; else, and for a bearing, its deformations and rates within period_tol): the loaded mesh can be period-1
 while a free gear rattles; a group without a period of its own takes the point's class.
 
 Contact metrics over a record window of P excitation periods, from the integrator's
@@ -50,33 +73,46 @@ import re
 import numpy as np
 
 from ...models.reduced import ReducedModel
-from ...models.contact_law import harmonic_series
+from ...models.contact_law import evaluate, harmonic_series
+from ..integrator.contact_eval import contact_kinematics
 
 __all__ = ["FAILED", "PERIODIC", "QUASI_PERIODIC", "CHAOTIC", "NOT_SETTLED", "APERIODIC",
-           "MOTION_LEGEND", "motion_class", "contact_groups", "window_metrics",
-           "metrics_with_errors", "classify_period", "count_clusters",
+           "MULTI_FREQUENCY", "MOTION_LEGEND", "monitored_quantities", "resolutions",
+           "resolved_period", "period_defect", "monitored_name", "motion_class",
+           "contact_groups", "window_metrics", "metrics_with_errors", "classify_period", "count_clusters",
            "monitored_deformation", "best_defect", "deformation_statistics", "batch_blocks"]
 
-FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC = range(6)
+FAILED, PERIODIC, QUASI_PERIODIC, CHAOTIC, NOT_SETTLED, APERIODIC, MULTI_FREQUENCY = range(7)
 MOTION_LEGEND = ("failed", "periodic", "quasi-periodic", "chaotic", "not settled",
-                 "not periodic (no exponent)")
+                 "not periodic (no exponent)", "multi-frequency forced")
 
 
 def motion_class(period_n: int, ci=(math.nan, math.nan), *, budget_used: bool = False,
-                 failed: bool = False) -> int:
-    """The class code of a point (module docstring) from its period, the exponent's
-    interval ``ci`` (NaN: not computed) and whether the transient budget ran out."""
+                 failed: bool = False, floor: float = 0.0, period_multiple: int = 1,
+                 multi_frequency: bool = False) -> int:
+    """The class code of a point (module docstring) from its period (in excitation
+    periods), the exponent's interval ``ci`` (NaN: not computed), the exponent's noise
+    floor ``floor`` (same unit; chaotic only where the interval's lower bound exceeds it),
+    whether the transient budget ran out and the base periods per excitation period
+    ``period_multiple`` (> 1: a forcing of several frequencies, whose period-1 response is
+    multi-frequency forced; ``multi_frequency``: the samples are per mesh period of a
+    forcing with no common period within the limit, so a response that follows it without
+    chaos is multi-frequency forced)."""
     if failed:
         return FAILED
     if period_n > 0:
-        return PERIODIC
+        return MULTI_FREQUENCY if period_n == 1 and period_multiple > 1 else PERIODIC
     lo, hi = (float(c) for c in ci)
     if math.isfinite(lo) and math.isfinite(hi):
-        if lo > 0.0:
+        if lo > 0.0 and not lo <= float(floor):
             return CHAOTIC
+        if multi_frequency:
+            return MULTI_FREQUENCY
         if hi < 0.0 or budget_used:
             return NOT_SETTLED
         return QUASI_PERIODIC
+    if multi_frequency:
+        return MULTI_FREQUENCY
     return NOT_SETTLED if budget_used else APERIODIC
 
 
@@ -324,3 +360,105 @@ def best_defect(samples, max_period: int) -> float:
     d = [float(np.max(np.abs(s[n:] - s[:-n]))) for n in range(1, min(int(max_period),
                                                                    s.shape[0] - 1) + 1)]
     return min(d) if d else math.nan
+
+
+# ---------------------------------------------------------------- engineering resolution
+
+def _monitored_rows(model: ReducedModel) -> dict:
+    """{name: contact index} of the quantities an engineer reads: every two-sided contact
+    (a gear mesh, the impact pair's clearance) and the monitored contact."""
+    ct = model.contacts
+    names = ct.names or tuple(f"c{j}" for j in range(ct.count))
+    rows = {}
+    for j in range(ct.count):
+        if np.isfinite(ct.gap_lo[j]) or j == model.monitor:
+            key = _key(names[j])
+            while key in rows:
+                key += "_"
+            rows[key] = j
+    return rows
+
+
+def monitored_name(model: ReducedModel) -> str:
+    """The monitored deformation's name among :func:`monitored_quantities`
+    (``delta_<contact>``; ``x0`` without contacts)."""
+    if model.contacts.count == 0:
+        return "x0"
+    return "delta_" + next(k for k, j in _monitored_rows(model).items() if j == model.monitor)
+
+
+def monitored_quantities(model: ReducedModel, param: float, t, states) -> dict:
+    """{name: (values (len(t),), kind)} at times ``t`` for states (len(t), 2m): the
+    deformation (``delta_<mesh>``, kind "length") and the contact-law force
+    (``force_<mesh>``, kind "force", in the model's force unit) of every gear mesh and of
+    the monitored contact; a model without contacts: its first coordinate ``x0``."""
+    states = np.atleast_2d(np.asarray(states, dtype=float))
+    if model.contacts.count == 0:
+        return {"x0": (states[:, 0].copy(), "length")}
+    rows = _monitored_rows(model)
+    idx = np.array(list(rows.values()), dtype=int)
+    d, dd, mu = contact_kinematics(model, param, t, states, rows=idx)
+    ct = model.contacts
+    col = (slice(None), None)
+    f = evaluate(d, dd, k_hi=ct.k_hi[idx][col], k_lo=ct.k_lo[idx][col],
+                 gap_hi=ct.gap_hi[idx][col], gap_lo=ct.gap_lo[idx][col],
+                 exponent=ct.exponent[idx][col], damping=ct.damping[idx][col],
+                 modulation=mu).force
+    out = {}
+    for i, key in enumerate(rows):
+        out[f"delta_{key}"] = (d[i], "length")
+        out[f"force_{key}"] = (f[i], "force")
+    return out
+
+
+def resolutions(model: ReducedModel, ranges: dict, kinds: dict, *, rel: float = 1e-3,
+                length_m: float = 1e-9, force_n: float = 1.0) -> dict:
+    """{name: resolution}: ``rel`` times the quantity's range over the record plus nothing
+    below an absolute floor, ``length_m`` [m] for a deformation and ``force_n`` [N] for a
+    force, converted to the model's units (a model without physical units, the impact
+    pair's, has no absolute floor: there the resolution is ``rel`` of the range alone)."""
+    physical = model.length_unit == "m"
+    floors = {"length": length_m if physical else 0.0,
+              "force": force_n / model.force_unit_n if physical else 0.0}
+    return {k: max(rel * float(r), floors[kinds[k]]) for k, r in ranges.items()}
+
+
+def resolved_period(samples: dict, res: dict, max_period: int) -> tuple[int, float]:
+    """(n, defect): the smallest n <= max_period at which the stroboscopic samples of
+    every quantity agree with those n periods later within its resolution:
+    max_k |q_{k+n} - q_k| <= res_q for every q of ``samples`` {name: (R,)} (and, for n > 1,
+    differ at each divisor of n by more than 10 resolutions); ``defect``
+    the largest of those differences in units of the resolution (<= 1).  Where no n
+    qualifies: (0, the least over n of that largest difference, > 1: how many resolutions
+    the samples spread); (0, nan) when a sample is not finite.""" 
+    qs = [np.asarray(v, dtype=float).ravel() for v in samples.values()]
+    if not qs or qs[0].size < 2 or not all(np.all(np.isfinite(q)) for q in qs):
+        return 0, math.nan
+    R = qs[0].size
+    scale = [float(res[k]) for k in samples]
+    best, worst_at = math.inf, {}
+    for n in range(1, min(int(max_period), R - 1) + 1):
+        worst = 0.0
+        for q, r in zip(qs, scale):
+            d = float(np.max(np.abs(q[n:] - q[:-n])))
+            worst = max(worst, d / r if r > 0 else (0.0 if d == 0 else math.inf))
+        worst_at[n] = worst
+        best = min(best, worst)
+        # as classify_period: a period-n cycle is resolved from each shorter divisor cycle
+        # by 10 resolutions; a slowly decaying free vibration whose frequency is a rational
+        # multiple of the excitation's passes at n > 1 while n = 1 nearly passes
+        if worst <= 1.0 and all(worst_at[d] > 10.0 for d in range(1, n) if n % d == 0):
+            return n, worst
+    return 0, best
+
+
+def period_defect(samples, n: int, *, split: int | None = None) -> float:
+    """max_k |P_{k+n} - P_k| of the full-state samples in units of each block's largest
+    |value| (:func:`classify_period`'s measure) at a given period n."""
+    s = np.asarray(samples, dtype=float)
+    if s.ndim == 1:
+        s = s[:, None]
+    if n < 1 or s.shape[0] <= n:
+        return math.nan
+    z = _scaled(s, split)
+    return float(np.max(np.abs(z[n:] - z[:-n])))

@@ -11,9 +11,16 @@ import numpy as np
 
 from ..integrator.integrate import integrate
 from ...status import Status
-from .motion import monitored_deformation
+from .motion import monitored_deformation, monitored_quantities
 
-__all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds"]
+__all__ = ["RecordWindow", "record_window", "record_extrema", "onset_speeds", "dense_per_period"]
+
+
+def dense_per_period(period_multiple: int) -> int:
+    """Dense samples per excitation period that give the ranges of the monitored
+    quantities (:func:`~.motion.monitored_quantities`): 16 per base period, at most 256
+    (a long common period is sampled at many phases over the record instead)."""
+    return int(min(16 * max(1, int(period_multiple)), 256))
 
 
 def onset_speeds(tr, rows) -> list:
@@ -39,6 +46,11 @@ class RecordWindow:
     lost_events: bool
     events: tuple
     speeds: np.ndarray
+    #: {name: (min, max)} of each monitored quantity over the record's dense samples
+    ranges: dict = None
+    #: (chunks,) largest and smallest monitored deformation of each chunk
+    chunk_max: np.ndarray = None
+    chunk_min: np.ndarray = None
 
 
 def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
@@ -51,10 +63,13 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
     chunks, states, ev_t, ev_j, ev_m, speeds = [], [], [], [], [], []
     qmin, qmax, losses, lost_events = math.inf, -math.inf, 0, False
     seed = np.array(seed, dtype=float)
+    S = dense_per_period(model.period_multiple)
+    ranges: dict = {}
+    cmax, cmin = [], []
     t0 = 0.0
     while t0 < R * T * (1 - 1e-12):
         k = min(chunk, R - int(round(t0 / T)))
-        t_eval = np.arange(1, k + 1) * T
+        t_eval = np.arange(1, k * S + 1) * (T / S)
         t_eval[-1] = k * T
         tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
         counts += tr.counts
@@ -64,7 +79,12 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
                 and (not has_monitor or (math.isfinite(tr.monitor_min)
                                          and math.isfinite(tr.monitor_max)))):
             return Status.NONFINITE, "non-finite state or monitor values"
-        ends = tr.u
+        ends = tr.u[S - 1::S]
+        for name, (v, _kind) in monitored_quantities(model, param, t_eval, tr.u).items():
+            lo, hi = ranges.get(name, (math.inf, -math.inf))
+            ranges[name] = (min(lo, float(v.min())), max(hi, float(v.max())))
+        cmax.append(tr.monitor_max if has_monitor else math.nan)
+        cmin.append(tr.monitor_min if has_monitor else math.nan)
         chunks.append((seed.copy(), ends, t0))
         states.append(ends)
         qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
@@ -78,7 +98,7 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
         t0 += k * T
     return RecordWindow(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
                    (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
-                   np.array(speeds))
+                   np.array(speeds), ranges, np.array(cmax), np.array(cmin))
 
 
 def record_extrema(model, param, rec: RecordWindow, has_monitor) -> tuple[float, float]:

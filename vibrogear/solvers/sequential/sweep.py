@@ -35,7 +35,8 @@ from ...config.options import SweepOptions
 from ...models.reduced import ReducedModel
 from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
-from .motion import MOTION_LEGEND, classify_period, count_clusters, monitored_deformation
+from .motion import (MOTION_LEGEND, classify_period, count_clusters, monitored_deformation,
+                     monitored_name)
 from .strob_evidence import spectral_evidence
 from ...status import Outcome, Status
 from .sweep_point import PHASES, PointRecord, run_point
@@ -86,6 +87,9 @@ class SweepResult:
     #: {phase: wall seconds summed over the points} (sweep_point.PHASES; resumed points
     #: count as recorded)
     timings: dict = field(default_factory=dict)
+    #: the monitored contact's name (the key of ``hysteresis_<name>`` in sweep.npz; "" when
+    #: unknown)
+    monitored: str = ""
 
     @property
     def ok(self) -> np.ndarray:
@@ -234,13 +238,20 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
     result = assemble_result(records, n_states=n_states, record_periods=settings.record_periods,
                              options=options, period_tol=settings.period_tol,
                              param_name=model.param_name, status_code=code,
-                             status_message=msg, wall_time=time.perf_counter() - wall)
+                             status_message=msg, wall_time=time.perf_counter() - wall,
+                             monitored=monitored_key(model))
     return broadcast(result)
+
+
+def monitored_key(model: ReducedModel) -> str:
+    """The monitored contact's name as the per-contact arrays spell it (``x0`` without
+    contacts)."""
+    return monitored_name(model).removeprefix("delta_")
 
 
 def assemble_result(records, *, n_states: int, record_periods: int, options, period_tol,
                     param_name="param", status_code=Status.OK, status_message="ok",
-                    wall_time=0.0) -> SweepResult:
+                    wall_time=0.0, monitored: str = "") -> SweepResult:
     """Stack point records into a :class:`SweepResult` (also used after reading files)."""
     recs = tuple(records)
     N, R = len(recs), int(record_periods)
@@ -277,4 +288,5 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
         lyapunov_ci=np.array([r.lyapunov_ci for r in recs], dtype=float).reshape(N, 2),
         transient_used=i("transient_used"),
         settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics,
-        timings={k: float(sum(r.timings.get(k, 0.0) for r in recs)) for k in PHASES})
+        timings={k: float(sum(r.timings.get(k, 0.0) for r in recs)) for k in PHASES},
+        monitored=str(monitored))

@@ -23,13 +23,21 @@ periods T, so its end state is again at phase 0.
   record_periods // 8) periods (at least 1; one integrator call each, the blocks of the
   exponent's interval): stroboscopic samples, extrema of the monitored deformation (located
   by the integrator), located contact events.
-* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples; where there
-  is none and ``lyapunov`` is on, the largest Lyapunov exponent over the record window
-  (:mod:`~.lyapunov`: each record chunk is the reference trajectory, one perturbed
-  trajectory per chunk) decides chaotic / quasi-periodic / not settled.  Per contact
-  group, the period again on the group's deformations alone.
-* **Orbit check** (``shoot``, :mod:`~.orbit_check`): a point without a period is first shot
-  from its settled state (periods 1 and 2).  A stable orbit makes it periodic
+* **Class** (:mod:`~.motion`): period-n from the record's stroboscopic samples, at the
+  engineering resolution (every mesh deformation and force within ``resolution_rel`` of
+  its range over the record, or 1 nm / 1 N; the record's dense samples give the ranges) or
+  within ``period_tol`` on the full state; where there is none and ``lyapunov`` is on, the
+  largest Lyapunov exponent over the record window (:mod:`~.lyapunov`: each record chunk is
+  the reference trajectory, one perturbed trajectory per chunk) decides chaotic /
+  quasi-periodic / not settled; where its lower bound is above 0, the same estimate is
+  repeated on the record integrated again at rtol / 10: chaotic only where that lower bound
+  is above 0 too (the change between the two is reported as the estimate's floor).  Under
+  a multi-frequency forcing (no common period within the limit) a point that is not
+  chaotic is "multi-frequency forced".  Per contact group, the period again on the
+  group's own quantities.
+* **Orbit check** (``shoot``, :mod:`~.orbit_check`): a point without a period (or periodic
+  at the resolution only, its transient budget used up) is first shot from its settled
+  state (periods 1 and 2).  A stable orbit makes it periodic
   (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
@@ -60,8 +68,10 @@ from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
 from .record_window import RecordWindow, record_extrema, record_window
-from .motion import (CHAOTIC, FAILED, best_defect, classify_period, contact_groups, count_clusters,
-                     metrics_with_errors, monitored_deformation, motion_class)
+from .motion import (CHAOTIC, FAILED, batch_blocks, best_defect, monitored_name,
+                     classify_period, contact_groups, count_clusters, metrics_with_errors,
+                     monitored_deformation, monitored_quantities, motion_class, period_defect,
+                     resolutions, resolved_period)
 from ...status import Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
@@ -102,7 +112,8 @@ class PointRecord:
     wall_time: float = 0.0
     states: np.ndarray | None = None   # (R, n) Poincare samples of the full state (optional)
     motion_class: int = FAILED         # motion.MOTION_LEGEND index
-    lyapunov: float = math.nan         # largest Lyapunov exponent (per model time unit)
+    lyapunov: float = math.nan         # largest Lyapunov exponent (1 / model time unit;
+    #: metrics lyapunov_per_s [1/s], lyapunov_per_period [per excitation period])
     lyapunov_ci: tuple = (math.nan, math.nan)   # its 95 % interval
     transient_used: int = 0            # transient periods integrated
     settled_by: str = ""               # "map", "statistics", "budget"
@@ -161,15 +172,93 @@ def _metrics(model, param, u_rec, rec: RecordWindow, groups, R, T, n) -> dict:
                                period_n=n)
 
 
-def _group_periods(model, param, T, strob, groups, max_period, period_tol) -> dict:
-    """period_n of each contact group from its deformations and rates alone."""
+def _group_periods(model, param, T, strob, groups, max_period, period_tol,
+                   resolved=None) -> dict:
+    """period_n of each contact group: a mesh's from its deformation and force at the
+    engineering resolution (``resolved``: (samples, resolutions) of
+    :func:`_resolution_test`), or, where those do not repeat, from its deformations and
+    rates within period_tol, as a bearing's."""
     out = {}
     t = np.zeros(strob.shape[0])          # period ends are at phase 0
     d, dd, _ = contact_kinematics(model, param, t, strob)
     for key, (_kind, idx) in groups.items():
-        s = np.hstack([d[idx].T, dd[idx].T])
-        out[f"period_n_{key}"] = classify_period(s, max_period, period_tol, split=len(idx))[0]
+        n = 0
+        if resolved is not None and f"delta_{key}" in resolved[0]:
+            mine = {k: resolved[0][k] for k in (f"delta_{key}", f"force_{key}")}
+            n = resolved_period(mine, resolved[1], max_period)[0]
+        if n == 0:
+            s = np.hstack([d[idx].T, dd[idx].T])
+            n = classify_period(s, max_period, period_tol, split=len(idx))[0]
+        out[f"period_n_{key}"] = n
     return out
+
+
+def _resolution_test(model, param, states, rec: RecordWindow, settings):
+    """(n, defect in resolutions, samples, resolutions) of the engineering-resolution
+    test: the stroboscopic samples of every monitored quantity
+    (:func:`~.motion.monitored_quantities`) against its resolution
+    (:func:`~.motion.resolutions`, from the quantity's range over the record's dense
+    samples)."""
+    q = monitored_quantities(model, param, np.zeros(len(states)), states)
+    samples = {k: v for k, (v, _kind) in q.items()}
+    kinds = {k: kind for k, (_v, kind) in q.items()}
+    ranges = {}
+    for k, v in samples.items():
+        lo, hi = (rec.ranges or {}).get(k, (math.inf, -math.inf))
+        ranges[k] = max(hi, float(np.max(v))) - min(lo, float(np.min(v)))
+    res = resolutions(model, ranges, kinds, rel=settings.resolution_rel,
+                      length_m=settings.resolution_length, force_n=settings.resolution_force)
+    n, defect = resolved_period(samples, res, settings.max_period)
+    return n, defect, samples, res
+
+
+def _qmax_error(rec: RecordWindow) -> float:
+    """Batch-means error of the monitored deformation's largest value: the standard error
+    of the mean of the block maxima over at most 8 blocks of the record's chunks."""
+    c = np.asarray(rec.chunk_max if rec.chunk_max is not None else [], dtype=float)
+    if c.size < 2 or not np.all(np.isfinite(c)):
+        return math.nan
+    L, B = batch_blocks(c.size, 0, 8)
+    if B < 2:
+        return math.nan
+    blocks = c[:L * B].reshape(B, L).max(axis=1)
+    return float(np.std(blocks, ddof=1) / math.sqrt(B))
+
+
+def _exponent(model, param, chunks, v0, options, T, chunk, counts):
+    """(exponent, interval, message) of Benettin's method on a record's chunks from the
+    tangent ``v0`` (:mod:`~.lyapunov`), in units of the model's time."""
+    scale = state_scale(np.vstack([chunks[0][0]] + [c[1] for c in chunks]), model.n_modes)
+    v, logs = v0, []
+    for start, ends, _ in chunks:
+        g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale, options=options)
+        counts[2] += calls
+        if st != Status.OK:
+            return math.nan, (math.nan, math.nan), \
+                f"Lyapunov exponent not determined: {st.message}"
+        logs.append(g)
+    lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+    return lam, ci, "ok"
+
+
+def _resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor) -> dict:
+    """The class's evidence at engineering resolution and the exponent in physical units:
+    ``resolution_period_n`` (0: the samples do not repeat within the resolution),
+    ``resolution_defect`` (the samples' largest difference at that period, in
+    resolutions; where none: the least over n, how many resolutions they spread),
+    ``qmax_res`` (the monitored deformation's resolution), ``qmax_err`` (batch means of
+    its largest value), ``lyapunov_per_s`` / ``lyapunov_lo_per_s`` (the exponent and its
+    95 % lower bound in 1/s) and ``lyapunov_per_period`` / ``lyapunov_lo_per_period`` /
+    ``lyapunov_floor_per_period`` (per excitation period: the log growth over one period;
+    the floor, the change at rtol / 10; NaN where not computed)."""
+    per_s = 1.0 / model.time_unit_s
+    return {"resolution_period_n": int(n_res),
+            "resolution_defect": float(res_defect),
+            "qmax_res": float(res.get(monitored_name(model), math.nan)),
+            "qmax_err": _qmax_error(rec),
+            "lyapunov_per_s": float(lam) * per_s, "lyapunov_lo_per_s": float(ci[0]) * per_s,
+            "lyapunov_per_period": float(lam) * T, "lyapunov_lo_per_period": float(ci[0]) * T,
+            "lyapunov_floor_per_period": float(floor) * T}
 
 
 def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
@@ -232,33 +321,52 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
     clock.lap("record")
 
-    # ---- class and evidence
+    # ---- class and evidence: a period at the engineering resolution, else within
+    # period_tol on the full state
+    n_res, res_defect, res_samples, res = _resolution_test(model, param, states, rec, settings)
+    if n_res > 1 and settled_by == "budget":
+        # a free vibration still decaying at a rational multiple of the excitation
+        # frequency repeats after n > 1 periods within the resolution: a period n > 1 needs
+        # a settled transient (its distance from a period no longer shrinking)
+        n_res = 0
     n, defect = classify_period(states, max_period, period_tol, split=m)
-    lam, ci = math.nan, (math.nan, math.nan)
+    strict = n > 0
+    if n_res > 0:
+        n, defect = n_res, period_defect(states, n_res, split=m)
+    lam, ci, floor = math.nan, (math.nan, math.nan), math.nan
+    chaos_floor = 0.0
     msg = "ok"
+    P = model.period_multiple
     if n == 0 and settings.lyapunov and len(chunks) >= 2:
         scale = state_scale(np.vstack([u_rec, states]), m)
         # start along the last step of the stroboscopic map: the slowest direction
-        v = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
-                              u_rec.size, index)
-        logs = []
-        for start, ends, _ in chunks:
-            g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale,
-                                            options=options)
-            counts[2] += calls
-            if st != Status.OK:
-                msg = f"Lyapunov exponent not determined: {st.message}"
-                logs = []
-                break
-            logs.append(g)
-        if logs:
-            lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
+        v0 = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
+                               u_rec.size, index)
+        lam, ci, msg = _exponent(model, param, chunks, v0, options, T, chunk, counts)
+        if math.isfinite(ci[0]) and ci[0] > 0.0:
+            # the same estimate on the same record at rtol / 10 (module docstring)
+            fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
+            rec_f = record_window(model, param, u_rec, R, T, chunk, groups, fine, counts,
+                                  has_monitor)
+            lam_f, ci_f = math.nan, (math.nan, math.nan)
+            if not isinstance(rec_f, tuple):
+                lam_f, ci_f, _ = _exponent(model, param, rec_f.chunks, v0, fine, T, chunk,
+                                           counts)
+            floor = abs(lam_f - lam) if math.isfinite(lam_f) else math.inf
+            # chaotic where the tighter integration reproduces a positive lower bound (a
+            # chaotic record at rtol / 10 is another stretch of the attractor: its change is
+            # sampling spread, reported as the floor, not a bar the bound must clear)
+            chaos_floor = 0.0 if math.isfinite(ci_f[0]) and ci_f[0] > 0.0 else math.inf
     clock.lap("lyapunov")
     orbit = None
-    # (no orbit to shoot where the samples are per mesh period of a multi-frequency forcing)
-    near = near_periods(states) if n == 0 and settings.shoot and \
+    # shot too: a point periodic at the resolution whose transient ran out of budget (its
+    # record still drifts within the resolution; on the orbit its extrema are exact); no
+    # orbit to shoot where the samples are per mesh period of a multi-frequency forcing
+    unsettled = n == 0 or (not strict and settled_by == "budget")
+    near = near_periods(states) if unsettled and settings.shoot and \
         not model.multi_frequency else ()
-    if near and motion_class(n, ci, budget_used=settled_by == "budget") != CHAOTIC:
+    if near and motion_class(n, ci, budget_used=settled_by == "budget",
+                             floor=chaos_floor) != CHAOTIC:
         # a slow transient or an attractor without a period? (orbit_check.py; a positive
         # exponent has already shown chaos)
         orbit = check_orbit(model, param, seed, period_tol=period_tol, options=options,
@@ -269,18 +377,27 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                             has_monitor)
             if not isinstance(again, tuple):
                 n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
+                r2 = _resolution_test(model, param, again.states, again, settings)
+                if r2[0] > 0:
+                    n2, d2 = r2[0], period_defect(again.states, r2[0], split=m)
                 if n2 > 0:
                     u_rec, rec, n, defect, settled_by = orbit.u0.copy(), again, n2, d2, "shooting"
                     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
+                    n_res, res_defect, res_samples, res = r2
                     lam, ci = math.nan, (math.nan, math.nan)   # periodic: multipliers instead
+                    floor, chaos_floor = math.nan, 0.0
     clock.lap("orbit_check")
-    cls = motion_class(n, ci, budget_used=settled_by == "budget")
-    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol) \
-        if has_monitor else {}
+    budget_used = settled_by == "budget"
+    mf = model.multi_frequency
+    cls = motion_class(n, ci, budget_used=budget_used, floor=chaos_floor, period_multiple=P,
+                       multi_frequency=mf)
+    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol,
+                             (res_samples, res)) if has_monitor else {}
     for key in list(metrics):
         gn = metrics[key]
         metrics[key.replace("period_n_", "motion_class_")] = motion_class(
-            gn, ci, budget_used=settled_by == "budget") if gn > 0 else cls
+            gn, ci, budget_used=budget_used, floor=chaos_floor, period_multiple=P,
+            multi_frequency=mf) if gn > 0 else cls
     if has_monitor:
         metrics.update(_metrics(model, param, u_rec, rec, groups, R, T, n))
         if rec.lost_events:
@@ -289,6 +406,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                        for k, v in metrics.items()}
     if orbit is not None:
         metrics.update(orbit.as_metrics())
+    metrics.update(_resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor))
     clock.lap("metrics")
     if settings.second_tolerance and cls == CHAOTIC:
         # two records of a chaotic motion diverge whatever the tolerance: their difference
