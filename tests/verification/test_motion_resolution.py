@@ -1,9 +1,10 @@
 """Motion classes at engineering resolution (solvers/sequential/motion.py).
 
-* The imported FVA two-stage gearbox (tests/data/rexs): 60 rolling elements at zero
-  radial clearance switch contact at the edge of each load zone, so the full state never
-  repeats within period_tol; both meshes stay in contact and their deformations and forces
-  repeat within 1 nm / 1 N.  The point is periodic, not chaotic (it was called chaotic,
+* The imported FVA two-stage gearbox (tests/data/rexs), its second stage's excitation
+  switched off (``excite = false``) so that the forcing repeats every mesh period: 60
+  rolling elements at zero radial clearance switch contact at the edge of each load zone,
+  so the full state never repeats within period_tol; both meshes stay in contact and their
+  deformations and forces repeat within 1 nm / 1 N.  The point is periodic, not chaotic (it was called chaotic,
   Lyapunov exponent > 0, before the resolution rule).  The reference is the record itself:
   each mesh's stroboscopic deformation, computed here from the kept states by the contact
   directions and the transmission error, spreads by less than 1 nm.
@@ -60,15 +61,32 @@ def test_resolution_settings_are_validated():
             SweepOptions(**{field: bad})
 
 
-@pytest.fixture(scope="module")
-def fva():
+def _fva(overrides=()):
     from vibrogear.analyses.study import build_study, integration_options
 
-    scene = load_scene(REXS)
+    scene = load_scene(REXS, overrides)
     study = build_study(scene)
     opts = integration_options(scene, record=True, period_tol=scene.sweep.period_tol,
                                study=study)
     return study, opts
+
+
+@pytest.fixture(scope="module")
+def fva():
+    return _fva(("gearbox.meshes[1].excite=false",))
+
+
+def test_fva_both_stages_excited_is_multi_frequency_forced_not_chaotic():
+    """With both stages excited (27/51 and 23/34 teeth: the forcing repeats only after 51
+    mesh periods of the first stage, beyond the period limit) the samples are per mesh
+    period and do not repeat; the response follows the forcing: multi-frequency forced."""
+    study, opts = _fva()
+    model = study.model
+    assert model.multi_frequency
+    s = sweep(model, [543.0], SweepOptions(directions=("up",), workers=1), options=opts,
+              u0=study.start(543.0))
+    assert s.status[0] == 0
+    assert s.motion_class[0] == MULTI_FREQUENCY
 
 
 def test_fva_gearbox_with_zero_clearance_bearings_is_periodic(fva):
