@@ -280,7 +280,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     if res.note:
         summary["resume"] = res.note
     return AnalysisOutcome(summary=summary, result=res, solver=res.outcome,
-                           partial_files=(ctx.out / PARTIAL_NAME,) if ctx.root else ())
+                           partial_files=(ctx.out / PARTIAL_NAME,) if ctx.writes else ())
 
 
 def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
