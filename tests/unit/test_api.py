@@ -1,0 +1,174 @@
+"""vibrogear from Python (vibrogear/api.py, docs/python.md): load, replace, run in memory.
+
+The references are independent of the code under test: the scene file's own numbers (the
+speed grid, the backlash), the files ``vibrogear run`` writes for the same scene (a run in
+memory must give exactly the arrays and the verdict the command line writes), and the
+message ``vibrogear check --set`` prints for the same bad value.
+"""
+from __future__ import annotations
+
+import json
+import pydoc
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vibrogear as vg
+from vibrogear import cli
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = ROOT / "configs" / "gear_pair.toml"
+#: a short sweep: 5 speeds up and down (the gear pair's contact loss lies above 5100 rpm)
+SHORT = {"sweep.n_points": 5, "sweep.transient_periods": 100,
+         "sweep.extra_transient_periods": 100, "sweep.record_periods": 16}
+
+
+def test_import_vibrogear_stays_cheap():
+    code = ("import sys, vibrogear as vg; assert callable(vg.load); "
+            "print(sorted(m for m in ('numba', 'dolfinx', 'matplotlib', 'gmsh', 'scipy') "
+            "if m in sys.modules))")
+    fresh = subprocess.run([sys.executable, "-c", "import sys, vibrogear; print(sorted(m for m "
+                            "in ('numba', 'dolfinx', 'matplotlib', 'gmsh', 'scipy') if m in "
+                            "sys.modules))"], capture_output=True, text=True, check=True)
+    assert fresh.stdout.strip() == "[]"
+    touched = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                             check=True)
+    assert touched.stdout.strip() == "[]"          # the API module itself loads no solver
+    assert vg.__version__ == __import__("vibrogear.version").version.__version__
+
+
+def test_load_takes_overrides_as_a_dict_or_as_set_strings():
+    a = vg.load(SCENE, {"sweep.n_points": 7, "gearbox.meshes[0].backlash": 5e-5})
+    b = vg.load(SCENE, ["sweep.n_points=7", "gearbox.meshes[0].backlash=5e-5"])
+    assert a == b
+    assert (a.sweep.n_points, a.gearbox.meshes[0].backlash) == (7, 5e-5)
+
+
+def test_replace_returns_a_new_checked_scene_and_leaves_the_old_one():
+    scene = vg.load(SCENE)
+    new = scene.replace({"gearbox.meshes[0].backlash": 5e-5, "sweep.n_points": np.int64(6)})
+    assert new.gearbox.meshes[0].backlash == 5e-5 and new.sweep.n_points == 6
+    assert scene.gearbox.meshes[0].backlash == 1e-4 and scene.sweep.n_points == 151
+    assert new.replace({}) == new
+
+
+def test_a_bad_value_is_refused_naming_the_field_as_check_does(capsys):
+    scene = vg.load(SCENE)
+    with pytest.raises(vg.ConfigError) as err:
+        scene.replace({"gearbox.meshes[0].backlash": -1e-5})
+    assert err.value.path == "gearbox.meshes[0].backlash"
+    assert "out of range: must be >= 0" in str(err.value)
+    code = cli.main(["check", str(SCENE), "--set", "gearbox.meshes[0].backlash=-1e-5"])
+    assert code == cli.EXIT_INPUT
+    assert str(err.value) in capsys.readouterr().err       # the same message
+    with pytest.raises(vg.ConfigError, match=r"sweep\.n_pointz: unknown key.*'n_points'"):
+        scene.replace({"sweep.n_pointz": 6})
+    with pytest.raises(vg.ConfigError, match=r"gearbox\.meshes\[2\]: no such list entry"):
+        scene.replace({"gearbox.meshes[2].backlash": 5e-5})
+    with pytest.raises(vg.ConfigError, match=r"sweep\.n_points: expected an integer"):
+        vg.load(SCENE, {"sweep.n_points": "six"})
+    with pytest.raises(vg.ConfigError, match="scene.analyses"):
+        vg.run(scene, ["campbell"])                   # a rotor's verb, not a gearbox's
+
+
+@pytest.fixture(scope="module")
+def in_memory(tmp_path_factory):
+    """load -> replace -> run(["sweep"]) from an empty working folder with an empty cache."""
+    import os
+    cwd, cache = tmp_path_factory.mktemp("cwd"), tmp_path_factory.mktemp("cache")
+    old, old_cache = os.getcwd(), os.environ.get("VIBROGEAR_CACHE_DIR")
+    os.chdir(cwd)
+    os.environ["VIBROGEAR_CACHE_DIR"] = str(cache)
+    try:
+        scene = vg.load(SCENE).replace({**SHORT, "gearbox.meshes[0].backlash": 5e-5})
+        run = vg.run(scene, ["sweep"])
+        fig = run.results["sweep"].plot()
+    finally:
+        os.chdir(old)
+        if old_cache is None:
+            os.environ.pop("VIBROGEAR_CACHE_DIR")
+        else:
+            os.environ["VIBROGEAR_CACHE_DIR"] = old_cache
+    return scene, run, fig, cwd, cache
+
+
+def test_a_run_in_memory_writes_nothing_and_returns_arrays_and_a_figure(in_memory):
+    from matplotlib.figure import Figure
+
+    scene, run, fig, cwd, cache = in_memory
+    assert list(cwd.iterdir()) == [] and list(cache.iterdir()) == []
+    assert run.out is None and run.status == "ok" and list(run.results) == ["sweep"]
+    a = run.results["sweep"].arrays()
+    grid = np.linspace(4500.0, 7000.0, 5)                    # the scene file's [sweep] range
+    assert np.allclose(a["param"], np.concatenate([grid, grid[::-1]]))
+    assert list(a["direction"]) == ["up"] * 5 + ["down"] * 5
+    assert a["poincare"].shape == (10, 16)
+    assert np.all(a["qmin"] <= a["qmax"])
+    assert run.results["sweep"].study.monitor.lines == (-50.0,)   # -backlash in um
+    assert isinstance(fig, Figure) and len(fig.axes) >= 2
+    assert isinstance(run.findings["verdict"], str) and run.findings["verdict"]
+    assert run.summary["results"]["sweep"]["points"] == 10
+    assert "files" not in run.summary["results"]["sweep"]
+
+
+def test_a_run_into_a_folder_writes_what_the_command_line_writes(in_memory, tmp_path):
+    scene, run, _, _, _ = in_memory
+    out = tmp_path / "out"
+    on_disk = vg.run(scene, ["sweep"], out=out)
+    assert on_disk.out == out
+    assert {"sweep.npz", "sweep.csv", "bifurcation.png", "summary.json",
+            "report.html"} <= {p.name for p in out.iterdir()}
+    assert not list(out.glob("*.partial.jsonl"))
+    with np.load(out / "sweep.npz", allow_pickle=False) as z:
+        written = {k: z[k] for k in z.files}
+    mem = run.results["sweep"].arrays()
+    assert sorted(mem) == sorted(written)                       # the npz's names
+    for k in ("param", "qmin", "qmax", "poincare", "period_n", "motion_class"):
+        np.testing.assert_array_equal(mem[k], written[k])      # deterministic: the same run
+    summary = json.loads((out / "summary.json").read_text())
+    assert run.findings["verdict"] == summary["findings"]["verdict"]
+    assert [b["from"] for b in run.findings["bands"]] == \
+        [b["from"] for b in summary["findings"]["bands"]]
+
+
+def test_modes_in_memory_equal_the_modes_csv(tmp_path):
+    from matplotlib.figure import Figure
+
+    scene = vg.load(SCENE)
+    res = vg.run(scene, "modes").results["modes"]
+    assert isinstance(res.plot(), Figure)
+    vg.run(scene, ["modes"], out=tmp_path)
+    import csv
+    rows = list(csv.DictReader((tmp_path / "modes.csv").open()))
+    a = res.arrays()
+    assert np.array_equal(a["frequency_hz"], [float(r["frequency_hz"]) for r in rows])
+    assert list(a["dominant"]) == [r["dominant"] for r in rows]
+    assert np.allclose(a["mesh_energy_G1"], [float(r["mesh_energy_G1"]) for r in rows],
+                       rtol=1e-3, atol=1e-4)                    # the csv keeps 4 digits
+
+
+@pytest.mark.parametrize("cls, entries", [
+    ("vibrogear.analyses.time_response:TimeResponseResult",
+     ["delta", "(nc, n) [m]", "t_s", "[s]", "force", "[N]", "period"]),
+    ("vibrogear.analyses.sweep:SweepStudyResult",
+     ["qmin", "[m", "poincare", "(N, R)", "impacts", "[1/period]", "arrays", "plot"]),
+    ("vibrogear.solvers.sequential.sweep:SweepResult",
+     ["param", "(N,)", "qmax", "[model length, m]", "lyapunov", "[1/model time]", "wall_time"]),
+    ("vibrogear.analyses.continuation:ContinuationStudyResult",
+     ["branch.npz", "qmin", "(M,) [m", "floquet", "label"]),
+    ("vibrogear.solvers.periodic.branch:ContinuationResult",
+     ["param", "(M,)", "period", "[model time units]", "u0", "(M, n)", "residual"]),
+    ("vibrogear.analyses.gearbox_modes:GearboxModesResult",
+     ["f_hz", "(K,) [Hz]", "zeta", "(K,) [1]", "mesh", "(M, K) [1]", "rpm_lo", "[rpm]"]),
+    ("vibrogear.analyses.states:StatesResult",
+     ["params", "(P,) [rpm or Omega]", "attractors", "fraction", "basin_fraction", "[m"]),
+])
+def test_help_lists_the_fields_with_units_and_shapes(cls, entries):
+    import importlib
+    module, name = cls.split(":")
+    text = pydoc.render_doc(getattr(importlib.import_module(module), name), renderer=pydoc.plaintext)
+    missing = [e for e in entries if e not in text]
+    assert not missing, f"help({name}) lacks {missing}"
