@@ -92,7 +92,7 @@ class Run:
     ``results``: analysis name -> its result object (``run.results["sweep"]``: the sweep's,
     with ``arrays()``, ``plot()`` and its fields documented by ``help()``); an analysis
     without a result object maps to its summary entry (a dict).
-    ``summary``: the run's summary, the dict ``summary.json`` holds (docs/DESIGN: scene,
+    ``summary``: the run's summary, the dict ``summary.json`` holds (scene,
     analyses, per-analysis ``results`` with status and counters, ``wall_time_s``,
     ``findings``).
     ``out``: the output folder written (None: a run in memory, nothing written).

@@ -172,3 +172,25 @@ def test_help_lists_the_fields_with_units_and_shapes(cls, entries):
     text = pydoc.render_doc(getattr(importlib.import_module(module), name), renderer=pydoc.plaintext)
     missing = [e for e in entries if e not in text]
     assert not missing, f"help({name}) lacks {missing}"
+
+
+def test_the_example_notebook_runs_and_writes_nothing():
+    """docs/examples/gear_pair.ipynb, executed as a user would (a Jupyter kernel in its
+    folder): no cell fails, the folder stays as it was, the sweep prints the scene's grid."""
+    nbclient = pytest.importorskip("nbclient")
+    nbformat = pytest.importorskip("nbformat")
+    pytest.importorskip("ipykernel")
+    folder = ROOT / "docs" / "examples"
+    before = sorted(p.name for p in folder.iterdir())
+    nb = nbformat.read(folder / "gear_pair.ipynb", as_version=4)
+    nbclient.NotebookClient(nb, timeout=600, kernel_name="python3",
+                            resources={"metadata": {"path": str(folder)}}).execute()
+    assert sorted(p.name for p in folder.iterdir()) == before
+    text = "\n".join(o.get("text", "") for c in nb.cells if c.cell_type == "code"
+                     for o in c.outputs)
+    assert "refused: gearbox.meshes[0].backlash: value -1e-05 out of range" in text
+    assert "  4500 rpm up" in text and "  7000 rpm down" in text
+    assert "backlash 0.05 mm:" in text and "backlash 0.2 mm: " in text
+    figures = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs
+               if "image/png" in o.get("data", {})]
+    assert figures                                    # the Figure shows as the cell's value
