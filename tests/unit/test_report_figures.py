@@ -144,13 +144,14 @@ def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_
     freq = np.outer(rpm / 60.0 * 40, order)
     amp = np.full((2, order.size), 1e-7)
     amp[:, 8] = 2e-6
-    path = plot_waterfall(tmp_path / "w.png", rpm, freq, amp, label="DTE", unit="m",
-                          max_hz=5000.0, mesh_hz=np.outer(rpm, [40 / 60.0]),
-                          shaft_hz=np.outer(rpm, [1 / 60.0]), max_order=3,
-                          title="two_stage: m = 146 (21+25+100)",
-                          lines=(np.array([667.0, 900.0]), rpm, np.array(["mesh", "unidentified"]),
-                                 np.array([2e-6, 1e-6])),
-                          unstable=np.array([True, False]))[0]
+    fig = plot_waterfall(rpm, freq, amp, label="DTE", unit="m",
+                         max_hz=5000.0, mesh_hz=np.outer(rpm, [40 / 60.0]),
+                         shaft_hz=np.outer(rpm, [1 / 60.0]), max_order=3,
+                         title="two_stage: m = 146 (21+25+100)",
+                         lines=(np.array([667.0, 900.0]), rpm, np.array(["mesh", "unidentified"]),
+                                np.array([2e-6, 1e-6])),
+                         unstable=np.array([True, False]))
+    path = save_figure(fig, tmp_path / "w.png", formats=("png",))[0]
     assert path.stat().st_size > 10_000
 
 

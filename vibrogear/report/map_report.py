@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
-from .map_plots import plot_map_figures
+from .map_plots import write_map_figures
 
 __all__ = ["write", "map_arrays", "METRICS_PER_MESH"]
 
@@ -114,7 +114,7 @@ def write(scene, outcome, out, previous=None) -> dict:
                                                      _curves_csv(res.curves)))
     title = res.study.title if res.study is not None else scene.scene.name
     unit = res.study.energy_unit if res.study is not None else "model units"
-    for name, path in plot_map_figures(arrays, res.meshes, out, title=title,
-                                       energy_unit=unit).items():
+    for name, path in write_map_figures(arrays, res.meshes, out, title=title,
+                                        energy_unit=unit).items():
         files[name] = str(path)
     return files

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .branch_io import branch_arrays
+from .figure import save_figure
 from .runup_plots import plot_envelopes, plot_orders, plot_waterfall
 from .sweep_io import read_sweep_npz, sweep_arrays
 
@@ -101,10 +102,13 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {"npz": str(atomic_write_npz(out / "runup.npz", runup_arrays(result))),
              "csv": str(atomic_write_bytes(out / "runup.csv", _csv(result)))}
     sweep, branch = steady_state(previous, out, result.study)
-    files["envelope_png"] = str(plot_envelopes(result, out / "runup_envelope", sweep=sweep,
-                                               branch=branch)[0])
-    files["orders_png"] = str(plot_orders(result, out / "runup_orders")[0])
-    files["waterfall_png"] = str(plot_waterfall(result, out / "runup_waterfall")[0])
+    png = ("png",)
+    files["envelope_png"] = str(save_figure(plot_envelopes(result, sweep=sweep, branch=branch),
+                                            out / "runup_envelope", formats=png)[0])
+    files["orders_png"] = str(save_figure(plot_orders(result), out / "runup_orders",
+                                          formats=png)[0])
+    files["waterfall_png"] = str(save_figure(plot_waterfall(result), out / "runup_waterfall",
+                                             formats=png)[0])
     files["overlaid"] = [k for k, v in (("sweep", sweep), ("continuation", branch))
                          if v is not None]
     return files
