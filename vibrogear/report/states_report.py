@@ -33,7 +33,6 @@ import io
 import math
 from pathlib import Path
 
-
 from ..analyses.states_summary import states_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .figure import save_figure
