@@ -52,6 +52,9 @@ def _parser() -> argparse.ArgumentParser:
                      "(e.g. the undersides of the feet), housing frame")
     imp.add_argument("--length-unit", default="m", choices=["m", "mm"],
                      help="unit of the --fixed-region numbers (default m)")
+    imp.add_argument("--load-case", default=None, type=int, metavar="N",
+                     help="the load case of the file's load spectrum to take as the operating "
+                     "point (1-based; default: the one with the largest duration share)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -125,7 +128,8 @@ def _main(argv: list[str] | None) -> int:
     if args.command == "import":
         from .cli_import import import_command
         return import_command(args.model, args.output, argv, housing=args.housing,
-                              fixed_region=args.fixed_region, length_unit=args.length_unit)
+                              fixed_region=args.fixed_region, length_unit=args.length_unit,
+                              load_case=args.load_case)
     from . import api
     from .config import ConfigError
     from .pipeline.files import check_output_dir

@@ -19,20 +19,24 @@ __all__ = ["import_command"]
 
 
 def import_command(model: str, output: str | None, argv=None, housing: str | None = None,
-                   fixed_region: str | None = None, length_unit: str = "m") -> int:
+                   fixed_region: str | None = None, length_unit: str = "m",
+                   load_case: int | None = None) -> int:
     from .config import ConfigError, scene_from_dict
     from .config.rexs import import_rexs, is_rexs_path
+    from .config.rexs.mapping import MappingStopped
     from .config.rexs.scene_toml import scene_toml
     from .pipeline.files import atomic_write_bytes
     from .models.scene_notes import derived_lines
     from .models.validate import validate_scene
+    imp = None
     try:
         if not is_rexs_path(model):
             raise ConfigError(model, "expected a REXS file named *.rexs (XML) or *.rexsj (JSON)")
         if output is not None and Path(output).is_dir():
             raise ConfigError(output, "is a folder; give the scene file to write")
         step, region = _step_casing(housing, fixed_region, length_unit)
-        imp = import_rexs(model, housing=step or housing, fixed_region=region)
+        imp = import_rexs(model, housing=step or housing, fixed_region=region,
+                          load_case=load_case)
         if step is not None:
             samples = _seat_radii_from_step(imp, step)
         scene = scene_from_dict(imp.data)
@@ -43,7 +47,11 @@ def import_command(model: str, output: str | None, argv=None, housing: str | Non
         if step is not None:        # the scene file names the STEP file relative to itself
             imp.data["housing"]["file"] = (os.path.relpath(step, Path(output).resolve().parent)
                                            if output is not None else step)
+    except MappingStopped as exc:
+        return _stopped(exc.errors, exc.draft, output, argv or [model])
     except ConfigError as exc:
+        if imp is not None and exc.path != "--housing":    # mapped, but the scene does not check
+            return _stopped(exc.errors, imp, output, argv or [model])
         print(f"vibrogear: invalid input: {exc}", file=sys.stderr)
         return 2
     text = scene_toml(imp, "vibrogear import " + " ".join(argv or [model]))
@@ -62,6 +70,55 @@ def import_command(model: str, output: str | None, argv=None, housing: str | Non
         print(f"wrote {output} (scene {scene.scene.name!r}; check it with `vibrogear check "
               f"{output}`)", file=sys.stderr)
     return 0
+
+
+def draft_path(output: str) -> Path:
+    """``scene.toml`` -> ``scene.draft.toml`` (beside it)."""
+    p = Path(output)
+    return p.with_name((p.stem if p.suffix.lower() == ".toml" else p.name) + ".draft.toml")
+
+
+def _stopped(errors: list, draft, output: str | None, argv) -> int:
+    """The mapping stopped: every problem on stderr, the draft scene written beside the
+    scene file asked for (``-o scene.toml`` -> ``scene.draft.toml``, which ``vibrogear check``
+    refuses until its first line is deleted); exit 2."""
+    from .config.base import DRAFT_MARKER
+    from .config.rexs.scene_toml import scene_toml
+    from .pipeline.files import atomic_write_bytes
+    import re
+    n = len(errors)
+
+    def origin(e) -> str:          # a scene field's REXS component, from the draft's comments
+        m = re.match(r"gearbox\.(\w+)\[(\d+)\]", str(getattr(e, "path", "")))
+        c = draft.comments.get((m.group(1), int(m.group(2)))) if m and draft else None
+        return f" [{c}]" if c else ""
+    lines = [f"{k + 1}. {e}{origin(e)}" for k, e in enumerate(errors)]
+    print(f"vibrogear: invalid input: the import stopped on {n} problem{'s' * (n != 1)} "
+          "(each names the REXS component, the attribute and the fix):", file=sys.stderr)
+    for line in lines:
+        print(f"  {line}", file=sys.stderr)
+    if output is None:
+        print("(with -o SCENE.toml the scene as far as it was mapped is written as "
+              "SCENE.draft.toml)", file=sys.stderr)
+        return 2
+    head = [f"{DRAFT_MARKER} the import stopped on {n} problem{'s' * (n != 1)}; "
+            f"`vibrogear check` refuses this file until {'they are' if n != 1 else 'it is'} "
+            "fixed and this line deleted",
+            *[f"# {x}" for line in lines for x in line.splitlines()], ""]
+    try:
+        body = scene_toml(draft, "vibrogear import " + " ".join(argv))
+    except (KeyError, TypeError, ValueError, AttributeError, IndexError):
+        body = "# (the mapped part could not be written as TOML)"
+    path = draft_path(output)
+    try:
+        atomic_write_bytes(path, ("\n".join(head) + body + "\n").encode("utf-8"))
+    except OSError as exc:
+        print(f"vibrogear: {path}: cannot write the draft: {exc.strerror or exc}",
+              file=sys.stderr)
+        return 2
+    print(f"wrote the draft {path} (the scene as far as it was mapped; nothing else written)",
+          file=sys.stderr)
+    return 2
 
 
 def _step_casing(housing: str | None, fixed_region: str | None, length_unit: str):

@@ -375,6 +375,10 @@ def _header_error(text: str, schema: type) -> ConfigError | None:
     return None
 
 
+#: the first line of a draft scene (``vibrogear import`` when the mapping stopped): refused
+DRAFT_MARKER = "# vibrogear DRAFT:"
+
+
 def read_toml_file(path: str | Path, schema: type | None = None) -> dict[str, Any]:
     """Read a TOML file (UTF-8, an optional byte-order mark) into a dict; ConfigError naming
     the file for anything that is not a readable scene file, and the table of ``schema``
@@ -392,6 +396,10 @@ def read_toml_file(path: str | Path, schema: type | None = None) -> dict[str, An
     except OSError as exc:
         raise ConfigError(str(path), f"cannot read: {exc.strerror or exc}") from None
     text = text.removeprefix("\ufeff")
+    if text.startswith(DRAFT_MARKER):
+        raise ConfigError(str(path), "is a draft scene that `vibrogear import` wrote because the "
+                          "mapping stopped: fix the problems listed at its top, then delete its "
+                          "first line")
     if schema is not None:
         bad = _header_error(text, schema)
         if bad is not None:

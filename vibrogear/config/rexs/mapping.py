@@ -11,6 +11,14 @@ Power flow.  ``shafts[0]`` (the driving shaft of the scene) is the shaft with
 ``defines_speed`` (else the one carrying the torque-defining load, else the first); the
 stages order the other shafts outwards from it, and each mesh's ``gear_a`` is the gear on
 the shaft nearer the driving shaft.
+
+Gears.  Each gear sits at its face centre (:func:`.mapping_shafts.axial_reference`: face-start
+positions where only they seat the file's gears); a stage's mesh takes the axial overlap of
+its two faces as its face width.
+
+Problems.  Every component is mapped on its own: a problem (missing attribute, unknown unit,
+broken reference, ...) is collected and the others go on; :class:`MappingStopped` then
+carries all of them and the scene as far as it was mapped (the draft).
 """
 from __future__ import annotations
 
@@ -21,11 +29,11 @@ from pathlib import Path
 
 from ..base import ConfigError, NAME_MAX_LEN
 from ..shaft_mesh import mesh_sections
-from .mapping_shafts import STEEL, diameter_at, gear_data, shafts_of
+from .mapping_shafts import STEEL, axial_reference, diameter_at, gear_data, shafts_of
 from .reader import RexsModel, read_rexs
 
-__all__ = ["import_rexs", "RexsImport", "MappingReport", "is_rexs_path", "UNSUPPORTED",
-           "STEEL"]
+__all__ = ["import_rexs", "RexsImport", "MappingReport", "MappingStopped", "is_rexs_path",
+           "UNSUPPORTED", "STEEL"]
 
 #: component types that carry power in a way the scene cannot express: refused by name
 UNSUPPORTED = ("planetary_stage", "planet_carrier", "planet_shaft", "planet_pin",
@@ -43,8 +51,9 @@ _RIGID_CONNECTIONS = ("cylindrical_interference_fit", "tapered_interference_fit"
                       "fkm_evaluation_point")
 #: read only as data of other components, or known and deliberately left out
 KNOWN_IGNORED = {
-    "gear_unit": "only its load_duration_fraction per load case is read (the load case "
-                 "taken is the longest)",
+    "gear_unit": "only its duration share per load case is read (load_duration_fraction, "
+                 "REXS 1.6 operating_time_fraction): the load case taken is the longest "
+                 "unless `--load-case N` names one",
     "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
                    "(`vibrogear import --housing box` generates a box housing with "
                    "its walls at the casing bearings' planes; `--housing CASING.step "
@@ -101,70 +110,128 @@ def _owner(model, part_id: str, owner_type: str):
     return model.owner(part_id, owner_type)
 
 
-def _refuse_unsupported(model) -> None:
+class MappingStopped(ConfigError):
+    """The mapping stopped: ``errors`` holds every problem found (each naming the component,
+    the attribute and the fix), ``draft`` the scene mapped as far as it went (a
+    :class:`RexsImport`), which ``vibrogear import`` writes as the draft beside the errors."""
+
+    def __init__(self, errors: list, draft: "RexsImport"):
+        super().__init__(errors[0].path, errors[0].message, errors)
+        self.draft = draft
+
+
+def _refuse_unsupported(model, errs) -> None:
     for c in model.components.values():
-        if c.type in UNSUPPORTED:
-            raise ConfigError(model.source, f"component {c.id} is a {c.type!r}"
-                              f"{' (' + repr(c.name) + ')' if c.name else ''}: not supported "
-                              "(vibrogear maps shafts, cylindrical gears and stages, rolling "
-                              "and concept bearings, external loads); nothing was written")
-        if c.type == "cylindrical_gear" and c.has("number_of_teeth") and \
-                c.number("number_of_teeth", model.source) < 0:
-            raise ConfigError(model.source, f"component {c.id} is an internal "
-                              "'cylindrical_gear' (negative number_of_teeth): internal gears "
-                              "are not supported; nothing was written")
+        with errs.catch():
+            if c.type in UNSUPPORTED:
+                raise ConfigError(model.source, f"component {c.id} is a {c.type!r}"
+                                  f"{' (' + repr(c.name) + ')' if c.name else ''}: not "
+                                  "supported (vibrogear maps shafts, cylindrical gears and "
+                                  "stages, rolling and concept bearings, external loads); fix: "
+                                  "export the gearbox without it, or model it by hand")
+            if c.type == "cylindrical_gear" and c.given("number_of_teeth") and \
+                    c.number("number_of_teeth", model.source) < 0:
+                raise ConfigError(model.source, f"component {c.id} is an internal "
+                                  "'cylindrical_gear' (negative number_of_teeth): internal "
+                                  "gears are not supported")
+
+
+def _overlap(gears, shafts, ga, gb):
+    """(face width common to both gears [m], housing y of its centre [m]) of a stage: each
+    gear's face about its own centre, the mesh on the overlap."""
+    lo, hi = [], []
+    for g in (ga, gb):
+        d = gears[g]
+        y = shafts[d["shaft"]]["y0"] + d["pos"]
+        lo.append(y - 0.5 * d["width"])
+        hi.append(y + 0.5 * d["width"])
+    return round(min(hi) - max(lo), 12), 0.5 * (min(hi) + max(lo))
 
 
 def import_rexs(path, *, name: str | None = None, housing: str | None = None,
-                fixed_region: dict | None = None) -> RexsImport:
-    """Read and map a REXS file; ConfigError naming the component and attribute on any
-    problem (nothing is written by this function).  ``housing``: None (casing = ground),
-    ``"box"`` or the path of a STEP casing (then ``fixed_region`` = {"min", "max"} in m)."""
+                fixed_region: dict | None = None, load_case: int | None = None) -> RexsImport:
+    """Read and map a REXS file (nothing is written by this function).  A file that cannot be
+    read as REXS raises ConfigError; a model whose mapping meets problems raises
+    :class:`MappingStopped` with every problem found and the draft scene.  ``housing``: None
+    (casing = ground), ``"box"`` or the path of a STEP casing (then ``fixed_region`` = {"min",
+    "max"} in m).  ``load_case``: the load case to take (1-based; default the one with the
+    largest duration share)."""
+    from ..base import ErrorList
     from .mapping_supports import analysis_sections, bearings, loads
     model = read_rexs(path)
     src = model.source
-    _refuse_unsupported(model)
+    errs = ErrorList()
+    _refuse_unsupported(model, errs)
     report = MappingReport()
-    frame, shafts = shafts_of(model, report)
+    frame, shafts = shafts_of(model, report, errs)
     gears, comments = {}, {}
     for g in model.of_type("cylindrical_gear"):
-        owner = _owner(model, g.id, "shaft")
-        if owner is None:
-            raise ConfigError(src, f"component {g.id} (cylindrical_gear) is not part of any "
-                              "shaft (no assembly relation with a shaft)")
-        d = gear_data(model, g, src, report)
-        d["shaft"] = owner.id
-        d["pos"] = d["u"] - shafts[owner.id]["u0"]
-        shafts[owner.id]["features"].add(round(d["pos"], 12))
-        gears[g.id] = d
-    discs = _additional_masses(model, shafts, report)
+        with errs.catch():
+            owner = _owner(model, g.id, "shaft")
+            if owner is None:
+                raise ConfigError(src, f"component {g.id} (cylindrical_gear) is not part of "
+                                  "any shaft; fix: add an assembly relation with its shaft")
+            d = gear_data(model, g, src, report)
+            if owner.id not in shafts:
+                continue                    # its shaft's problem is listed
+            d["shaft"] = owner.id
+            gears[g.id] = d
+    axial_reference(gears, shafts, report)
+    for d in gears.values():
+        shafts[d["shaft"]]["features"].add(round(d["pos"], 12))
+    discs = {}
+    with errs.catch():
+        discs = _additional_masses(model, shafts, report)
     stages = []
     for st in model.of_type("cylindrical_stage"):
-        rel = next((r for r in model.relations_of("stage") if r.ref("stage") == st.id), None)
-        g1 = rel.ref("gear_1") if rel else None
-        g2 = rel.ref("gear_2") if rel else None
-        if g1 not in gears or g2 not in gears:
-            raise ConfigError(src, f"component {st.id} (cylindrical_stage): its stage relation "
-                              "must name two cylindrical gears as gear_1 and gear_2")
-        if gears[g1]["shaft"] == gears[g2]["shaft"]:
-            raise ConfigError(src, f"component {st.id} (cylindrical_stage): gears {g1} and "
-                              f"{g2} are both on shaft {gears[g1]['shaft']}; a stage's gears "
-                              "must sit on two shafts")
-        a = st.number("center_distance", src)
-        s1, s2 = shafts[gears[g1]["shaft"]], shafts[gears[g2]["shaft"]]
-        dist = math.hypot(s1["x"] - s2["x"], s1["z"] - s2["z"])
-        if abs(dist - a) > 1e-4 * a:
-            raise ConfigError(src, f"component {st.id} (cylindrical_stage): attribute "
-                              f"'center_distance' = {a * 1e3:g} mm, but its gears' shafts "
-                              f"{gears[g1]['shaft']} and {gears[g2]['shaft']} are "
-                              f"{dist * 1e3:.6g} mm apart")
-        stages.append((st, g1, g2))
-    order = _power_flow(model, shafts, gears, stages)
+        with errs.catch():
+            rel = next((r for r in model.relations_of("stage") if r.ref("stage") == st.id), None)
+            g1 = rel.ref("gear_1") if rel else None
+            g2 = rel.ref("gear_2") if rel else None
+            if g1 not in gears or g2 not in gears:
+                if any(g in model.components and model.components[g].type == "cylindrical_gear"
+                       for g in (g1, g2)) and all(g in model.components for g in (g1, g2)):
+                    continue                # a gear's own problem is listed
+                raise ConfigError(src, f"component {st.id} (cylindrical_stage): its stage "
+                                  "relation must name two cylindrical gears as gear_1 and "
+                                  "gear_2")
+            if gears[g1]["shaft"] == gears[g2]["shaft"]:
+                raise ConfigError(src, f"component {st.id} (cylindrical_stage): gears {g1} and "
+                                  f"{g2} are both on shaft {gears[g1]['shaft']}; a stage's "
+                                  "gears must sit on two shafts; fix: the assembly relations "
+                                  "of the gears with their shafts")
+            a = st.number("center_distance", src)
+            s1, s2 = shafts[gears[g1]["shaft"]], shafts[gears[g2]["shaft"]]
+            dist = math.hypot(s1["x"] - s2["x"], s1["z"] - s2["z"])
+            if abs(dist - a) > 1e-4 * a:
+                raise ConfigError(src, f"component {st.id} (cylindrical_stage): attribute "
+                                  f"'center_distance' = {a * 1e3:g} mm, but its gears' shafts "
+                                  f"{gears[g1]['shaft']} and {gears[g2]['shaft']} are "
+                                  f"{dist * 1e3:.6g} mm apart; fix: the shafts' "
+                                  "support_vector or the centre distance")
+            b_common, _ = _overlap(gears, shafts, g1, g2)
+            if b_common <= 0.0:
+                raise ConfigError(src, f"component {st.id} (cylindrical_stage): the faces of "
+                                  f"gears {g1} and {g2} do not overlap axially (gap "
+                                  f"{-b_common * 1e3:.4g} mm); fix: their "
+                                  "u_coordinate_on_shaft or the shafts' support_vector")
+            stages.append((st, g1, g2))
+    # the power flow and the loads follow the gear train: where a part of it has a problem,
+    # the consequences would only repeat it
+    train_ok = not errs
+    order = list(shafts)
+    if train_ok:
+        with errs.catch():
+            order = _power_flow(model, shafts, gears, stages)
+        train_ok = not errs
     data = {"scene": {}, "gearbox": {"name": model.application and
                                      f"{Path(src).stem} ({model.application} export)"
                                      or Path(src).stem}}
-    supports = bearings(model, shafts, report)
-    couplings, case = loads(model, shafts, gears, stages, order, report)
+    supports = bearings(model, shafts, report, errs)
+    couplings, case = [], None
+    if train_ok:
+        with errs.catch():
+            couplings, case = loads(model, shafts, gears, stages, order, report, load_case)
     for sid in order:
         sh = shafts[sid]
         sh["features"].update(b["position"] for b in supports if b["shaft"] == sid)
@@ -206,58 +273,71 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
     data["gearbox"]["meshes"] = []
     for k, (st, ga, gb) in enumerate(_stages_in_flow(stages, gears, order)):
         a, b = gears[ga], gears[gb]
+        width, y_mesh = _overlap(gears, shafts, ga, gb)
         data["gearbox"]["meshes"].append({
             "name": f"stage{st.id}", "gear_a": f"gear{ga}", "gear_b": f"gear{gb}",
             "pressure_angle": a["alpha"], "hand": 1 if a["beta"] >= 0 else -1,
             "stiffness": "iso6336", "profile_shift_a": a["shift"], "profile_shift_b": b["shift"],
-            "face_width": min(a["width"], b["width"]), "backlash": 1.0e-4,
-            "damping": _mesh_damping(a, b)})
+            "face_width": width, "backlash": 1.0e-4,
+            "damping": _mesh_damping(a, b, width)})
         comments[("meshes", k)] = f"REXS cylindrical_stage {st.id} ({st.name})"
         report.mapped.append(f"cylindrical_stage {st.id} -> gearbox.meshes[{k}] 'stage{st.id}': "
                              f"gear{ga} drives gear{gb}, centre distance "
                              f"{st.number('center_distance', src) * 1e3:g} mm, mesh stiffness "
                              "by ISO 6336-1 (method B) with its single/double contact harmonics")
+        if abs(width - min(a["width"], b["width"])) > 1e-9:
+            report.assumed.append(
+                f"cylindrical_stage {st.id}: the faces of gear{ga} (b = {a['width'] * 1e3:g} mm) "
+                f"and gear{gb} (b = {b['width'] * 1e3:g} mm) overlap over {width * 1e3:.6g} mm: "
+                f"the mesh's face width; the overlap's centre at housing y = "
+                f"{y_mesh * 1e3:.6g} mm (each gear stays at its own face centre)")
         report.assumed.append(f"cylindrical_stage {st.id}: backlash 0.1 mm, mesh damping "
-                              f"{_mesh_damping(a, b):.4g} N s/m (damping ratio 0.05 of the "
-                              "pair's mesh mode), hand +1 = positive REXS helix angle")
+                              f"{_mesh_damping(a, b, width):.4g} N s/m (damping ratio 0.05 of "
+                              "the pair's mesh mode), hand +1 = positive REXS helix angle")
     data["gearbox"]["bearings"] = supports
     data["gearbox"]["couplings"] = couplings
     for k, b in enumerate(supports):
         comments[("bearings", k)] = b.pop("_comment")
-        b["shaft"] = names[b["shaft"]]
+        b["shaft"] = names.get(b["shaft"], f"shaft{b['shaft']}")
         if b.get("outer_shaft"):
-            b["outer_shaft"] = names[b["outer_shaft"]]
+            b["outer_shaft"] = names.get(b["outer_shaft"], f"shaft{b['outer_shaft']}")
     for k, c in enumerate(couplings):
         comments[("couplings", k)] = c.pop("_comment")
         c["shaft"] = names[c["shaft"]]
-    data.update(analysis_sections(model, case, couplings))
-    data["gearbox"]["modes_rpm"] = data["time_response"]["rpm"]
+    if case is not None:
+        data.update(analysis_sections(model, case, couplings))
+        data["gearbox"]["modes_rpm"] = data["time_response"]["rpm"]
     data["scene"] = {"name": _name(name or Path(src).stem), "analyses": ["modes", "sweep"],
                      "description": f"imported from {Path(src).name} (REXS {model.version})"}
     skip = ("shaft_section", "material", "cylindrical_gear_flank", "rolling_bearing_row",
             "rolling_element")
-    if housing == "box":
-        from .mapping_housing import box_housing
-        box_housing(model, data, report)
-        skip += ("gear_casing",)
-        report.mapped += [f"gear_casing {c.id} -> [housing]: a generated box (see assumed)"
-                          for c in model.of_type("gear_casing")]
-    elif housing is not None and Path(housing).suffix.lower() in (".step", ".stp"):
-        from .mapping_casing_step import step_housing
-        step_housing(model, data, report, str(housing), fixed_region)
-        skip += ("gear_casing",)
-        report.mapped += [f"gear_casing {c.id} -> [housing]: the STEP solid {housing} (see "
-                          "assumed)" for c in model.of_type("gear_casing")]
-    elif housing is not None:
+    if housing is not None and housing != "box" and \
+            Path(housing).suffix.lower() not in (".step", ".stp"):
         raise ConfigError("--housing", f"expected 'box' or a STEP file (*.step, *.stp), got "
                           f"{housing!r}")
+    if housing is not None and not errs:    # the housing is built around a complete gearbox
+        with errs.catch():
+            if housing == "box":
+                from .mapping_housing import box_housing
+                box_housing(model, data, report)
+                what = "a generated box (see assumed)"
+            else:
+                from .mapping_casing_step import step_housing
+                step_housing(model, data, report, str(housing), fixed_region)
+                what = f"the STEP solid {housing} (see assumed)"
+            skip += ("gear_casing",)
+            report.mapped += [f"gear_casing {c.id} -> [housing]: {what}"
+                              for c in model.of_type("gear_casing")]
     for c in model.components.values():
         if c.type in KNOWN_IGNORED and c.type not in skip:
             report.ignored.append(f"{c.type} {c.id}: {KNOWN_IGNORED[c.type]}")
         elif c.type not in KNOWN_IGNORED and c.type not in _MAPPED_TYPES:
             report.ignored.append(f"{c.type} {c.id}: a component type the importer does not "
                                   "map (it carries no power path of the scene)")
-    return RexsImport(data, comments, report, model)
+    imp = RexsImport(data, comments, report, model)
+    if errs:
+        raise MappingStopped(errs.errors, imp)
+    return imp
 
 
 def _additional_masses(model, shafts, report) -> dict:
@@ -290,7 +370,7 @@ _MAPPED_TYPES = ("additional_mass", "shaft", "cylindrical_gear", "cylindrical_st
                  "concept_bearing")
 
 
-def _mesh_damping(a, b) -> float:
+def _mesh_damping(a, b, width: float | None = None) -> float:
     """A viscous mesh damping of ratio 0.05 of the pair's mesh mode: c = 2 zeta sqrt(k m_e),
     k = c_gamma b with the ISO 6336 typical c_gamma = 20 N/(mm um), m_e the pair's equivalent
     mass on the line of action (solid steel pitch discs)."""
@@ -300,7 +380,7 @@ def _mesh_damping(a, b) -> float:
         return J, r
     (Ja, ra), (Jb, rb) = inertia_radius(a), inertia_radius(b)
     me = 1.0 / (ra ** 2 / Ja + rb ** 2 / Jb)
-    k = 2e10 * min(a["width"], b["width"])
+    k = 2e10 * (width if width is not None else min(a["width"], b["width"]))
     return float(f"{2 * 0.05 * math.sqrt(k * me):.3g}")
 
 

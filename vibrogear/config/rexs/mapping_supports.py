@@ -13,21 +13,28 @@ to ground.
 * ``concept_bearing``: a linear spring bearing with its ``radial_stiffness`` (assumed
   1e9 N/m where the file gives none).
 Bearings that take an axial force (``axial_force_absorption`` other than ``no_direction``)
-get an axial spring (``axial_stiffness``, assumed 1e8 N/m where none is given).
+get an axial spring (``axial_stiffness``, assumed 1e8 N/m where none is given).  Exporter
+placeholders count as not given: a stiffness of 0, of :data:`PLACEHOLDER_STIFFNESS` (1e20
+N/m) or more, or an empty value (listed under "assumed" with the file's value).
 
 Loads.  An ``external_load`` that ``transmits_torque`` becomes a torsional coupling at its
 position: the one on the driving shaft the motor, the others loads.  Its torque is the
-``torque_around_u_axis`` of the load case used (the one with the largest
-``load_duration_fraction``); a load without one takes the input torque times its shaft's
+``torque_around_u_axis`` (else ``power`` / omega) of the load case used: the one named
+(``--load-case N``), else the one with the largest duration share
+(``load_duration_fraction``, REXS 1.6 ``operating_time_fraction``); without a load spectrum
+the components' own attributes (the loads' torque or power, the speed-defining shaft's
+``rotational_speed``).  A load without a torque takes the input torque times its shaft's
 speed reduction (lossless).  Forces of external loads are not mapped (reported).
 """
 from __future__ import annotations
+
+import math
 
 from ..base import ConfigError
 from ..bearing_catalogue import bearing_kind, boundary_dimensions
 
 __all__ = ["bearings", "loads", "analysis_sections", "COUPLING_TWIST", "CONCEPT_STIFFNESS",
-           "AXIAL_STIFFNESS"]
+           "AXIAL_STIFFNESS", "PLACEHOLDER_STIFFNESS"]
 
 #: twist [rad] the assumed coupling stiffness gives at the load case's torque
 COUPLING_TWIST = 0.02
@@ -35,6 +42,8 @@ COUPLING_TWIST = 0.02
 CONCEPT_STIFFNESS = 1e9
 #: axial stiffness of a bearing that takes axial force and gives none [N/m]
 AXIAL_STIFFNESS = 1e8
+#: a stiffness at or above this [N/m] is an exporter's "rigid" placeholder, not a value
+PLACEHOLDER_STIFFNESS = 1e20
 _BEARING_TYPES = ("rolling_bearing_with_catalog_geometry",
                   "rolling_bearing_with_detailed_geometry", "concept_bearing")
 
@@ -47,94 +56,135 @@ def _side(model, bid):
     return model.components[rel.ref("inner_part")], model.components[rel.ref("outer_part")]
 
 
-def bearings(model, shafts, report) -> list[dict]:
-    src = model.source
+def _stiffness(c, attr: str, src: str):
+    """(value [N/m], why it is not taken): the file's stiffness, or None with the reason
+    where it is an exporter's placeholder (absent, empty, zero, or 1e20 N/m and above)."""
+    if not c.has(attr):
+        return None, "the file gives none"
+    if not c.given(attr):
+        return None, "the file's value is empty"
+    k = c.number(attr, src)
+    if k == 0.0:
+        return None, "the file's 0 N/m is an exporter placeholder"
+    if abs(k) >= PLACEHOLDER_STIFFNESS:
+        return None, f"the file's {k:.3g} N/m is an exporter placeholder (>= 1e20 N/m: 'rigid')"
+    if k < 0.0:
+        raise ConfigError(src, f"component {c.id} ({c.type}): attribute {attr!r} = {k:g} N/m "
+                          "must be >= 0; fix: give the bearing's stiffness, or leave it out for "
+                          "the default")
+    return k, None
+
+
+def bearings(model, shafts, report, errs=None) -> list[dict]:
+    from ..base import ErrorList
+    errs = ErrorList() if errs is None else errs
     out = []
     for c in model.of_type(*_BEARING_TYPES):
-        inner, outer = _side(model, c.id)
-        if inner.type != "shaft":
-            raise ConfigError(src, f"component {c.id} ({c.type}): its inner_part {inner.id} "
-                              f"is a {inner.type!r}, expected a shaft")
-        sh = shafts[inner.id]
-        pos = c.number("u_coordinate_on_shaft_inner_side", src) - sh["u0"]
-        b = {"name": f"bearing{c.id}", "shaft": inner.id, "position": round(pos, 12)}
-        where = "the casing (ground)"
-        if outer.type == "shaft":
-            b["outer_shaft"] = outer.id
-            b["outer_position"] = round(c.number("u_coordinate_on_shaft_outer_side", src)
-                                        - shafts[outer.id]["u0"], 12)
-            where = f"shaft {outer.id}"
-        elif outer.type != "gear_casing":
-            raise ConfigError(src, f"component {c.id} ({c.type}): its outer_part {outer.id} is "
-                              f"a {outer.type!r}, expected a shaft or the gear_casing")
-        if c.type == "concept_bearing":
-            k = c.number("radial_stiffness", src) if c.has("radial_stiffness") else None
-            if k is None:
-                k = CONCEPT_STIFFNESS
-                report.assumed.append(f"concept_bearing {c.id}: radial stiffness "
-                                      f"{CONCEPT_STIFFNESS:g} N/m (the file gives none)")
-            b.update(type="spring", stiffness=k, damping=200.0)
-            what = f"linear spring bearing, {k:.4g} N/m"
-        else:
-            kind = bearing_kind(c.text("bearing_type", src, "radial_grooved_ball_bearing"))
-            if "axial" in c.text("bearing_type", src, "") and "radial" not in \
-                    c.text("bearing_type", src, ""):
-                raise ConfigError(src, f"component {c.id} ({c.type}): bearing_type "
-                                  f"{c.text('bearing_type', src)!r} (a thrust bearing) is not "
-                                  "supported: vibrogear's rolling elements are radial")
-            desig = c.text("catalogue_designation", src, "")
-            try:
-                boundary_dimensions(desig) if desig else None
-                known = bool(desig)
-            except ConfigError:
-                known = False
-            if known:
-                b["designation"] = desig
-                what = f"designation {desig!r} (ISO boundary dimensions, element-set rule)"
-            elif c.type == "rolling_bearing_with_detailed_geometry" and \
-                    _detailed(model, c, b, kind, report):
-                b["type"] = "ball" if kind == "ball" else "roller"
-                what = "the detailed element set (rolling_bearing_row, rolling_element)"
-            elif all(c.has(k) for k in ("inner_diameter", "outer_diameter", "width")):
-                b.update(bore_diameter=c.number("inner_diameter", src),
-                         outer_diameter=c.number("outer_diameter", src),
-                         width=c.number("width", src))
-                b["type"] = "ball" if kind == "ball" else "roller"
-                if kind == "tapered":
-                    b["contact_angle"] = 12.0
-                what = "boundary dimensions (element-set rule)"
-                if desig:
-                    report.assumed.append(f"{c.type} {c.id}: designation {desig!r} is not in "
-                                          "the ISO table; its boundary dimensions are used")
-            else:
-                attr = "catalogue_designation" if c.type.endswith("catalog_geometry") \
-                    else "inner_diameter"
-                raise ConfigError(src, f"component {c.id} ({c.type}): attribute {attr!r}"
-                                  f"{' = ' + repr(desig) if desig else ''}: the designation is "
-                                  "not in the built-in ISO 15 / ISO 355 table and the file "
-                                  "gives no inner_diameter, outer_diameter and width")
-            b["damping"] = 200.0
-            attr = next((a for a in ("operating_radial_bearing_clearance",
-                                     "mounted_radial_bearing_clearance",
-                                     "radial_bearing_clearance") if c.has(a)), None)
-            if attr is not None:        # the bearing's radial play; the gap per side is half
-                b["clearance"] = 0.5 * c.number(attr, src)
-                report.mapped.append(f"{c.type} {c.id}: {attr} "
-                                     f"{c.number(attr, src) * 1e6:g} um -> clearance (gap per "
-                                     f"side) {b['clearance'] * 1e6:g} um")
-            else:
-                report.assumed.append(f"{c.type} {c.id}: radial clearance 0")
-        if c.text("axial_force_absorption", src, "no_direction") != "no_direction":
-            ka = c.number("axial_stiffness", src) if c.has("axial_stiffness") else AXIAL_STIFFNESS
-            b["axial_stiffness"] = ka
-            if not c.has("axial_stiffness"):
-                report.assumed.append(f"{c.type} {c.id}: axial stiffness {ka:g} N/m")
-        report.assumed.append(f"{c.type} {c.id}: viscous damping 200 N s/m")
-        b["_comment"] = f"REXS {c.type} {c.id} ({c.name}): shaft {inner.id} in {where}"
-        report.mapped.append(f"{c.type} {c.id} -> bearing{c.id}: shaft {inner.id} in {where}; "
-                             f"{what}")
-        out.append(b)
+        with errs.catch():
+            b = _bearing(model, c, shafts, report)
+            if b is not None:
+                out.append(b)
     return out
+
+
+def _bearing(model, c, shafts, report):
+    src = model.source
+    inner, outer = _side(model, c.id)
+    if inner.type != "shaft":
+        raise ConfigError(src, f"component {c.id} ({c.type}): its inner_part {inner.id} "
+                          f"is a {inner.type!r}, expected a shaft")
+    if inner.id not in shafts or (outer.type == "shaft" and outer.id not in shafts):
+        return None                     # its shaft's problem is listed
+    sh = shafts[inner.id]
+    pos = c.number("u_coordinate_on_shaft_inner_side", src) - sh["u0"]
+    b = {"name": f"bearing{c.id}", "shaft": inner.id, "position": round(pos, 12)}
+    where = "the casing (ground)"
+    if outer.type == "shaft":
+        b["outer_shaft"] = outer.id
+        b["outer_position"] = round(c.number("u_coordinate_on_shaft_outer_side", src)
+                                    - shafts[outer.id]["u0"], 12)
+        where = f"shaft {outer.id}"
+    elif outer.type != "gear_casing":
+        raise ConfigError(src, f"component {c.id} ({c.type}): its outer_part {outer.id} is "
+                          f"a {outer.type!r}, expected a shaft or the gear_casing")
+    if c.type == "concept_bearing":
+        k, why = _stiffness(c, "radial_stiffness", src)
+        if k is None:
+            k = CONCEPT_STIFFNESS
+            report.assumed.append(f"concept_bearing {c.id}: radial stiffness "
+                                  f"{CONCEPT_STIFFNESS:g} N/m ({why})")
+        b.update(type="spring", stiffness=k, damping=200.0)
+        what = f"linear spring bearing, {k:.4g} N/m"
+    else:
+        kind = bearing_kind(c.text("bearing_type", src, "radial_grooved_ball_bearing"))
+        if "axial" in c.text("bearing_type", src, "") and "radial" not in \
+                c.text("bearing_type", src, ""):
+            raise ConfigError(src, f"component {c.id} ({c.type}): bearing_type "
+                              f"{c.text('bearing_type', src)!r} (a thrust bearing) is not "
+                              "supported: vibrogear's rolling elements are radial")
+        desig = c.text("catalogue_designation", src, "")
+        try:
+            boundary_dimensions(desig) if desig else None
+            known = bool(desig)
+        except ConfigError:
+            known = False
+        if known:
+            b["designation"] = desig
+            what = f"designation {desig!r} (ISO boundary dimensions, element-set rule)"
+        elif c.type == "rolling_bearing_with_detailed_geometry" and \
+                _detailed(model, c, b, kind, report):
+            b["type"] = "ball" if kind == "ball" else "roller"
+            what = "the detailed element set (rolling_bearing_row, rolling_element)"
+        elif all(c.has(k) for k in ("inner_diameter", "outer_diameter", "width")):
+            b.update(bore_diameter=c.number("inner_diameter", src),
+                     outer_diameter=c.number("outer_diameter", src),
+                     width=c.number("width", src))
+            b["type"] = "ball" if kind == "ball" else "roller"
+            if kind == "tapered":
+                b["contact_angle"] = 12.0
+            what = "boundary dimensions (element-set rule)"
+            if desig:
+                report.assumed.append(f"{c.type} {c.id}: designation {desig!r} is not in "
+                                      "the ISO table; its boundary dimensions are used")
+        else:
+            attr = "catalogue_designation" if c.type.endswith("catalog_geometry") \
+                else "inner_diameter"
+            raise ConfigError(src, f"component {c.id} ({c.type}): attribute {attr!r}"
+                              f"{' = ' + repr(desig) if desig else ''}: the designation is "
+                              "not in the built-in ISO 15 / ISO 355 table and the file "
+                              "gives no inner_diameter, outer_diameter and width")
+        b["damping"] = 200.0
+        attr = next((a for a in ("operating_radial_bearing_clearance",
+                                 "mounted_radial_bearing_clearance",
+                                 "radial_bearing_clearance") if c.has(a)), None)
+        if attr is not None:        # the bearing's radial play; the gap per side is half
+            b["clearance"] = 0.5 * c.number(attr, src)
+            report.mapped.append(f"{c.type} {c.id}: {attr} "
+                                 f"{c.number(attr, src) * 1e6:g} um -> clearance (gap per "
+                                 f"side) {b['clearance'] * 1e6:g} um")
+        else:
+            report.assumed.append(f"{c.type} {c.id}: radial clearance 0")
+        if c.given("radial_stiffness"):
+            k, why = _stiffness(c, "radial_stiffness", src)
+            report.ignored.append(f"{c.type} {c.id}: radial_stiffness "
+                                  + (f"{k:.4g} N/m" if k is not None else f"not taken ({why})")
+                                  + ": the rolling bearing's stiffness follows from its "
+                                  "element set and the load")
+    locating = c.text("axial_force_absorption", src, "no_direction") != "no_direction"
+    if locating:
+        ka, why = _stiffness(c, "axial_stiffness", src)
+        if ka is None:
+            ka = AXIAL_STIFFNESS
+            report.assumed.append(f"{c.type} {c.id}: axial stiffness {ka:g} N/m ({why}; "
+                                  f"the bearing locates shaft {inner.id} axially: "
+                                  f"axial_force_absorption = "
+                                  f"{c.text('axial_force_absorption', src)!r})")
+        b["axial_stiffness"] = ka
+    report.assumed.append(f"{c.type} {c.id}: viscous damping 200 N s/m")
+    b["_comment"] = f"REXS {c.type} {c.id} ({c.name}): shaft {inner.id} in {where}"
+    report.mapped.append(f"{c.type} {c.id} -> bearing{c.id}: shaft {inner.id} in {where}; "
+                         f"{what}")
+    return b
 
 
 def _detailed(model, c, b, kind, report) -> str | None:
@@ -165,12 +215,25 @@ def _detailed(model, c, b, kind, report) -> str | None:
     return "the detailed element set (rolling_bearing_row, rolling_element)"
 
 
-def _case_value(case, cid, attr):
+_FRACTIONS = ("load_duration_fraction", "operating_time_fraction")   # 1.0-1.5; 1.6 on
+_CASE_ATTRS = ("rotational_speed", "torque_around_u_axis", "power")
+
+
+def _case_value(model, case, cid, attr, where=""):
+    """``attr`` of component ``cid`` in a load case, in SI units through the unit table
+    (speeds rpm, torques N m, power W); None where absent or empty."""
+    from .reader import Component
     v = case.get(cid, {}).get(attr)
     if v is None:
         return None
-    from .reader import UNIT_FACTORS
-    return float(v[0]) * UNIT_FACTORS.get(v[1], 1.0)
+    comp = model.components[cid]
+    one = Component(cid, comp.type, comp.name, {attr: v})
+    if not one.given(attr):
+        return None
+    try:
+        return one.number(attr, model.source)
+    except ConfigError as exc:
+        raise ConfigError(exc.path, f"{where}{exc.message}") from None
 
 
 def _speed_ratios(shafts, gears, stages, order) -> dict:
@@ -187,82 +250,173 @@ def _speed_ratios(shafts, gears, stages, order) -> dict:
     return p
 
 
-def _load_case(model) -> int:
-    """Index of the load case with the largest load_duration_fraction (the first on a tie)."""
-    units = [c.id for c in model.of_type("gear_unit")]
-    best, frac = 0, -1.0
+def duration_shares(model) -> list:
+    """Each load case's duration share [%] (``load_duration_fraction``, in REXS 1.6 on
+    ``operating_time_fraction``, on the gear unit or any component of the case); None where
+    the case gives none."""
+    out = []
     for k, case in enumerate(model.load_cases):
-        f = next((_case_value(case, u, "load_duration_fraction") for u in units
-                  if _case_value(case, u, "load_duration_fraction") is not None), 0.0)
-        if f > frac:
-            best, frac = k, f
-    return best
+        units = [c.id for c in model.of_type("gear_unit")]
+        ids = units + [cid for cid in case if cid not in units]
+        out.append(next((v for cid in ids for a in _FRACTIONS
+                         if (v := _case_value(model, case, cid, a,
+                                              f"load case {k + 1}: ")) is not None), None))
+    return out
 
 
-def loads(model, shafts, gears, stages, order, report):
-    """(couplings, the load case used, as {"index", "rpm", "torque", "speeds", "torques"})."""
+def choose_load_case(model, load_case: int | None = None) -> tuple[int, str]:
+    """(index of the load case taken, why): the one named (1-based ``load_case``), else the one
+    with the largest duration share (the first of equal ones), else the first."""
+    n = len(model.load_cases)
+    if load_case is not None:
+        if not 1 <= load_case <= n:
+            raise ConfigError("--load-case", f"must be 1 to {n} (the file's load cases), got "
+                              f"{load_case}" if n else "the file has no load spectrum: "
+                              "leave --load-case out")
+        return load_case - 1, "named with --load-case"
+    shares = duration_shares(model)
+    if all(f is None for f in shares):
+        return 0, "the first: the file gives no duration shares"
+    k = max(range(n), key=lambda i: (shares[i] if shares[i] is not None else -1.0, -i))
+    return k, f"the largest duration share, {shares[k]:g} %"
+
+
+def _static_case(model) -> dict:
+    """The operating point a file without a load spectrum gives on its components (the
+    shafts' rotational_speed, the external loads' torque_around_u_axis or power)."""
+    case = {}
+    for c in model.of_type("shaft", "external_load"):
+        for attr in _CASE_ATTRS:
+            if c.given(attr):
+                case.setdefault(c.id, {})[attr] = c.attributes[attr]
+    return case
+
+
+def loads(model, shafts, gears, stages, order, report, load_case: int | None = None):
+    """(couplings, the load case used, as {"index", "rpm", "torque", "speeds", "torques"}).
+    Every problem is collected and raised together (each naming the component, the attribute
+    and the fix)."""
+    from ..base import ErrorList
     src = model.source
+    errs = ErrorList()
     _owner = type(model).owner
-    if not model.load_cases:
-        raise ConfigError(src, "the model has no load case (load_spectrum/load_case): the "
-                          "speed and torque come from it")
-    k = _load_case(model)
-    case = model.load_cases[k]
-    first = order[0]
     ratios = _speed_ratios(shafts, gears, stages, order)
-    speed_shaft = next((sid for sid in order if shafts[sid]["comp"].flag("defines_speed")), first)
+    first = order[0]
+    if model.load_cases:
+        k, how = choose_load_case(model, load_case)
+        cases = list(model.load_cases)
+        label = f"load case {k + 1}"
+    else:
+        if load_case is not None:
+            raise ConfigError("--load-case", "the file has no load spectrum: leave --load-case "
+                              "out (the operating point is the external loads' torque and the "
+                              "speed-defining shaft's speed)")
+        k, how, cases, label = 0, "no load spectrum", [_static_case(model)], "the model"
+    case = cases[k]
+    speed_shaft = next((sid for sid in order if shafts[sid]["comp"].flag("defines_speed")),
+                       first)
 
-    def driving_rpm(c):
-        v = _case_value(c, speed_shaft, "rotational_speed")
-        return None if v is None else abs(v / ratios[speed_shaft])
-    rpm = driving_rpm(case)
-    if rpm is None:
-        raise ConfigError(src, f"load case {k + 1}, component {speed_shaft} (shaft): missing "
-                          "attribute 'rotational_speed'")
+    def driving_rpm(c, where):
+        for sid in [speed_shaft] + [s for s in order if s != speed_shaft]:
+            v = _case_value(model, c, sid, "rotational_speed", where)
+            if v is not None and sid in ratios:
+                return abs(v / ratios[sid])
+        return None
+    rpm = None
+    with errs.catch():
+        rpm = driving_rpm(case, f"{label}: ")
+        if rpm is None:
+            raise ConfigError(src, f"{label}, component {speed_shaft} (shaft): missing "
+                              "attribute 'rotational_speed'; fix: give the speed-defining shaft "
+                              + ("its speed in the load case" if model.load_cases else
+                                 "its rotational_speed (the file has no load spectrum)"))
     ext = [c for c in model.of_type("external_load") if c.flag("transmits_torque")]
-    definer = next((c for c in ext if c.flag("defines_torque")), None)
-    if definer is None:
-        raise ConfigError(src, "no external_load with defines_torque = true: the torque of the "
-                          "load case sets the load")
-    t_def = _case_value(case, definer.id, "torque_around_u_axis")
-    if t_def is None:
-        raise ConfigError(src, f"load case {k + 1}, component {definer.id} (external_load): "
-                          "missing attribute 'torque_around_u_axis'")
-    d_shaft = _owner(model, definer.id, "shaft").id
-    t_in = abs(t_def) * abs(ratios[d_shaft])        # torque at the driving shaft, lossless
+
+    def torque_of(c, cid, sid, shaft_rpm, where):
+        t = _case_value(model, c, cid, "torque_around_u_axis", where)
+        if t is None or t == 0.0:
+            p = _case_value(model, c, cid, "power", where)
+            if p is not None and p != 0.0 and shaft_rpm:
+                return abs(p) / (shaft_rpm * math.pi / 30.0), "power"
+        return (abs(t), "torque") if t is not None else (None, None)
+
+    definer = next((c for c in ext if c.flag("defines_torque")), None) or next(
+        (c for c in ext if any(case.get(c.id, {}).get(a) for a in _CASE_ATTRS[1:])), None)
+    t_in, d_shaft = None, None
+    with errs.catch():
+        if definer is None:
+            raise ConfigError(src, "no external_load transmits a torque (transmits_torque = true "
+                              "with defines_torque = true, or a torque_around_u_axis or power); "
+                              "fix: give the input or output load its torque")
+        owner = _owner(model, definer.id, "shaft")
+        if owner is None or owner.id not in ratios:
+            raise ConfigError(src, f"component {definer.id} (external_load) is not part of a "
+                              "driven shaft; fix: an assembly relation with its shaft")
+        d_shaft = owner.id
+        t, kind = torque_of(case, definer.id, d_shaft,
+                            rpm * abs(ratios[d_shaft]) if rpm else None, f"{label}: ")
+        if t is None:
+            raise ConfigError(src, f"{label}, component {definer.id} (external_load): missing "
+                              "attribute 'torque_around_u_axis' (or 'power'); fix: give the "
+                              "load's torque or power" + ("" if model.load_cases else
+                                                          " on the component (the file has no "
+                                                          "load spectrum)"))
+        t_in = t * abs(ratios[d_shaft])             # torque at the driving shaft, lossless
+        if kind == "power":
+            report.mapped.append(f"external_load {definer.id}: its power "
+                                 f"{_case_value(model, case, definer.id, 'power') / 1e3:.6g} kW "
+                                 f"at {rpm * abs(ratios[d_shaft]):.6g} rpm -> torque {t:.6g} N m")
+    errs.raise_if()
     couplings = []
     for c in ext:
-        owner = _owner(model, c.id, "shaft")
-        if owner is None:
-            raise ConfigError(src, f"component {c.id} (external_load) is not part of a shaft")
-        sid = owner.id
-        torque = abs(_case_value(case, c.id, "torque_around_u_axis") or 0.0) or \
-            t_in / abs(ratios[sid])
-        role = "motor" if sid == first else "load"
-        stiffness = float(f"{torque / COUPLING_TWIST:.4g}")
-        couplings.append({
-            "name": f"{role}{c.id}", "shaft": sid,
-            "position": round(c.number("u_coordinate_on_shaft", src) - shafts[sid]["u0"], 12),
-            "role": role, "stiffness": stiffness, "torque": float(f"{torque:.10g}"),
-            "damping": float(f"{2e-4 * stiffness:.3g}"),
-            "_comment": f"REXS external_load {c.id} ({c.name}), load case {k + 1}"})
-        report.mapped.append(f"external_load {c.id} -> coupling '{role}{c.id}' ({role}) on "
-                             f"shaft {sid}: torque {torque:.6g} N m"
-                             + ("" if c.flag("defines_torque") else
-                                " (input torque x speed reduction, lossless)"))
-        report.assumed.append(f"external_load {c.id}: torsional stiffness {stiffness:g} N m/rad "
-                              f"(twist {COUPLING_TWIST:g} rad at its torque), damping "
-                              f"{2e-4 * stiffness:.3g} N m s/rad")
+        with errs.catch():
+            owner = _owner(model, c.id, "shaft")
+            if owner is None or owner.id not in ratios:
+                raise ConfigError(src, f"component {c.id} (external_load) is not part of a "
+                                  "driven shaft; fix: an assembly relation with its shaft")
+            sid = owner.id
+            own, _ = torque_of(case, c.id, sid, rpm * abs(ratios[sid]), f"{label}: ")
+            torque = own or t_in / abs(ratios[sid])
+            role = "motor" if sid == first else "load"
+            stiffness = float(f"{torque / COUPLING_TWIST:.4g}")
+            couplings.append({
+                "name": f"{role}{c.id}", "shaft": sid,
+                "position": round(c.number("u_coordinate_on_shaft", src) - shafts[sid]["u0"],
+                                  12),
+                "role": role, "stiffness": stiffness, "torque": float(f"{torque:.10g}"),
+                "damping": float(f"{2e-4 * stiffness:.3g}"),
+                "_comment": f"REXS external_load {c.id} ({c.name}), {label}"})
+            report.mapped.append(f"external_load {c.id} -> coupling '{role}{c.id}' ({role}) on "
+                                 f"shaft {sid}: torque {torque:.6g} N m"
+                                 + ("" if own else " (input torque x speed reduction, "
+                                    "lossless)"))
+            report.assumed.append(f"external_load {c.id}: torsional stiffness {stiffness:g} N m/"
+                                  f"rad (twist {COUPLING_TWIST:g} rad at its torque), damping "
+                                  f"{2e-4 * stiffness:.3g} N m s/rad")
+    errs.raise_if()
     for c in model.of_type("external_load"):
         if not c.flag("transmits_torque"):
             report.ignored.append(f"external_load {c.id}: forces and bending moments are not "
                                   "mapped (the scene's static load is the torque)")
-    speeds = [driving_rpm(c) for c in model.load_cases]
-    torques = [abs(_case_value(c, definer.id, "torque_around_u_axis") or 0.0)
-               * abs(ratios[d_shaft]) for c in model.load_cases]
-    report.mapped.append(f"load case {k + 1} of {len(model.load_cases)} (largest "
-                         f"load_duration_fraction) -> the operating point: {rpm:g} rpm, "
-                         f"{t_in:.6g} N m at the driving shaft")
+    speeds, torques = [], []
+    for j, c in enumerate(cases):
+        where = f"load case {j + 1}: "
+        n = driving_rpm(c, where)
+        speeds.append(n)
+        t, _ = torque_of(c, definer.id, d_shaft, n * abs(ratios[d_shaft]) if n else None, where)
+        torques.append((t or 0.0) * abs(ratios[d_shaft]))
+    if model.load_cases:
+        report.mapped.append(f"load case {k + 1} of {len(cases)} ({how}) -> the operating "
+                             f"point: {rpm:g} rpm, {t_in:.6g} N m at the driving shaft"
+                             + ("; the other load cases span the map's speed and load axes"
+                                if len(cases) > 1 else ""))
+        if how.startswith("the first"):
+            report.assumed.append(f"load spectrum: load case 1 of {len(cases)} ({how})")
+    else:
+        report.mapped.append(f"no load spectrum: the operating point from the components' own "
+                             f"attributes (shaft {speed_shaft} rotational_speed, external_load "
+                             f"{definer.id} torque): {rpm:g} rpm, {t_in:.6g} N m at the driving "
+                             "shaft")
     return couplings, {"index": k, "rpm": rpm, "torque": t_in,
                        "speeds": [s for s in speeds if s], "torques": torques}
 

@@ -21,32 +21,104 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..base import ConfigError
 
 __all__ = ["RexsModel", "Component", "Relation", "read_rexs", "SUPPORTED_VERSIONS",
-           "UNIT_FACTORS"]
+           "UNITS", "UNIT_FACTORS", "ATTRIBUTE_QUANTITY", "unit_key", "unit_factor"]
 
 #: REXS versions read (attribute names as in 1.4; the versions differ in components this
 #: importer does not map, e.g. 1.5's bevel and worm stages, which it refuses by name)
 SUPPORTED_VERSIONS = ("1.0", "1.1", "1.2", "1.3", "1.4", "1.5", "1.6", "2.0")
 
-#: unit as REXS writes it -> factor to the SI unit this importer uses
-UNIT_FACTORS = {
-    "mm": 1e-3, "m": 1.0, "mum": 1e-6, "um": 1e-6, "µm": 1e-6,
-    "deg": 1.0, "rad": 180.0 / math.pi,
-    "N / mm^2": 1e6, "N/mm^2": 1e6, "MPa": 1e6, "GPa": 1e9, "Pa": 1.0, "N / m^2": 1.0,
-    "kg / dm^3": 1e3, "kg/dm^3": 1e3, "kg / m^3": 1.0, "kg/m^3": 1.0, "g / cm^3": 1e3,
-    "N m": 1.0, "Nm": 1.0, "N mm": 1e-3, "N": 1.0, "kN": 1e3,
-    "1 / min": 1.0, "1/min": 1.0, "rpm": 1.0,
-    "kW": 1.0, "W": 1e-3,
-    "N / mm": 1e3, "N/mm": 1e3, "N / m": 1.0, "N/m": 1.0, "N / mum": 1e6, "N/mum": 1e6,
-    "N mm / rad": 1e-3, "N m / rad": 1.0,
-    "kg": 1.0, "kg m^2": 1.0, "kg mm^2": 1e-6,
-    "%": 1.0, "C": 1.0, "none": 1.0, "": 1.0,
+#: unit (normalised by :func:`unit_key`) -> (quantity, factor to the SI unit this importer
+#: uses).  The spellings of REXS 1.0-1.7 and 2.0 (their schemas' unit lists: ``°`` in 1.0-1.7
+#: beside ``deg``, ``mum`` for micrometres, ``1 / min``, ``N m``, ``kg / dm^3``, ``N / mm^2``)
+#: and the ones exporters write instead (``µm``, ``rpm``, ``Nm``, ``N*m``, ``MPa``, ...).
+#: Angles stay in degrees, speeds in rpm; power in W, everything else SI.
+UNITS = {
+    "m": ("length", 1.0), "mm": ("length", 1e-3), "cm": ("length", 1e-2),
+    "um": ("length", 1e-6),
+    "deg": ("angle", 1.0), "°": ("angle", 1.0), "rad": ("angle", 180.0 / math.pi),
+    "pa": ("stress", 1.0), "n/m^2": ("stress", 1.0), "n/mm^2": ("stress", 1e6),
+    "mpa": ("stress", 1e6), "gpa": ("stress", 1e9), "kn/mm^2": ("stress", 1e9),
+    "kg/m^3": ("density", 1.0), "kg/dm^3": ("density", 1e3), "g/cm^3": ("density", 1e3),
+    "kg/mm^3": ("density", 1e9),
+    "nm": ("torque", 1.0), "nmm": ("torque", 1e-3), "knm": ("torque", 1e3),
+    "n": ("force", 1.0), "kn": ("force", 1e3),
+    "1/min": ("speed", 1.0), "rpm": ("speed", 1.0), "min^-1": ("speed", 1.0),
+    "u/min": ("speed", 1.0), "rad/s": ("speed", 30.0 / math.pi), "1/s": ("speed", 60.0),
+    "w": ("power", 1.0), "kw": ("power", 1e3), "mw": ("power", 1e6),
+    "n/m": ("stiffness", 1.0), "n/mm": ("stiffness", 1e3), "n/um": ("stiffness", 1e6),
+    "kn/mm": ("stiffness", 1e6), "kn/um": ("stiffness", 1e9),
+    "nmm/rad": ("rotational stiffness", 1e-3), "nm/rad": ("rotational stiffness", 1.0),
+    "kg": ("mass", 1.0), "g": ("mass", 1e-3),
+    "kgm^2": ("inertia", 1.0), "kgmm^2": ("inertia", 1e-6), "gmm^2": ("inertia", 1e-9),
+    "%": ("fraction", 1.0), "c": ("temperature", 1.0), "°c": ("temperature", 1.0),
+    "none": ("number", 1.0), "": ("number", 1.0), "-": ("number", 1.0),
 }
+
+#: the quantity of each attribute the importer reads as a number: a unit of another quantity
+#: is an error naming both (a face width in degrees is a broken file, not a number to scale)
+ATTRIBUTE_QUANTITY = {
+    **{a: "length" for a in (
+        "u_coordinate_on_shaft", "u_coordinate_on_shaft_inner_side",
+        "u_coordinate_on_shaft_outer_side", "length", "outer_diameter_begin",
+        "outer_diameter_end", "inner_diameter_begin", "inner_diameter_end", "face_width",
+        "normal_module", "center_distance", "inner_diameter", "outer_diameter", "width",
+        "reference_diameter", "reference_diameter_rolling_bearing", "diameter_of_rolling_element",
+        "length_of_rolling_element", "operating_radial_bearing_clearance",
+        "mounted_radial_bearing_clearance", "radial_bearing_clearance")},
+    **{a: "angle" for a in ("helix_angle_reference_diameter", "helix_angle",
+                            "normal_pressure_angle", "pressure_angle")},
+    "elastic_modulus": "stress", "density": "density", "torque_around_u_axis": "torque",
+    "rotational_speed": "speed", "power": "power", "axial_stiffness": "stiffness",
+    "radial_stiffness": "stiffness", "mass_of_component": "mass",
+    **{a: "inertia" for a in ("moment_of_inertia_u_axis", "moment_of_inertia_v_axis",
+                              "moment_of_inertia_w_axis")},
+    "load_duration_fraction": "fraction", "operating_time_fraction": "fraction",
+    **{a: "number" for a in ("number_of_teeth", "poisson_ratio",
+                             "addendum_modification_coefficient", "profile_shift_coefficient",
+                             "number_of_rolling_elements")},
+}
+
+_MICRO = ("\u00b5", "\u03bc", "mu")     # micro sign, Greek mu, REXS's "mu" (mum, mus)
+
+
+def unit_key(unit) -> str:
+    """A unit as the table keys it: spaces, ``*``, ``·`` and ``⋅`` between factors dropped,
+    ``²``/``³`` as ``^2``/``^3``, the micro prefix (``µ``, ``μ``, REXS's ``mu``) as ``u``,
+    lower case (``N m``, ``Nm``, ``N*m`` and ``N·m`` are one unit)."""
+    s = str(unit or "").strip()
+    for a, b in (("\u00b2", "^2"), ("\u00b3", "^3"), ("\u00b7", ""), ("\u22c5", ""),
+                 ("*", ""), ("\u2009", ""), ("\u00a0", "")):
+        s = s.replace(a, b)
+    s = re.sub(r"\s+", "", s)
+    for m in _MICRO:
+        s = re.sub(m + r"(?=m|s|$)", "u", s)
+    return s.lower()
+
+
+def unit_factor(unit, quantity: str | None = None) -> float | None:
+    """The factor to SI of ``unit``; None where the table does not know it or it is not a
+    unit of ``quantity``."""
+    entry = UNITS.get(unit_key(unit))
+    if entry is None or (quantity is not None and entry[0] != quantity
+                         and {quantity, entry[0]} != {"number", "fraction"}):
+        return None
+    return entry[1]
+
+
+#: kept for callers that scale by a raw unit string: every spelling of the table
+UNIT_FACTORS = {k: v[1] for k, v in UNITS.items()}
+
+
+def _empty(value) -> bool:
+    return value is None or (isinstance(value, str) and not value.strip()) or \
+        (isinstance(value, (list, tuple)) and not value)
 
 
 @dataclass(frozen=True)
@@ -66,18 +138,37 @@ class Component:
         if attr not in self.attributes:
             raise ConfigError(source, f"component {self.id} ({self.type}"
                               f"{', ' + repr(self.name) if self.name else ''}): missing "
-                              f"attribute {attr!r}")
+                              f"attribute {attr!r}; fix: give it in the REXS file"
+                              + (f" (a {ATTRIBUTE_QUANTITY[attr]})" if attr in
+                                 ATTRIBUTE_QUANTITY else ""))
         return self.attributes[attr][0]
 
+    def given(self, attr: str) -> bool:
+        """The attribute is present with a value (an exporter's empty value is not given)."""
+        return attr in self.attributes and not _empty(self.attributes[attr][0])
+
+    def unit_error(self, attr: str, source: str, unit: str, quantity: str | None):
+        known = sorted({u for u, (q, _) in UNITS.items() if u and (quantity is None
+                                                                   or q == quantity)})
+        what = f"a unit of {quantity} " if quantity else ""
+        return ConfigError(source, f"component {self.id} ({self.type}): attribute {attr!r} "
+                           f"has unit {unit!r}, which the importer does not know as {what}"
+                           f"(known: {', '.join(known)}); fix: write the value in one of "
+                           "these units")
+
     def number(self, attr: str, source: str, default: float | None = None) -> float:
-        """The attribute in SI units (lengths m, angles deg, moduli Pa, ...)."""
-        if attr not in self.attributes and default is not None:
+        """The attribute in SI units (lengths m, angles deg, moduli Pa, ...), converted
+        through :data:`UNITS`; an empty value counts as not given."""
+        if not self.given(attr) and default is not None:
             return default
         value, unit = self.raw(attr, source), self.attributes[attr][1]
-        if unit not in UNIT_FACTORS:
+        if _empty(value):
             raise ConfigError(source, f"component {self.id} ({self.type}): attribute {attr!r} "
-                              f"has unit {unit!r}, which the importer does not know (known: "
-                              f"{', '.join(sorted(k for k in UNIT_FACTORS if k))})")
+                              "is empty; fix: give its value")
+        quantity = ATTRIBUTE_QUANTITY.get(attr)
+        factor = unit_factor(unit, quantity)
+        if factor is None:
+            raise self.unit_error(attr, source, unit, quantity)
         try:
             x = float(value)
         except (TypeError, ValueError):
@@ -86,12 +177,13 @@ class Component:
         if not math.isfinite(x):
             raise ConfigError(source, f"component {self.id} ({self.type}): attribute {attr!r} "
                               f"must be finite, got {value!r}")
-        return float(f"{x * UNIT_FACTORS[unit]:.12g}")    # 0.0045, not 0.0045000000000000005
+        return float(f"{x * factor:.12g}")    # 0.0045, not 0.0045000000000000005
 
     def vector(self, attr: str, source: str) -> tuple[float, float, float]:
         value, unit = self.raw(attr, source), self.attributes[attr][1]
+        factor = unit_factor(unit) or 1.0
         try:
-            v = tuple(float(c) * UNIT_FACTORS.get(unit, 1.0) for c in value)
+            v = tuple(float(c) * factor for c in value)
         except (TypeError, ValueError):
             v = ()
         if len(v) != 3 or not all(math.isfinite(c) for c in v):
@@ -100,7 +192,7 @@ class Component:
         return v
 
     def text(self, attr: str, source: str, default: str | None = None) -> str:
-        if attr not in self.attributes and default is not None:
+        if not self.given(attr) and default is not None:
             return default
         return str(self.raw(attr, source))
 

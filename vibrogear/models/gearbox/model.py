@@ -277,10 +277,16 @@ def _mesh_geometry(cfg, i, axes, gear_p):
     ga, gb = cfg.gears[ka], cfg.gears[kb]
     sa, sb = cfg.shaft_index(ga.shaft, ""), cfg.shaft_index(gb.shaft, "")
     ya, yb = cfg.shafts[sa].y0 + ga.position, cfg.shafts[sb].y0 + gb.position
-    if abs(ya - yb) > 1e-3 * max(ga.width, gb.width):
+    # faces of unequal width need not share a centre: the mesh's face width must fit in
+    # their axial overlap
+    overlap = min(ya + ga.width / 2, yb + gb.width / 2) - max(ya - ga.width / 2, yb - gb.width / 2)
+    if abs(ya - yb) > 1e-3 * max(ga.width, gb.width) and \
+            overlap < (m.face_width or min(ga.width, gb.width)) - 1e-9:
         raise ConfigError(f"{path}.gear_b", f"gears of the mesh lie in different planes: "
-                          f"housing y = {ya:.6g} m (gear_a) and {yb:.6g} m (gear_b); "
-                          "adjust the shafts' y0 or the gear positions")
+                          f"housing y = {ya:.6g} m (gear_a) and {yb:.6g} m (gear_b), their "
+                          f"faces overlap over {max(overlap, 0.0):.6g} m, less than the mesh's "
+                          "face width; adjust the shafts' y0 or the gear positions, or set "
+                          "face_width to the overlap")
     ca = housing_to_rotor([axes[sa][0], 0.0, axes[sa][1]])[:2]
     cb = housing_to_rotor([axes[sb][0], 0.0, axes[sb][1]])[:2]
     r_a, r_b = ga.pitch_diameter / 2, gb.pitch_diameter / 2
