@@ -49,11 +49,15 @@ def load(path: str | Path, overrides: Mapping[str, Any] | Sequence[str] | None =
     return validate_scene(scene)
 
 
-def import_rexs(path: str | Path, *, housing: str | None = None) -> Scene:
+def import_rexs(path: str | Path, *, housing: str | None = None,
+                load_case: int | None = None) -> Scene:
     """The gearbox of a REXS model (``.rexs`` XML, ``.rexsj`` JSON) as a checked scene, as
     ``vibrogear import`` maps it (docs/your-gearbox.md); ``housing``: None (the casing is
-    rigid ground) or ``"box"`` (a parametric box housing around the shafts).  A STEP casing
-    needs its clamped region: use ``vibrogear import --housing CASING.step``."""
+    rigid ground) or ``"box"`` (a parametric box housing around the shafts); ``load_case``:
+    the load case of the file's load spectrum taken as the operating point (1-based; None:
+    the one with the largest duration share).  A model the mapping cannot take raises
+    ConfigError listing every problem (each naming the component and attribute).  A STEP
+    casing needs its clamped region: use ``vibrogear import --housing CASING.step``."""
     from .config import scene_from_dict
     from .config.rexs import import_rexs as _map, is_rexs_path
     from .models.validate import validate_scene
@@ -62,7 +66,7 @@ def import_rexs(path: str | Path, *, housing: str | None = None) -> Scene:
     if housing not in (None, "box"):
         raise ConfigError("housing", f"expected None or 'box', got {housing!r} (a STEP casing: "
                           "`vibrogear import --housing CASING.step --fixed-region ...`)")
-    return validate_scene(scene_from_dict(_map(path, housing=housing).data))
+    return validate_scene(scene_from_dict(_map(path, housing=housing, load_case=load_case).data))
 
 
 def check(scene: Scene, *, files: bool = False) -> Scene:

@@ -194,3 +194,17 @@ def test_the_example_notebook_runs_and_writes_nothing():
     figures = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs
                if "image/png" in o.get("data", {})]
     assert figures                                    # the Figure shows as the cell's value
+
+
+def test_import_rexs_gives_the_scene_vibrogear_import_maps():
+    """The FVA two-stage gearbox (REXS 1.4): the gear data the file states (test_rexs_import)."""
+    path = ROOT / "tests" / "data" / "rexs" / "FVA-Industriegetriebe_2stufig_1-4.rexs"
+    scene = vg.import_rexs(path)
+    teeth = {g.name: (g.teeth, g.module, g.helix_angle) for g in scene.gearbox.gears}
+    assert teeth["gear15"] == (27, 0.0045, 21.0) and teeth["gear17"] == (51, 0.0045, 21.0)
+    assert teeth["gear16"] == (23, 0.0065, 10.0) and teeth["gear18"] == (34, 0.0065, 10.0)
+    assert vg.load(path) == scene                      # load imports a REXS file the same way
+    with pytest.raises(vg.ConfigError, match="housing"):
+        vg.import_rexs(path, housing="casing.step")
+    with pytest.raises(vg.ConfigError, match=r"\*\.rexs"):
+        vg.import_rexs(SCENE)
