@@ -208,3 +208,23 @@ def test_import_rexs_gives_the_scene_vibrogear_import_maps():
         vg.import_rexs(path, housing="casing.step")
     with pytest.raises(vg.ConfigError, match=r"\*\.rexs"):
         vg.import_rexs(SCENE)
+
+
+def test_replace_refills_what_the_scene_derives_as_a_set_does():
+    """single_stage with the housing's box sizes and bore positions left to the gearbox
+    (config/housing_sizing.py): a thicker wall through ``replace`` gives the scene the file
+    with that wall gives, the box grown by twice the 5 mm (margin = tip + wall + 5 mm)."""
+    import copy
+
+    from vibrogear.config.scene import read_toml, scene_from_dict
+    data = read_toml(ROOT / "configs" / "single_stage.toml")
+    for k in ("length", "width", "height"):
+        data["housing"].pop(k)
+    for b in data["housing"]["bores"]:
+        b.pop("x"), b.pop("z")
+    scene = scene_from_dict(copy.deepcopy(data))
+    thick = scene.replace({"housing.wall_thickness": 0.02})
+    edited = copy.deepcopy(data)
+    edited["housing"]["wall_thickness"] = 0.02
+    assert thick == scene_from_dict(edited)
+    assert thick.housing.length == pytest.approx(scene.housing.length + 2 * 0.005, abs=1e-9)

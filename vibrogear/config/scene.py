@@ -129,12 +129,15 @@ class Scene:
         if not isinstance(changes, dict):
             raise ConfigError("replace", f"expected a dict of --set keys and values, got "
                               f"{type(changes).__name__}")
-        data = as_data(self)
+        # the scene as written (before the sizes derived from other sections were filled in,
+        # so that they follow the change as they follow a --set), else as it stands
+        written = getattr(self, "_written", None)
+        data = copy.deepcopy(written) if written is not None else as_data(self)
         for key, value in changes.items():
             if not isinstance(key, str):
                 raise ConfigError("replace", f"keys are --set paths such as "
                                   f"'sweep.n_points', got {key!r}")
-            set_path(data, parse_key(key), _plain(value))
+            set_path(data, parse_key(key, what="replace"), _plain(value))
         return scene_from_dict(data)
 
     def _check_analysis(self, i: int, analysis: str) -> None:
@@ -185,16 +188,19 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
         set_path(data, keys, value)
     if base_dir is not None:
         resolve_file(data, base_dir)
+    written = copy.deepcopy(data)   # what Scene.replace changes
     fill_housing(data)              # a parametric housing's missing sizes, from the gearbox
     # the sections that take the parameter read it under the model's keys
-    return build(GearboxScene if "gearbox" in data else Scene, data)
+    scene = build(GearboxScene if "gearbox" in data else Scene, data)
+    object.__setattr__(scene, "_written", written)
+    return scene
 
 
 def load_scene(path: str | Path, overrides: tuple[str, ...] = (),
                changes: dict[str, Any] | None = None) -> Scene:
     """Read, override (``section.key=value``) and validate a scene file; a REXS model
     (``.rexs``, ``.rexsj``) is imported first (:mod:`.rexs`).  ``changes``: more overrides as
-    {``--set`` key: Python value} (:meth:`Scene.replace`), applied after ``overrides``."""
+    {``--set`` key: Python value} (:meth:`Scene.replace`), applied before ``overrides``."""
     from .rexs import import_rexs, is_rexs_path
     data = import_rexs(path).data if is_rexs_path(path) else read_toml(path)
     try:
@@ -204,7 +210,7 @@ def load_scene(path: str | Path, overrides: tuple[str, ...] = (),
                                   f"{type(changes).__name__}")
             data = copy.deepcopy(data)
             for key, value in changes.items():
-                set_path(data, parse_key(str(key)), _plain(value))
+                set_path(data, parse_key(str(key), what="overrides"), _plain(value))
         return scene_from_dict(data, overrides, base_dir=Path(path).parent)
     except RecursionError:
         raise ConfigError(str(path), "arrays or tables nested too deeply") from None
