@@ -169,7 +169,8 @@ def test_modes_in_memory_equal_the_modes_csv(tmp_path):
 def test_help_lists_the_fields_with_units_and_shapes(cls, entries):
     import importlib
     module, name = cls.split(":")
-    text = pydoc.render_doc(getattr(importlib.import_module(module), name), renderer=pydoc.plaintext)
+    text = pydoc.render_doc(getattr(importlib.import_module(module), name),
+                            renderer=pydoc.plaintext)
     missing = [e for e in entries if e not in text]
     assert not missing, f"help({name}) lacks {missing}"
 

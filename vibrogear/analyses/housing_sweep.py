@@ -110,6 +110,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     summary = {"parameter": opts.parameter, "values": [r["value"] for r in rows],
                "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
                "points_computed": len(todo), "points_resumed": len(values) - len(todo),
-               "resume": store.note if store is not None else "", "seconds": time.perf_counter() - t0}
+               "resume": store.note if store is not None else "",
+               "seconds": time.perf_counter() - t0}
     return AnalysisOutcome(summary=summary, result=HousingSweepResult(
         parameter=opts.parameter, rows=tuple(rows), freqs=freqs))

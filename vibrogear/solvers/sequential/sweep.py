@@ -131,7 +131,8 @@ class SweepResult:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays ``sweep.npz`` holds, by the same names (NaN/inf replaced by 0; failed
-        points flagged by ``ok = False`` and ``status < 0``; see :mod:`vibrogear.report.sweep_io`)."""
+        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.sweep_io`
+        describes them)."""
         ok = self.status == 0
         return dict(**self._class_arrays(),
             param=_finite(self.param), direction=np.asarray(self.direction, dtype="<U4"),
