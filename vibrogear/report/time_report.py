@@ -64,8 +64,9 @@ def write(scene, outcome, out, previous=None) -> dict:
 
 def figure(r):
     """The figure of a time response
-    (:class:`~vibrogear.analyses.time_response.TimeResponseResult`): a gearbox's mesh deformations, phase trajectories, mesh and bearing forces; the impact
-    pair's monitored deformation and its phase trajectory."""
+    (:class:`~vibrogear.analyses.time_response.TimeResponseResult`): a gearbox's mesh
+    deformations, phase trajectories, mesh and bearing forces; the impact pair's monitored
+    deformation and its phase trajectory."""
     study, model = r.study, r.study.model
     names = _names(r)
     title = f"{study.title}, {study.param_name} = {r.param:g}"
