@@ -229,3 +229,27 @@ def test_replace_refills_what_the_scene_derives_as_a_set_does():
     edited["housing"]["wall_thickness"] = 0.02
     assert thick == scene_from_dict(edited)
     assert thick.housing.length == pytest.approx(scene.housing.length + 2 * 0.005, abs=1e-9)
+
+
+def test_time_response_and_branches_in_memory():
+    """The time response's clock from the scene alone: 40 mesh periods of the 40-tooth
+    pinion at 5800 rpm last 40 x 60 / (5800 x 40) s, sampled 32 times a period; the branch
+    figure and arrays of a short continuation."""
+    from matplotlib.figure import Figure
+
+    scene = vg.load(SCENE, {"time_response.periods": 40, "continuation.max_points": 12})
+    run = vg.run(scene, ["time_response", "continuation"])
+    tr = run.results["time_response"].arrays()
+    assert tr["t_s"][-1] == pytest.approx(40 * 60.0 / (5800.0 * 40), rel=1e-12)
+    assert tr["t_s"].shape == (40 * 32 + 1,)
+    assert tr["delta"].shape == tr["force"].shape == (len(tr["names"]), tr["t_s"].size)
+    assert tr["names"][0] == "G1"
+    assert isinstance(run.results["time_response"].plot(), Figure)
+    br = run.results["continuation"]
+    a = br.arrays()
+    assert {"param", "qmin", "qmax", "stable", "label", "floquet", "branch"} <= set(a)
+    assert np.all((a["param"] >= 4500.0 - 1e-9) & (a["param"] <= 7000.0 + 1e-9))
+    assert isinstance(br.plot("qmin"), Figure)
+    assert isinstance(run.results["continuation"].plot(sweep=None), Figure)
+    with pytest.raises(ValueError, match="qmax"):
+        br.plot("q")
