@@ -212,18 +212,25 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan, outcomes=None) -
 
 def _in_memory_sources(scene: Scene, outcomes: dict) -> dict:
     """{file name: arrays} of a run in memory: the findings' source files
-    (``analyses.findings.SOURCE_FILES``) as each result's ``arrays()`` gives them, the
-    arrays its report writer would have written."""
+    (``analyses.findings.SOURCE_FILES``) as the report writers would have written them: a
+    ``.npz`` as its result's ``arrays()``, ``erp.csv`` (nvh with a housing) as the columns
+    rpm, erp_w, erp_db."""
+    import numpy as np
+
     from .analyses.findings import SOURCE_FILES
     found = {}
     for name, outcome in outcomes.items():
-        run = VERBS[name].runs.get(scene.model_kind)
-        arrays = getattr(outcome.result, "arrays", None)
-        if run is None or arrays is None:
+        run, result = VERBS[name].runs.get(scene.model_kind), outcome.result
+        if run is None or result is None:
             continue
         for f in run.outputs:
-            if f in SOURCE_FILES and f.endswith(".npz"):
-                found[f] = arrays()
+            if f not in SOURCE_FILES:
+                continue
+            if f.endswith(".npz") and hasattr(result, "arrays"):
+                found[f] = result.arrays()
+            elif f == "erp.csv" and getattr(result, "erp_w", None) is not None:
+                found[f] = {k: np.asarray(getattr(result, k), float)
+                            for k in ("rpm", "erp_w", "erp_db")}
     return found
 
 

@@ -253,3 +253,26 @@ def test_time_response_and_branches_in_memory():
     assert isinstance(run.results["continuation"].plot(sweep=None), Figure)
     with pytest.raises(ValueError, match="qmax"):
         br.plot("q")
+
+
+@pytest.mark.slow                     # ~19 s on two cores: two runs of each, one writing figures
+def test_map_and_runup_in_memory_judge_as_their_files_do(tmp_path):
+    """The findings of a run in memory come from the results' arrays; a run into a folder
+    derives them from the files it wrote (map.npz, runup.npz): the same bands and verdict."""
+    scene = vg.load(SCENE, {"map.n_speeds": 3, "map.n_loads": 2, "map.curves": False,
+                            "map.transient_periods": 60, "map.extra_transient_periods": 60,
+                            "map.record_periods": 16, "runup.rpm_end": 5000.0,
+                            "runup.rate": 800.0})
+    for verb in ("map", "runup"):
+        mem = vg.run(scene, [verb])
+        disk = vg.run(scene, [verb], out=tmp_path / verb)
+        summary = json.loads((tmp_path / verb / "summary.json").read_text())
+        assert mem.findings["bands"] == summary["findings"]["bands"]
+        assert mem.findings["verdict"] == summary["findings"]["verdict"] == \
+            disk.findings["verdict"]
+        with np.load(tmp_path / verb / f"{verb}.npz", allow_pickle=False) as z:
+            a = mem.results[verb].arrays()
+            assert sorted(a) == sorted(z.files)
+            for k in z.files:
+                if k != "wall_time":                  # the one entry that is a clock
+                    np.testing.assert_array_equal(a[k], z[k], err_msg=k)

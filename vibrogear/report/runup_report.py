@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analyses.runup import runup_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .branch_io import branch_arrays
 from .figure import save_figure
@@ -32,28 +33,6 @@ from .runup_plots import plot_envelopes, plot_orders, plot_waterfall
 from .sweep_io import read_sweep_npz, sweep_arrays
 
 __all__ = ["write", "runup_arrays", "steady_state"]
-
-
-def runup_arrays(result) -> dict:
-    """The arrays of ``runup.npz`` (see the module docstring)."""
-    out = {"meshes": np.array(result.mesh_names), "order_names": np.array(result.order_names),
-           "orders": np.asarray(result.orders, float), "unit": np.array(result.study.monitor.unit),
-           "directions": np.array(list(dict.fromkeys(r.direction for r in result.runs))),
-           "runs": np.array([r.key or r.direction for r in result.runs]),
-           "inertia_torque": np.array([r.inertia_torque for r in result.runs], dtype=bool)}
-    for r in result.runs:
-        d = r.key or r.direction
-        out[f"{d}_time"] = r.time_s
-        out[f"{d}_rpm"] = r.rpm
-        out[f"{d}_track_rpm"] = r.track_rpm
-        for i, name in enumerate(result.mesh_names):
-            out[f"{d}_env_min_{name}"] = r.env_min[i]
-            out[f"{d}_env_max_{name}"] = r.env_max[i]
-            out[f"{d}_losses_{name}"] = r.losses[i].astype(np.int64)
-            tr = r.tracks[name]
-            for k, oname in enumerate(result.order_names):
-                out[f"{d}_order_{name}_{oname}"] = tr.amplitude[k]
-    return out
 
 
 def _csv(result) -> bytes:
