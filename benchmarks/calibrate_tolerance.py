@@ -101,13 +101,15 @@ def main(argv=None) -> dict:
           f"measured / fitted = {ratio.max():.2f}; rule in code: {ACCURACY_RULE}")
     for acc in (1e-2, 1e-3, 1e-4, 1e-5):
         print(f"  accuracy {acc:g} -> rtol, atol = {tolerances_for(acc)}")
+    from vibrogear.report.figure import save_figure
     from vibrogear.report.precision_plots import plot_accuracy_rule
 
     pts = [{"label": f"{r['case']} {r['rpm']:.0f} rpm", "rtols": RTOLS, "errors": r["errors"],
             "steps_per_period": r["steps_per_period"]} for r in use]
-    plot_accuracy_rule(pts, ACCURACY_RULE, 1e-3, tolerances_for(1e-3)[0],
-                       Path(a.out).with_suffix(""), formats=("png",),
-                       title="gearbox work-precision: the accuracy -> rtol rule at accuracy 1e-3")
+    fig = plot_accuracy_rule(pts, ACCURACY_RULE, 1e-3, tolerances_for(1e-3)[0],
+                             title="gearbox work-precision: the accuracy -> rtol rule at "
+                                   "accuracy 1e-3")
+    save_figure(fig, Path(a.out).with_suffix(""), formats=("png",))
     out = {"rtols": RTOLS, "atol_per_rtol": ATOL_PER_RTOL, "transient_periods": a.transient,
            "record_periods": a.record, "points": rows, "fit": fit}
     Path(a.out).parent.mkdir(parents=True, exist_ok=True)

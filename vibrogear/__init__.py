@@ -1,4 +1,16 @@
-"""vibrogear: nonlinear vibration analysis of gear drives."""
+"""vibrogear: nonlinear vibration analysis of gear drives.
+
+From Python (:mod:`vibrogear.api`, imported on first use, so ``import vibrogear`` stays
+cheap: no numba, dolfinx or matplotlib until a run needs them)::
+
+    import vibrogear as vg
+    scene = vg.load("configs/gear_pair.toml")
+    run = vg.run(scene.replace({"sweep.n_points": 6}), ["sweep"])   # in memory, writes nothing
+    run.results["sweep"].arrays(); run.results["sweep"].plot(); run.findings
+
+``load``, ``replace`` (a method of the scene), ``check``, ``run``, ``import_rexs`` and the
+``Run`` they return are documented in :mod:`vibrogear.api` and docs/python.md.
+"""
 import os as _os
 
 # GNU OpenMP is not fork-safe: once a process has run an OpenMP region (CHOLMOD's
@@ -9,5 +21,19 @@ import os as _os
 # Set before any library that reads it is loaded; a value the user sets is kept.
 _os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-__version__ = "0.1.0"
-__all__ = ["__version__"]
+from .version import __version__  # noqa: E402
+
+#: the public API, re-exported from vibrogear.api on first access
+_API = ("load", "run", "check", "import_rexs", "Run", "ConfigError", "NumericalFailure")
+__all__ = ["__version__", *_API]
+
+
+def __getattr__(name: str):
+    if name in _API:
+        from . import api
+        return getattr(api, name)
+    raise AttributeError(f"module 'vibrogear' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_API))

@@ -21,7 +21,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from . import __version__
+from .version import __version__
 from .config.base import ConfigError
 
 __all__ = ["cache_dir", "cache_key", "entry_dir", "clear_cache", "cache_info", "publish_entry",

@@ -130,22 +130,17 @@ def _main(argv: list[str] | None) -> int:
         return import_command(args.model, args.output, argv, housing=args.housing,
                               fixed_region=args.fixed_region, length_unit=args.length_unit,
                               load_case=args.load_case)
-    from .config import ConfigError, load_scene
+    from . import api
+    from .config import ConfigError
     from .pipeline.files import check_output_dir
 
     try:
-        scene = load_scene(args.scene, tuple(args.overrides))
+        scene = api.load(args.scene, tuple(args.overrides))
         if args.command in SINGLE:
-            from .config.base import as_data, build
-            data = as_data(scene)
-            data["scene"]["analyses"] = [SINGLE[args.command]]
-            scene = build(type(scene), data)
+            scene = api.with_analyses(scene, [SINGLE[args.command]])
         out = (check_output_dir(args.out) if args.out is not None else
                check_output_dir(Path("out") / scene.scene.name, "scene.name"))
-        from .models.validate import validate_scene
-        from .runner import resolve
-        validate_scene(scene, files=args.command == "check")
-        resolve(scene)
+        api.check(scene, files=args.command == "check")
     except (ConfigError, NotImplementedError) as exc:
         _error("invalid input", exc)
         return EXIT_INPUT
@@ -156,18 +151,16 @@ def _main(argv: list[str] | None) -> int:
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
               f" output folder {out}/)")
         return EXIT_OK
-    from .runner import NumericalFailure, RunContext, WriteFailure, run_scene
+    from .runner import NumericalFailure, WriteFailure
 
-    from .pipeline.outcome import LostUnits, is_root_process
-    from .pipeline.compile_notice import compile_notice
-    from .pipeline.run_lock import FolderInUse, RunLock
+    from .pipeline.outcome import LostUnits
+    from .pipeline.run_lock import FolderInUse
 
-    ctx = RunContext(out=out, quiet=args.quiet)
     _handle_stop_signals()
     try:
-        # compile_notice: a line on stderr while numba compiles (cold cache), unless --quiet
-        with RunLock(out, wait=args.wait, enabled=is_root_process()), compile_notice(args.quiet):
-            summary = run_scene(scene, ctx, source=str(args.scene))
+        # the API's run: the folder's lock, the compile notice, every file the run writes
+        summary = api.run(scene, out=out, quiet=args.quiet, wait=args.wait,
+                          source=str(args.scene)).summary
     except FolderInUse as exc:
         _error("invalid input", exc)
         return EXIT_INPUT

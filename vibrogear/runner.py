@@ -17,7 +17,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from . import __version__
+from .version import __version__
 from .config import Scene
 from .analyses.invoke import invoke, load, with_needs
 from .config.verbs import VERBS
@@ -82,17 +82,23 @@ def write_summary(out: Path, summary: dict) -> None:
     atomic_write_text(out / "summary.json", json.dumps(finite_json(summary), indent=2))
 
 
-def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
+def run_scene(scene: Scene, ctx: RunContext, source: str = "", *,
+              outcomes: dict | None = None) -> dict:
     """Run every analysis of ``scene`` and its report writer; write ``summary.json``
     after each; return the summary.  The reduced-model study is built once, before the
-    first analysis that takes it, and handed to each explicitly."""
+    first analysis that takes it, and handed to each explicitly.  ``outcomes``: a dict that
+    receives each analysis's :class:`AnalysisOutcome` by name (:func:`vibrogear.api.run`).
+    ``ctx.out`` None: a run in memory; no report writer runs and no file is written
+    (summary.json, report.html, figures, partial files: none)."""
     from .models.validate import validate_scene
     validate_scene(scene)                    # before the output folder exists
     plan = resolve(scene)
+    if ctx.out is None:
+        return _run_plan(scene, ctx, source, plan, outcomes)
     created = not ctx.out.exists()
     ctx.out.mkdir(parents=True, exist_ok=True)
     try:
-        return _run_plan(scene, ctx, source, plan)
+        return _run_plan(scene, ctx, source, plan, outcomes)
     except Exception:
         # an input error found while building the model: leave no empty output folder
         if created and ctx.out.is_dir() and not any(ctx.out.iterdir()):
@@ -100,7 +106,7 @@ def run_scene(scene: Scene, ctx: RunContext, source: str = "") -> dict:
         raise
 
 
-def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
+def _run_plan(scene: Scene, ctx: RunContext, source: str, plan, outcomes=None) -> dict:
     summary: dict[str, Any] = {
         "scene": scene.scene.name, "source": source, "model": scene.model_kind,
         "analyses": list(scene.scene.analyses),
@@ -125,14 +131,16 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
                 t0 = time.perf_counter()
             # analyses that read earlier outcomes take them as ``previous`` (read-only), with
             # the saved results of verbs that did not run here
-            seen = {**_load_saved(name, scene.model_kind, ctx.out, previous), **previous}
+            saved = {} if ctx.out is None else _load_saved(name, scene.model_kind, ctx.out,
+                                                           previous)
+            seen = {**saved, **previous}
             seen = with_needs(name, scene.model_kind, study, scene, ctx, seen)
             outcome = invoke(load(entry.analysis), study if entry.study else None, scene, ctx,
                              seen)
             record = outcome.record()
             if outcome.warnings:
                 record["warnings"] = list(outcome.warnings)
-            if entry.report is not None and ctx.root:
+            if entry.report is not None and ctx.writes:
                 files = load(entry.report)(scene, outcome, ctx.out, MappingProxyType(previous))
                 if files:
                     record["files"] = files
@@ -140,6 +148,8 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
                 Path(path).unlink(missing_ok=True)
             summary["results"][name] = record
             previous[name] = outcome
+            if outcomes is not None:
+                outcomes[name] = outcome
         except (NumericalFailure, ArithmeticError) as exc:
             # ArithmeticError: overflow, a singular or non-finite matrix (e.g. the housing's
             # HousingNumericalError), raised below the analyses; reported with the analysis name
@@ -178,22 +188,50 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
         summary["wall_time_s"][name] = time.perf_counter() - t0
         if study is not None and study.notes:
             summary["notes"] = list(study.notes)
-        failure = _write_run_files(ctx.out, summary, failure, html=False)
+        if ctx.out is not None:
+            failure = _write_run_files(ctx.out, summary, failure, html=False)
         if failure is not None:
             break
     if ctx.root:
         # what the finished results say about the speeds (also after a failure: finished
         # points are never lost)
         from .analyses.findings import run_findings
-        findings = run_findings(scene, summary["results"])
+        findings = run_findings(scene, summary["results"],
+                                _in_memory_sources(scene, previous) if ctx.out is None else None)
         if findings is not None:
             summary["findings"] = findings
-        failure = _write_overview(scene, ctx.out, findings, failure)
+        if ctx.out is not None:
+            failure = _write_overview(scene, ctx.out, findings, failure)
     summary["wall_time_s"]["total"] = time.perf_counter() - t_all
-    failure = _write_run_files(ctx.out, summary, failure, html=True)
+    if ctx.out is not None:
+        failure = _write_run_files(ctx.out, summary, failure, html=True)
     if failure is not None:
         raise failure
     return summary
+
+
+def _in_memory_sources(scene: Scene, outcomes: dict) -> dict:
+    """{file name: arrays} of a run in memory: the findings' source files
+    (``analyses.findings.SOURCE_FILES``) as the report writers would have written them: a
+    ``.npz`` as its result's ``arrays()``, ``erp.csv`` (nvh with a housing) as the columns
+    rpm, erp_w, erp_db."""
+    import numpy as np
+
+    from .analyses.findings import SOURCE_FILES
+    found = {}
+    for name, outcome in outcomes.items():
+        run, result = VERBS[name].runs.get(scene.model_kind), outcome.result
+        if run is None or result is None:
+            continue
+        for f in run.outputs:
+            if f not in SOURCE_FILES:
+                continue
+            if f.endswith(".npz") and hasattr(result, "arrays"):
+                found[f] = result.arrays()
+            elif f == "erp.csv" and getattr(result, "erp_w", None) is not None:
+                found[f] = {k: np.asarray(getattr(result, k), float)
+                            for k in ("rpm", "erp_w", "erp_db")}
+    return found
 
 
 def _write_run_files(out: Path, summary: dict, failure, *, html: bool):

@@ -227,7 +227,13 @@ def test_mode_figure_and_animation_are_written(surface, tmp_path):
 
     _, s = surface
     res = _res(s)
-    png = plot_mode_shapes(res, tmp_path / "modes.png", [0, 1, 2])
+    from matplotlib.figure import Figure
+
+    from vibrogear.report.figure import write_figure
+
+    fig = plot_mode_shapes(res, [0, 1, 2])
+    assert isinstance(fig, Figure) and not list(tmp_path.iterdir())
+    png = write_figure(fig, tmp_path / "modes.png", dpi=100)
     with Image.open(png) as im:
         assert im.size[0] > 600
     disp, val, view, title = mode_panel_data(res, 1)

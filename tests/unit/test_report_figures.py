@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from vibrogear.report.branch_plots import branch_legend, draw_branches, label_special_points
-from vibrogear.report.figure import mode_count_note, new_figure, plain_title
+from vibrogear.report.figure import mode_count_note, new_figure, plain_title, save_figure
 
 
 def _branches():
@@ -69,8 +69,8 @@ def test_branch_figure_legend_has_no_stable_entry(tmp_path):
     from vibrogear.report.branch_plots import plot_branches
 
     arrays = _branches()
-    svg = plot_branches(arrays, tmp_path / "branch_max", title="two_stage: m = 146 (21+25+100)",
-                        formats=("svg",))[0].read_text()
+    svg = save_figure(plot_branches(arrays, title="two_stage: m = 146 (21+25+100)"),
+                      tmp_path / "branch_max", formats=("svg",))[0].read_text()
     assert "period-1 branch unstable" in svg
     assert "period-1 stable" not in svg and "branch stable" not in svg
     assert "m = 146" not in svg
@@ -105,14 +105,14 @@ def _sweep(n=8):
 def test_bifurcation_has_a_panel_per_mesh_and_rows_per_direction(tmp_path):
     from vibrogear.report.sweep_plots import plot_bifurcation
 
-    svg = plot_bifurcation(_sweep(), tmp_path / "b", formats=("svg",),
-                           title="two_stage: m = 146 (21+25+100)")[0].read_text()
+    svg = save_figure(plot_bifurcation(_sweep(), title="two_stage: m = 146 (21+25+100)"),
+                      tmp_path / "b", formats=("svg",))[0].read_text()
     assert "G1: impacts" in svg and "G2: impacts" in svg       # both meshes, G2 rattles
     assert "out of contact" in svg and "back-flank impacts" in svg
     assert "G1 up" not in svg and "bearing:A up" not in svg    # rows per direction only
     assert "Poincare" in svg and "m = 146" not in svg
-    asked = plot_bifurcation(_sweep(), tmp_path / "c", formats=("svg",),
-                             per_contact_rows=True)[0].read_text()
+    asked = save_figure(plot_bifurcation(_sweep(), per_contact_rows=True), tmp_path / "c",
+                        formats=("svg",))[0].read_text()
     for row in ("G1 up", "G1 down", "bearing:A down"):         # differ from the whole
         assert row in asked
     assert "G2 up" not in asked                                # same class as the whole
@@ -144,13 +144,14 @@ def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_
     freq = np.outer(rpm / 60.0 * 40, order)
     amp = np.full((2, order.size), 1e-7)
     amp[:, 8] = 2e-6
-    path = plot_waterfall(tmp_path / "w.png", rpm, freq, amp, label="DTE", unit="m",
-                          max_hz=5000.0, mesh_hz=np.outer(rpm, [40 / 60.0]),
-                          shaft_hz=np.outer(rpm, [1 / 60.0]), max_order=3,
-                          title="two_stage: m = 146 (21+25+100)",
-                          lines=(np.array([667.0, 900.0]), rpm, np.array(["mesh", "unidentified"]),
-                                 np.array([2e-6, 1e-6])),
-                          unstable=np.array([True, False]))[0]
+    fig = plot_waterfall(rpm, freq, amp, label="DTE", unit="m",
+                         max_hz=5000.0, mesh_hz=np.outer(rpm, [40 / 60.0]),
+                         shaft_hz=np.outer(rpm, [1 / 60.0]), max_order=3,
+                         title="two_stage: m = 146 (21+25+100)",
+                         lines=(np.array([667.0, 900.0]), rpm, np.array(["mesh", "unidentified"]),
+                                np.array([2e-6, 1e-6])),
+                         unstable=np.array([True, False]))
+    path = save_figure(fig, tmp_path / "w.png", formats=("png",))[0]
     assert path.stat().st_size > 10_000
 
 
@@ -173,9 +174,10 @@ def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
             ("G1", 1, 3000.0), ("G1", 2, 1500.0), ("G2", 1, round(2000 * 60 / 55, 6)),
             ("G2", 2, round(2000 * 60 / 110, 6))}                            # mode 1
     assert got == want
-    svg = plot_resonance_map(tmp_path / "r", f, mesh, 40, 1000.0, 3000.0,
-                             orders=list(orders.items()), crossings=cross, formats=("svg",),
-                             title="two_stage: m = 146 (21+25+100)")[0].read_text()
+    svg = save_figure(plot_resonance_map(f, mesh, 40, 1000.0, 3000.0,
+                                         orders=list(orders.items()), crossings=cross,
+                                         title="two_stage: m = 146 (21+25+100)"),
+                      tmp_path / "r", formats=("svg",))[0].read_text()
     assert "G2 1x mesh frequency" in svg and "G1 2x mesh frequency" in svg
     assert "1500 rpm" in svg and "2182 rpm" in svg and "m = 146" not in svg
 

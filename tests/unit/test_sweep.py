@@ -256,6 +256,9 @@ def test_partial_file_of_another_run_is_set_aside(tmp_path, change):
 # ---------------------------------------------------------------- files and plot
 
 def test_files_and_plot(tmp_path, hyst_result):
+    from matplotlib.figure import Figure
+
+    from vibrogear.report.figure import save_figure
     from vibrogear.report.sweep_plots import plot_bifurcation
 
     paths = write_sweep(hyst_result, tmp_path)
@@ -268,7 +271,10 @@ def test_files_and_plot(tmp_path, hyst_result):
     assert not list(tmp_path.glob(".*.tmp"))            # atomic writes leave no temp files
     rows = list(csv.DictReader(paths["csv"].open()))
     assert [float(r["Omega"]) for r in rows] == z["param"].tolist()   # the npz keeps "param"
-    out = plot_bifurcation(z, tmp_path / "bifurcation", bounds=(-1.0, 1.0))
+    fig = plot_bifurcation(z, bounds=(-1.0, 1.0))
+    assert isinstance(fig, Figure)                       # drawn, not written
+    assert not list(tmp_path.glob("bifurcation*"))
+    out = save_figure(fig, tmp_path / "bifurcation")
     assert [p.suffix for p in out] == [".png", ".svg"]
     assert all(p.stat().st_size > 1000 for p in out)
     assert math.isfinite(float(hyst_result.wall_time))

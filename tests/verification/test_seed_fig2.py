@@ -28,6 +28,7 @@ from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config.scene import load_scene
 from vibrogear.report.fig2 import plot_fig2
+from vibrogear.report.figure import save_figure
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = str(ROOT / "configs" / "two_stage_seed.toml")
@@ -75,13 +76,14 @@ def test_fig2_draws_dots_branches_zero_line_and_band(tmp_path):
                 "stable": np.array([1, 1, 0, 0, 1, 1], bool),
                 "label": np.array(["", "", "PD", "", "", ""]), "branch": np.zeros(6, int),
                 "n_periods": np.ones(6, int)}
-    paths = plot_fig2(sweep, branches, tmp_path / "fig2", param_label="rpm", formats=("svg",))
+    paths = save_figure(plot_fig2(sweep, branches, param_label="rpm"), tmp_path / "fig2",
+                        formats=("svg",))
     svg = paths[0].read_text()
     # one motion row per direction by default; the PD named with its speed
     assert "PD 1.4" in svg and "G1 up" not in svg and "bearing up" not in svg
     # per-contact rows where asked: each group whose own class differs from the whole's
     # (the bearing has no period of its own here, so its period-n differs too)
-    asked = plot_fig2(sweep, branches, tmp_path / "fig2_rows", param_label="rpm",
-                      formats=("svg",), per_contact_rows=True)[0].read_text()
+    asked = save_figure(plot_fig2(sweep, branches, param_label="rpm", per_contact_rows=True),
+                        tmp_path / "fig2_rows", formats=("svg",))[0].read_text()
     assert "G1 up" in asked and "bearing up" in asked
     assert "period-1 branch stable" in svg and "period-1 branch unstable" in svg

@@ -48,12 +48,35 @@ __all__ = ["ContinuationStudyResult", "run", "starting_orbit", "coverage"]
 
 @dataclass(frozen=True, eq=False)
 class ContinuationStudyResult:
+    """A continuation: branches of periodic orbits with their Floquet stability.
+
+    - ``result``: the :class:`~vibrogear.solvers.periodic.branch.ContinuationResult`
+      (``help()`` lists its fields and the arrays with shapes and units).
+    - ``study``: the :class:`~vibrogear.analyses.study.Study`.
+    - ``branches`` (property): ``result.branches``.
+
+    :meth:`arrays`: the arrays of ``branch.npz`` by the same names: per point of all branches
+    ``param`` (M,) [rpm or Omega], ``qmin`` / ``qmax`` (M,) [m for a gearbox], ``stable``
+    (M,), ``label`` (M,) ("LP", "PD", "NS" or ""), ``branch`` (M,), ``floquet`` (M, n), ...;
+    :meth:`plot`: a branch figure."""
     result: ContinuationResult
     study: Study
 
     @property
     def branches(self) -> tuple:
         return self.result.branches
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``branch.npz``, by the same names (``help(ContinuationResult)``)."""
+        return self.result.arrays()
+
+    def plot(self, quantity: str = "qmax", sweep=None):
+        """The maxima (``quantity="qmax"``, ``branch_max.png``) or minima (``"qmin"``,
+        ``branch_min.png``) of the monitored deformation along the branches as a matplotlib
+        Figure (display units; stable solid, unstable dashed, LP / PD / NS marked);
+        ``sweep``: a sweep's result (``run.results["sweep"]``) to overlay."""
+        from ..report.bifurcation_figures import branch_figure
+        return branch_figure(self, quantity, sweep)
 
 
 def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:

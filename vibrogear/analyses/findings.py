@@ -67,14 +67,17 @@ def _read_csv(path) -> dict[str, np.ndarray]:
             for i, name in enumerate(header)}
 
 
-def run_findings(scene, results: dict) -> dict | None:
+def run_findings(scene, results: dict, sources: dict | None = None) -> dict | None:
     """The findings of a run of ``scene`` whose summary records are ``results`` (None for
-    scenes without a speed parameter: rotor-only and housing-only scenes)."""
+    scenes without a speed parameter: rotor-only and housing-only scenes).  ``sources``:
+    {file name: arrays} of a run in memory (the arrays its results would write), besides
+    the files the records list."""
     parameter = scene.parameter
     if parameter is None:
         return None
     gearbox = parameter.name == "rpm"
-    return derive_findings(read_sources(results), results, scene.findings,
+    found = {**read_sources(results), **(sources or {})}
+    return derive_findings(found, results, scene.findings,
                            param_unit=parameter.unit, length_scale=1e6 if gearbox else 1.0,
                            length_unit="µm" if gearbox else "")
 

@@ -22,10 +22,31 @@ __all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL", "GearboxM
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class GearboxModesResult:
-    """What :mod:`vibrogear.report.gearbox_modes_report` writes: the elastic modes
-    (``f_hz``, ``fd_hz``, ``zeta``), the dominant-subsystem shares (``shares``: subsystems x
-    modes, rows in ``names`` order), the mesh strain-energy shares (``mesh``: meshes x
-    modes, rows in ``mesh_names`` order) and the speed range of the resonance map."""
+    """What :mod:`vibrogear.report.gearbox_modes_report` writes: the elastic modes of the
+    reduced model linearised at its static state, and the speed range of the resonance map.
+
+    K elastic modes (rigid-body modes counted, not listed), S subsystems, M meshes.
+
+    Fields:
+
+    - ``f_hz``: (K,) [Hz] natural frequencies |lambda| / 2 pi, ascending.
+    - ``fd_hz``: (K,) [Hz] damped natural frequencies.
+    - ``zeta``: (K,) [1] modal damping ratios.
+    - ``names``: (S,) the subsystems (shafts, the housing); ``shares``: (S, K) [1] each
+      subsystem's share of each mode's energy (a column sums to 1).
+    - ``mesh_names``: (M,) the gear meshes; ``mesh``: (M, K) [1] each mesh's share of each
+      mode's strain energy.
+    - ``mesh_teeth``: the driving gear's teeth of the first mesh.
+    - ``rpm``: [rpm] the speed of the static state; ``rpm_lo``, ``rpm_hi``: [rpm] the
+      resonance map's speed range.
+    - ``title``: the study's title.
+    - ``orders``: ((mesh name, [Hz/rpm]) ...) each mesh's frequency per driving rpm.
+    - ``resonances``: the resonance speeds (dicts: ``rpm``, ``frequency_hz``, ``mesh``,
+      ``mesh_order``, ...; as in summary.json).
+
+    :meth:`arrays`: the columns of ``modes.csv`` (``frequency_hz``, ``damped_frequency_hz``,
+    ``damping_ratio``, ``share`` (K,) [1] the dominant subsystem's, ``dominant`` (K,) str,
+    ``mesh_energy_<mesh>`` (K,) [1]); :meth:`plot`: the resonance map."""
     f_hz: np.ndarray
     fd_hz: np.ndarray
     zeta: np.ndarray
@@ -40,6 +61,24 @@ class GearboxModesResult:
     title: str
     orders: tuple = ()              # (mesh name, mesh frequency per driving rpm [Hz/rpm])
     resonances: tuple = ()          # the resonance speeds (dicts, as in the summary)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The columns of ``modes.csv`` as arrays, by the same names (see the class docstring)."""
+        k = np.argmax(self.shares, axis=0) if self.f_hz.size else np.zeros(0, int)
+        out = {"frequency_hz": np.asarray(self.f_hz, float),
+               "damped_frequency_hz": np.asarray(self.fd_hz, float),
+               "damping_ratio": np.asarray(self.zeta, float),
+               "dominant": np.array([self.names[i] for i in k], dtype=str),
+               "share": np.array([self.shares[i, j] for j, i in enumerate(k)], float)}
+        for j, name in enumerate(self.mesh_names):
+            out[f"mesh_energy_{name}"] = np.asarray(self.mesh[j], float)
+        return out
+
+    def plot(self):
+        """The resonance map (``resonance_map.png``) as a matplotlib Figure: natural
+        frequencies against every mesh's orders over the speed range."""
+        from ..report.gearbox_modes_report import figure
+        return figure(self)
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
 RIGID_TOL = 1e-7

@@ -72,9 +72,11 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     values = opts.points()
     if not is_root_process():
         raise NumericalFailure("housing_sweep runs its points in worker processes: start it without mpirun")
-    ctx.out.mkdir(parents=True, exist_ok=True)
-    store = PartialStore(ctx.out / POINTS_FILE, sweep_signature(scene))
-    done = {float(row["value"]): row for row in store.items}
+    store = None                  # a run in memory (no output folder): nothing resumed or kept
+    if ctx.out is not None:
+        ctx.out.mkdir(parents=True, exist_ok=True)
+        store = PartialStore(ctx.out / POINTS_FILE, sweep_signature(scene))
+    done = {float(row["value"]): row for row in (store.items if store is not None else ())}
     todo = [(v, c) for v, c in zip(values, cfgs) if float(v) not in done]
     n = opts.n_freqs
     t0 = time.perf_counter()
@@ -94,7 +96,8 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
                 if row["status"] != "ok":
                     failures.append(row)
                     continue
-                store.append(row)
+                if store is not None:
+                    store.append(row)
                 done[float(v)] = row
                 bar.update(1, f"{opts.parameter}={v:g}")
     rows = [done[float(v)] for v in values if float(v) in done]
@@ -107,6 +110,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     summary = {"parameter": opts.parameter, "values": [r["value"] for r in rows],
                "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
                "points_computed": len(todo), "points_resumed": len(values) - len(todo),
-               "resume": store.note, "seconds": time.perf_counter() - t0}
+               "resume": store.note if store is not None else "",
+               "seconds": time.perf_counter() - t0}
     return AnalysisOutcome(summary=summary, result=HousingSweepResult(
         parameter=opts.parameter, rows=tuple(rows), freqs=freqs))

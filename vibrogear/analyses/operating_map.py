@@ -47,7 +47,7 @@ from .study import Study, integration_options, start_state
 from ..solvers.sequential.record_json import record_from_json, record_to_json
 
 __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
-           "grid_array"]
+           "grid_array", "map_arrays", "METRICS_PER_MESH"]
 
 PARTIAL_NAME = "map.partial.jsonl"
 #: what the map does on one process (summary.json's serial_part)
@@ -85,6 +85,16 @@ class OperatingMap:
     def grid(self, name: str) -> np.ndarray:
         """(directions, loads, speeds) array of a per-point quantity (see :func:`grid_array`)."""
         return grid_array(self, name)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``map.npz``, by the same names (:func:`map_arrays`)."""
+        return map_arrays(self)
+
+    def plot(self):
+        """The motion class of every point over speed and load (``map_class.png``) as a
+        matplotlib Figure."""
+        from ..report.map_plots import plot_class_map
+        return plot_class_map(self.arrays(), title=self.study.title if self.study else "")
 
     @property
     def outcome(self) -> Outcome:
@@ -293,7 +303,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         summary["resume"] = res.note
     summary.update(split.summary())
     return AnalysisOutcome(summary=summary, result=res, solver=res.outcome,
-                           partial_files=(ctx.out / PARTIAL_NAME,) if ctx.root else ())
+                           partial_files=(ctx.out / PARTIAL_NAME,) if ctx.writes else ())
 
 
 def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
@@ -322,3 +332,39 @@ def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
                  "points_per_second": (n - res.resumed) / res.wall_time
                  if res.wall_time > 0 else None},
     }
+
+
+#: the per-mesh metrics of map.npz (``<metric>_<mesh>``)
+METRICS_PER_MESH = ("impacts_drive", "impacts_back", "rattle", "contact_fraction", "max_force")
+
+
+def _finite(a, fill=0.0):
+    a = np.asarray(a, dtype=float)
+    return np.where(np.isfinite(a), a, fill)
+
+
+def map_arrays(res) -> dict:
+    """The arrays of ``map.npz`` (NaN replaced) as a plain dict (their names and units:
+    :mod:`vibrogear.report.map_report`)."""
+    g = res.grid
+    status = g("status")
+    out = dict(rpm=np.asarray(res.rpm, float), torque=np.asarray(res.torque, float),
+               twist=np.asarray(res.twist, float), load_scale=np.asarray(res.scale, float),
+               direction=np.asarray(res.directions, dtype="<U4"),
+               load_given_as=np.asarray(res.load_kind),
+               motion_class=g("motion_class"), motion_class_legend=np.asarray(res.legend),
+               period_n=g("period_n"), qmin=_finite(g("qmin")), qmax=_finite(g("qmax")),
+               status=status, ok=status == 0, wall_time=_finite(g("point_wall")))
+    for m in res.meshes:
+        for k in METRICS_PER_MESH:
+            out[f"{k}_{m}"] = _finite(g(f"{k}_{m}"))
+        out[f"impacts_{m}"] = out[f"impacts_drive_{m}"] + out[f"impacts_back_{m}"]
+    for b in res.bearings:
+        out[f"unloaded_{b}"] = _finite(g(f"unloaded_{b}"))
+    curves = res.curves.curves if res.curves is not None else ()
+    out["curve_label"] = np.asarray([c.label for c in curves], dtype="<U2")
+    out["curve_start"] = np.concatenate([[0], np.cumsum([c.rpm.size for c in curves])]).astype(int)
+    for key in ("rpm", "torque", "twist"):
+        out[f"curve_{key}"] = (np.concatenate([getattr(c, key) for c in curves]) if curves
+                               else np.zeros(0))
+    return out

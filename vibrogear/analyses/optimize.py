@@ -161,7 +161,7 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
     for k in ("budget", "workers"):
         settings.pop(k, None)
     store, resumed, note = None, [], ""
-    if ctx.root:
+    if ctx.writes:
         store = PartialStore(Path(ctx.out) / PARTIAL_NAME, {
             "analysis": "optimize", "scene": fingerprint(base), "settings": settings,
             "method": method})
@@ -169,7 +169,8 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
     resumed = broadcast(resumed)
     for r in resumed:
         r.pop("kind", None)
-    task = Evaluation(base=base, config=cfg, scratch=str(Path(ctx.out) / "optimize_evals"))
+    task = Evaluation(base=base, config=cfg,
+                      scratch=None if ctx.out is None else str(Path(ctx.out) / "optimize_evals"))
     t0 = time.perf_counter()
     with ctx.progress(cfg.budget, f"optimize ({method})") as bar:
         if resumed:
@@ -180,7 +181,8 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
         except BudgetSpent:
             stop = f"budget of {cfg.budget} evaluations spent"
         finally:
-            shutil.rmtree(task.scratch, ignore_errors=True)     # the evaluations' scratch
+            if task.scratch is not None:                        # the evaluations' scratch
+                shutil.rmtree(task.scratch, ignore_errors=True)
     # evaluations in the file that this run's method did not ask for again: kept
     for r in resumed:
         if _key(r["values"]) not in ev.f_of:

@@ -45,7 +45,8 @@ class Evaluation:
     """What each evaluation needs (plain data: it travels to worker processes by fork)."""
     base: dict                 # the evaluated scene as data (evaluation_data)
     config: object             # OptimizeConfig
-    scratch: str               # folder for the analyses' partial files (removed after)
+    scratch: str | None        # folder for the analyses' partial files (removed after);
+                               # None: evaluations in memory (a run without an output folder)
 
 
 def scene_with(base: dict, config, values: dict):
@@ -197,12 +198,13 @@ def evaluate(task: Evaluation, index: int, values: dict) -> dict:
     t0, c0 = time.perf_counter(), time.process_time()
     record = {"index": int(index), "values": dict(values), "objective": None,
               "constraints": [], "status": "failed", "reason": ""}
-    scratch = Path(task.scratch) / f"eval-{index}"
+    scratch = None if task.scratch is None else Path(task.scratch) / f"eval-{index}"
     try:
         scene = scene_with(task.base, cfg, values)
         from ..models.validate import validate_scene
         validate_scene(scene)
-        scratch.mkdir(parents=True, exist_ok=True)
+        if scratch is not None:
+            scratch.mkdir(parents=True, exist_ok=True)
         outcomes = _run_analyses(scene, RunContext(out=scratch, quiet=True))
         record["objective"] = _read(cfg, cfg.objective, values, outcomes)
         record["constraints"] = [_read(cfg, c, values, outcomes) for c in cfg.constraints]
@@ -217,7 +219,8 @@ def evaluate(task: Evaluation, index: int, values: dict) -> dict:
         record["reason"] = f"{type(exc).__name__}: {exc}"
         record["traceback"] = traceback.format_exc(limit=6)
     finally:
-        shutil.rmtree(scratch, ignore_errors=True)
+        if scratch is not None:
+            shutil.rmtree(scratch, ignore_errors=True)
     record["wall_s"] = time.perf_counter() - t0
     record["cpu_s"] = time.process_time() - c0
     return record

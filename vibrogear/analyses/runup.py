@@ -37,7 +37,7 @@ from .order_tracking import Waterfall, order_tracks, waterfall
 from .study import Study, integration_options
 
 __all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed",
-           "run_key", "inertia_effect", "MAX_RUNUP_BYTES"]
+           "run_key", "inertia_effect", "MAX_RUNUP_BYTES", "runup_arrays"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -65,12 +65,26 @@ class RunupRun:
 
 @dataclass(frozen=True, eq=False)
 class RunupResult:
+    """A run-up / run-down: per run (direction; with the inertia torque or not) and mesh
+    period the speed, the deformation envelope and contact losses of every mesh, order tracks
+    and the waterfall.  :meth:`arrays`: the arrays of ``runup.npz`` (names and units:
+    :mod:`vibrogear.report.runup_report`); :meth:`plot`: the envelopes over the speed."""
     study: Study
     mesh_names: tuple[str, ...]
     order_names: tuple[str, ...]
     orders: np.ndarray          # per order name: cycles per driving-shaft revolution
     runs: tuple[RunupRun, ...]
     teeth: int                  # mesh periods per driving-shaft revolution
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``runup.npz``, by the same names (:func:`runup_arrays`)."""
+        return runup_arrays(self)
+
+    def plot(self):
+        """The deformation envelopes of every mesh against the speed
+        (``runup_envelope.png``, without the steady state overlaid) as a matplotlib Figure."""
+        from ..report.runup_plots import plot_envelopes
+        return plot_envelopes(self)
 
 
 def shaft_orders(scene, mesh_orders) -> tuple[tuple[str, ...], np.ndarray, int]:
@@ -279,3 +293,25 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     return AnalysisOutcome(summary=summary, result=RunupResult(
         study=study, mesh_names=mesh_names, order_names=names, orders=orders, runs=runs,
         teeth=teeth))
+
+
+def runup_arrays(result) -> dict:
+    """The arrays of ``runup.npz`` (their names and units: :mod:`vibrogear.report.runup_report`)."""
+    out = {"meshes": np.array(result.mesh_names), "order_names": np.array(result.order_names),
+           "orders": np.asarray(result.orders, float), "unit": np.array(result.study.monitor.unit),
+           "directions": np.array(list(dict.fromkeys(r.direction for r in result.runs))),
+           "runs": np.array([r.key or r.direction for r in result.runs]),
+           "inertia_torque": np.array([r.inertia_torque for r in result.runs], dtype=bool)}
+    for r in result.runs:
+        d = r.key or r.direction
+        out[f"{d}_time"] = r.time_s
+        out[f"{d}_rpm"] = r.rpm
+        out[f"{d}_track_rpm"] = r.track_rpm
+        for i, name in enumerate(result.mesh_names):
+            out[f"{d}_env_min_{name}"] = r.env_min[i]
+            out[f"{d}_env_max_{name}"] = r.env_max[i]
+            out[f"{d}_losses_{name}"] = r.losses[i].astype(np.int64)
+            tr = r.tracks[name]
+            for k, oname in enumerate(result.order_names):
+                out[f"{d}_order_{name}_{oname}"] = tr.amplitude[k]
+    return out

@@ -53,7 +53,30 @@ _NOT_IN_SIGNATURE = ("workers", "starts", "batch", "basin_tol", "cluster_tol", "
 
 @dataclass(frozen=True, eq=False)
 class StatesResult:
-    """The census: grid, attractors per grid value, starts, branches, timings."""
+    """The census: every attractor found from random starts at every grid value.
+
+    P grid values, A attractors (all grid values), B branch points.
+
+    Fields:
+
+    - ``params``: (P,) [rpm or Omega] the grid.
+    - ``attractors``: (A,) Attractor, grouped by grid value: ``param``, ``motion_class``
+      (code into ``legend``), ``period_n``, ``qmin`` / ``qmax`` [m for a gearbox] of the
+      monitored deformation, ``fraction`` [1] of the settled starts that reach it (its basin)
+      with ``ci`` (Wilson 95 % interval), ``count`` (starts), ``stable`` (Floquet; None: not
+      shot), ``max_multiplier`` [1], ``metrics`` ({mesh: {"impacts" [1/period], "rattle" [J
+      per period]}}), ``seen_by_sweep``.
+    - ``n_starts``: (P,) starts settled without failure; ``n_failed``: (P,) failed.
+    - ``study``: the :class:`~vibrogear.analyses.study.Study`.
+    - ``branches``: branches continued from attractors; ``branch_notes``: how each ended.
+    - ``sweep``: the sweep's arrays it was compared with (None: no sweep).
+    - ``timings``: {phase: s}; ``counters``: integrator counters.
+    - ``starts``: per settled start: ``point``, ``index``, ``wall_s`` [s], ``attractor``.
+    - ``legend``: names of the motion-class codes.
+
+    :meth:`arrays`: the arrays of ``states.npz`` by the same names (``attractor_param``,
+    ``attractor_qmin`` [m], ``basin_fraction`` [1], ``basin_ci_lo`` / ``_hi``, ...;
+    :mod:`vibrogear.report.states_report` lists them all); :meth:`plot`: the danger map."""
     params: np.ndarray                 # (P,)
     attractors: tuple                  # states_cluster.Attractor, grouped by grid value
     n_starts: np.ndarray               # (P,) starts settled without failure
@@ -68,6 +91,17 @@ class StatesResult:
     starts: dict = field(default_factory=dict)
     #: names of the motion-class codes of the attractors (the sweep's)
     legend: tuple = MOTION_LEGEND
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``states.npz``, by the same names (see the class docstring)."""
+        from .states_summary import states_arrays
+        return states_arrays(self)
+
+    def plot(self):
+        """The danger map (``states.png``) as a matplotlib Figure: every attractor by speed,
+        marker area its basin, the sweep's path and the branches."""
+        from ..report.states_report import figure
+        return figure(self)
 
 
 def grid(cfg) -> np.ndarray:
@@ -209,7 +243,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
                            deformation_scale=cfg.deformation_scale,
                            velocity_scale=cfg.velocity_scale, box=cfg.box) for p in params]
     store, done = None, {}
-    if ctx.root:
+    if ctx.writes:
         settings = {k: v for k, v in dataclasses.asdict(cfg).items()
                     if k not in _NOT_IN_SIGNATURE}
         store = PartialStore(Path(ctx.out) / PARTIAL_NAME, {

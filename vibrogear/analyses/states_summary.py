@@ -17,7 +17,7 @@ import numpy as np
 
 from ..status import Status
 
-__all__ = ["states_summary", "coexisting_points"]
+__all__ = ["states_summary", "coexisting_points", "states_arrays"]
 
 
 def _num(x):
@@ -80,3 +80,65 @@ def states_summary(result, cfg, opts, info) -> dict:
                            "failed_starts": failed},
     }
     return summary
+
+
+def _flag(v) -> int:
+    return -1 if v is None else int(bool(v))
+
+
+def _fin(a) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    return np.where(np.isfinite(a), a, 0.0)
+
+
+def states_arrays(res) -> dict:
+    """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.StatesResult`
+    (the names and units: :mod:`vibrogear.report.states_report`)."""
+    atts = res.attractors
+    meshes = sorted({g for a in atts for g in a.metrics})
+    ci = np.array([a.ci for a in atts], dtype=float).reshape(-1, 2)
+    out = {
+        "param": np.asarray(res.params, float), "n_starts": np.asarray(res.n_starts, int),
+        "n_failed": np.asarray(res.n_failed, int),
+        "attractor_param": np.array([a.param for a in atts], float),
+        "attractor_class": np.array([a.motion_class for a in atts], int),
+        "attractor_class_legend": np.asarray(res.legend),
+        "attractor_period_n": np.array([a.period_n for a in atts], int),
+        "attractor_qmin": _fin([a.qmin for a in atts]),
+        "attractor_qmax": _fin([a.qmax for a in atts]),
+        "basin_fraction": _fin([a.fraction for a in atts]),
+        "basin_ci_lo": ci[:, 0], "basin_ci_hi": ci[:, 1],
+        "attractor_starts": np.array([a.count for a in atts], int),
+        "attractor_stable": np.array([_flag(a.stable) for a in atts], int),
+        "attractor_max_multiplier": _fin([a.max_multiplier for a in atts]),
+        "attractor_refined": np.array([a.refined for a in atts], bool),
+        "attractor_seen_by_sweep": np.array([_flag(a.seen_by_sweep) for a in atts], int),
+        "q_display_scale": np.float64(res.study.monitor.scale),
+        "q_display_unit": np.asarray(res.study.monitor.unit),
+        "param_name": np.asarray(res.study.param_name),
+    }
+    for g in meshes:
+        out[f"attractor_impacts_{g}"] = _fin([a.metrics.get(g, {}).get("impacts", math.nan)
+                                              for a in atts])
+        out[f"attractor_rattle_{g}"] = _fin([a.metrics.get(g, {}).get("rattle", math.nan)
+                                             for a in atts])
+    brs = res.branches
+    pts = [p for b in brs for p in b.points]
+    out["branch_start"] = np.concatenate([[0], np.cumsum([len(b.points) for b in brs])]).astype(int)
+    out["branch_n_periods"] = np.array([b.n_periods for b in brs], int)
+    out["branch_param"] = np.array([p.param for p in pts], float)
+    out["branch_qmin"] = np.array([p.qmin for p in pts], float)
+    out["branch_qmax"] = np.array([p.qmax for p in pts], float)
+    out["branch_stable"] = np.array([p.stable for p in pts], bool)
+    out["branch_label"] = np.array([p.label for p in pts], dtype="<U2")
+    for k, v in (res.starts or {}).items():
+        out[f"start_{k}"] = np.asarray(v)
+    sw = res.sweep or {}
+    for k in ("param", "qmin", "qmax"):
+        v = np.asarray(sw.get(k, np.zeros(0)), float)
+        out[f"sweep_{k}"] = v
+    if sw:
+        ok = np.isfinite(out["sweep_qmin"]) & np.isfinite(out["sweep_qmax"])
+        for k in ("param", "qmin", "qmax"):
+            out[f"sweep_{k}"] = out[f"sweep_{k}"][ok]
+    return out

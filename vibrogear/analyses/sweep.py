@@ -39,8 +39,35 @@ _NOT_IN_SIGNATURE = ("workers", "callback", "done")
 
 @dataclass(frozen=True, eq=False)
 class SweepStudyResult:
+    """A sweep: sequential continuation up and down in the parameter (the bifurcation diagram).
+
+    - ``sweep``: the :class:`~vibrogear.solvers.sequential.sweep.SweepResult`, every point's
+      fields with their shapes and units (``help(SweepResult)``): ``param`` (N,) [rpm or
+      Omega], ``direction`` (N,), ``qmin`` / ``qmax`` (N,) [m for a gearbox] of the monitored
+      mesh deformation, ``poincare`` (N, R) [m], ``period_n`` (N,), ``impacts`` (N,)
+      [1/period], ``motion_class`` (N,), ``lyapunov`` (N,) [1/s], ``metrics`` (rattle,
+      contact fractions per mesh), ``status`` (N,) (0 ok).
+    - ``study``: the :class:`~vibrogear.analyses.study.Study` (model, parameter, monitored
+      mesh: ``study.monitor.scale`` converts m to its display unit, um).
+
+    :meth:`arrays`: the arrays of ``sweep.npz`` by the same names (lengths in m; NaN
+    replaced by 0 with ``ok`` flags); :meth:`plot`: the bifurcation diagram."""
     sweep: SweepResult
     study: Study
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``sweep.npz``, by the same names
+        (:meth:`~vibrogear.solvers.sequential.sweep.SweepResult.arrays`)."""
+        return self.sweep.arrays()
+
+    def plot(self, branches=None, *, per_contact_rows: bool = False):
+        """The bifurcation diagram (``bifurcation.png``) as a matplotlib Figure: Poincare
+        samples, minima and maxima up and down in display units, the motion-class band, the
+        impacts and rattle per mesh; ``branches``: a continuation's result
+        (``run.results["continuation"]``) to overlay; ``per_contact_rows``: a class row per
+        contact group (the scene's ``[figures] motion_rows_per_contact``)."""
+        from ..report.bifurcation_figures import sweep_figure
+        return sweep_figure(self, branches, per_contact_rows=per_contact_rows)
 
 
 def jumps(param, q, rel: float = 0.15, res=None, err=None) -> list[float]:
@@ -67,7 +94,7 @@ def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callb
     touch no files).  The caller deletes ``store.path`` once the final files exist."""
     params = np.asarray(params, dtype=float).ravel()
     store, done = None, {}
-    if root if root is not None else is_root_process():
+    if out_dir is not None and (root if root is not None else is_root_process()):
         settings = {k: v for k, v in dataclasses.asdict(sweep_kw["settings"]).items()
                     if k not in _NOT_IN_SIGNATURE}
         u0 = sweep_kw.get("u0")
@@ -97,7 +124,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     total = len(cfg.directions) * params.size
     with ctx.progress(total, "sweep") as bar:
         res, store, resumed = resumable_sweep(
-            study.model, params, ctx.out, physics=study.physics, root=ctx.root, split=split,
+            study.model, params, ctx.out, physics=study.physics, root=ctx.writes, split=split,
             callback=lambda rec: bar.update(1, f"{rec.param:.4g} {study.param_unit} "
                                                f"P{rec.period_n}"),
             settings=SweepOptions.of(cfg), options=opts, u0=study.start(params[0]))

@@ -24,11 +24,36 @@ from ..solvers.integrator.rtol_limit import loosest_rtol
 from ..status import Status
 from .study import Study, integration_options
 
-__all__ = ["TimeResponseResult", "run", "working_flank_losses"]
+__all__ = ["TimeResponseResult", "run", "working_flank_losses", "STATES_IN_NPZ"]
+
+
+#: the states go into time_response.npz when the model has at most this many
+STATES_IN_NPZ = 64
 
 
 @dataclass(frozen=True, eq=False)
 class TimeResponseResult:
+    """The time response of a study's reduced model from its static equilibrium.
+
+    n samples, nc contacts (gear meshes, bearing elements; the impact pair's clearance),
+    2m states.  Units: a gearbox's lengths in m, forces in N, times in s (its model time
+    unit is 1 s); the impact pair's are nondimensional.
+
+    Fields:
+
+    - ``study``: the :class:`~vibrogear.analyses.study.Study` (model, parameter, units).
+    - ``param``: the parameter value (driving-shaft speed in rpm, or Omega).
+    - ``t``: (n,) [model time units] sample times; ``t_s`` (property): (n,) [s].
+    - ``u``: (n, 2m) [model units: modal coordinates and their rates] the states.
+    - ``delta``: (nc, n) [m] each contact's deformation (a mesh: the tooth deflection along
+      the line of action; below 0 the working flank has lost contact).
+    - ``delta_dot``: (nc, n) [m/s] its rate.
+    - ``force``: (nc, n) [N] each contact's force.
+    - ``period``: [model time units] the excitation (mesh) period.
+
+    :meth:`arrays`: the arrays of ``time_response.npz`` (``t``, ``t_s``, ``delta``,
+    ``delta_dot``, ``force``, ``names`` (nc,) of the contacts, and ``u`` with
+    ``state_names`` for a model of at most 64 states); :meth:`plot`: its figure."""
     study: Study
     param: float
     t: np.ndarray              # (n,) model time
@@ -40,7 +65,30 @@ class TimeResponseResult:
 
     @property
     def t_s(self) -> np.ndarray:
+        """(n,) [s] the sample times in seconds."""
         return self.t * self.study.time_unit_s
+
+    @property
+    def names(self) -> list[str]:
+        """(nc,) the contacts' names (``G1``, a bearing element's, ``c0`` ...)."""
+        ct = self.study.model.contacts
+        return list(ct.names) or [f"c{j}" for j in range(ct.count)]
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``time_response.npz``, by the same names (see the class docstring)."""
+        model = self.study.model
+        out = dict(t=self.t, t_s=self.t_s, delta=self.delta, delta_dot=self.delta_dot,
+                   force=self.force, names=np.array(self.names, dtype=str))
+        if model.n_states <= STATES_IN_NPZ:
+            out.update(u=self.u, state_names=np.array(model.state_names, dtype=str))
+        return out
+
+    def plot(self):
+        """The report's figure of this time response (``time_response.png``) as a
+        matplotlib Figure: a gearbox's mesh deformations, phase trajectories, mesh and
+        bearing forces; the impact pair's deformation and phase trajectory."""
+        from ..report.time_report import figure
+        return figure(self)
 
 
 def working_flank_losses(delta, gap_hi: float, gap_lo: float) -> int:

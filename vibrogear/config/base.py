@@ -22,8 +22,8 @@ from typing import Any
 
 from .errors import ConfigError, ErrorList
 
-__all__ = ["ConfigError", "ErrorList", "spec", "build", "check", "set_path", "parse_override", "as_data",
-           "check_name", "read_toml_file", "expected_text", "NAME_MAX_LEN"]
+__all__ = ["ConfigError", "ErrorList", "spec", "build", "check", "set_path", "parse_override",
+           "parse_key", "as_data", "check_name", "read_toml_file", "expected_text", "NAME_MAX_LEN"]
 
 #: longest name used as a file or folder name (scene.name)
 NAME_MAX_LEN = 100
@@ -230,6 +230,22 @@ def _did_you_mean(name: str, allowed) -> str:
 _KEY_PART = re.compile(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)")
 
 
+def parse_key(key: str, text: str | None = None, what: str = "--set") -> list[str]:
+    """The keys of a dotted path as the tool prints it, ``gearbox.gears[0].teeth`` (or
+    ``gears.0``): ``["gearbox", "gears", "0", "teeth"]``; ``text``: the whole override, for
+    the message; ``what``: where the key was given (the error's path)."""
+    keys: list[str] = []
+    for part in key.strip().split("."):
+        m = _KEY_PART.fullmatch(part.strip())
+        if m is None:
+            raise ConfigError(what, f"bad key {key.strip()!r} in {text or key!r}: expected "
+                              "dotted names with optional list indices, e.g. "
+                              "gearbox.gears[0].teeth")
+        keys.append(m.group(1))
+        keys += re.findall(r"\d+", m.group(2))
+    return keys
+
+
 def parse_override(text: str) -> tuple[list[str], Any]:
     """Parse ``section.key=value`` (value in TOML syntax, bare words as strings); list
     entries as the tool prints them, ``gearbox.gears[0].teeth=30`` (or ``gears.0``)."""
@@ -238,15 +254,7 @@ def parse_override(text: str) -> tuple[list[str], Any]:
     if "=" not in text:
         raise ConfigError("--set", f"expected section.key=value, got {text!r}")
     key, raw = text.split("=", 1)
-    key = key.strip()
-    keys: list[str] = []
-    for part in key.split("."):
-        m = _KEY_PART.fullmatch(part.strip())
-        if m is None:
-            raise ConfigError("--set", f"bad key {key!r} in {text!r}: expected dotted names "
-                              "with optional list indices, e.g. gearbox.gears[0].teeth")
-        keys.append(m.group(1))
-        keys += re.findall(r"\d+", m.group(2))
+    keys = parse_key(key, text)
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except (tomllib.TOMLDecodeError, RecursionError):

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import ConfigError, ErrorList, build, parse_override, read_toml_file, set_path, spec
+from .base import (ConfigError, ErrorList, as_data, build, parse_key, parse_override,
+                   read_toml_file, set_path, spec)
 from .findings_section import FindingsConfig
 from .gearbox import GearboxConfig
 from .housing import HousingConfig, resolve_file
@@ -117,6 +118,28 @@ class Scene:
         if self.optimize is not None:           # the evaluated scene at the variables' bounds
             self.optimize.check_scene(self, scene_from_dict, "optimize")
 
+    def replace(self, changes: dict[str, Any]) -> "Scene":
+        """A new scene with ``changes`` applied, checked as ``vibrogear check`` checks a scene
+        file (every field's type and range, the rules across sections): ``{key: value}`` with
+        the keys of ``--set`` (``"gearbox.meshes[0].backlash": 5e-5``, ``"sweep.n_points":
+        6``) and plain Python values (numbers, strings, lists, tables as dicts).  A bad value
+        raises :class:`ConfigError` naming the field, its expected type and range; ``self`` is
+        unchanged (a scene is frozen).  The gear-mesh geometry checks of the model layer run
+        when the scene is loaded and run (:func:`vibrogear.api.load`, :func:`vibrogear.api.run`)."""
+        if not isinstance(changes, dict):
+            raise ConfigError("replace", f"expected a dict of --set keys and values, got "
+                              f"{type(changes).__name__}")
+        # the scene as written (before the sizes derived from other sections were filled in,
+        # so that they follow the change as they follow a --set), else as it stands
+        written = getattr(self, "_written", None)
+        data = copy.deepcopy(written) if written is not None else as_data(self)
+        for key, value in changes.items():
+            if not isinstance(key, str):
+                raise ConfigError("replace", f"keys are --set paths such as "
+                                  f"'sweep.n_points', got {key!r}")
+            set_path(data, parse_key(key, what="replace"), _plain(value))
+        return scene_from_dict(data)
+
     def _check_analysis(self, i: int, analysis: str) -> None:
         allowed = ANALYSIS_MODELS[analysis]
         if not any(getattr(self, s) is not None for s in allowed):
@@ -140,6 +163,17 @@ class GearboxScene(Scene):
     states: RpmStatesConfig | None = spec(None)
 
 
+def _plain(value: Any) -> Any:
+    """A numpy scalar or array as the plain number or list a scene file holds."""
+    if type(value).__module__ == "numpy" and hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    return value
+
+
 def read_toml(path: str | Path) -> dict[str, Any]:
     return read_toml_file(path, Scene)
 
@@ -154,17 +188,29 @@ def scene_from_dict(data: dict[str, Any], overrides: tuple[str, ...] = (),
         set_path(data, keys, value)
     if base_dir is not None:
         resolve_file(data, base_dir)
+    written = copy.deepcopy(data)   # what Scene.replace changes
     fill_housing(data)              # a parametric housing's missing sizes, from the gearbox
     # the sections that take the parameter read it under the model's keys
-    return build(GearboxScene if "gearbox" in data else Scene, data)
+    scene = build(GearboxScene if "gearbox" in data else Scene, data)
+    object.__setattr__(scene, "_written", written)
+    return scene
 
 
-def load_scene(path: str | Path, overrides: tuple[str, ...] = ()) -> Scene:
+def load_scene(path: str | Path, overrides: tuple[str, ...] = (),
+               changes: dict[str, Any] | None = None) -> Scene:
     """Read, override (``section.key=value``) and validate a scene file; a REXS model
-    (``.rexs``, ``.rexsj``) is imported first (:mod:`.rexs`)."""
+    (``.rexs``, ``.rexsj``) is imported first (:mod:`.rexs`).  ``changes``: more overrides as
+    {``--set`` key: Python value} (:meth:`Scene.replace`), applied before ``overrides``."""
     from .rexs import import_rexs, is_rexs_path
     data = import_rexs(path).data if is_rexs_path(path) else read_toml(path)
     try:
+        if changes:
+            if not isinstance(changes, dict):
+                raise ConfigError("overrides", "expected a dict of --set keys and values, got "
+                                  f"{type(changes).__name__}")
+            data = copy.deepcopy(data)
+            for key, value in changes.items():
+                set_path(data, parse_key(str(key), what="overrides"), _plain(value))
         return scene_from_dict(data, overrides, base_dir=Path(path).parent)
     except RecursionError:
         raise ConfigError(str(path), "arrays or tables nested too deeply") from None

@@ -94,14 +94,21 @@ def spine(outcome: Outcome | None) -> dict:
 
 @dataclass(frozen=True)
 class RunContext:
-    """Per-run settings an analysis may use: the output folder (for resume files only),
+    """Per-run settings an analysis may use: the output folder (for resume files only; None:
+    a run in memory, :func:`vibrogear.api.run` without ``out``, that writes no file at all),
     whether to show progress, and whether this process writes files."""
-    out: Path
+    out: Path | None
     quiet: bool = False
 
     @property
     def root(self) -> bool:
         return is_root_process()
+
+    @property
+    def writes(self) -> bool:
+        """Whether this process writes files (partial files included): it is the root process
+        and the run has an output folder."""
+        return self.out is not None and self.root
 
     def progress(self, total: int, label: str) -> Progress:
         return Progress(total, label, quiet=self.quiet)

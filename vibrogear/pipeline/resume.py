@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from ..version import __version__
 
 __all__ = ["fingerprint", "PartialStore", "signature_difference", "read_items"]
 

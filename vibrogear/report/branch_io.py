@@ -13,35 +13,12 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from ..solvers.periodic.branch import branch_arrays
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("branch", "n_periods", "param", "period", "stable", "label", "qmin", "qmax",
                "impacts", "max_abs_multiplier", "residual", "neutral")
-
-
-def branch_arrays(branches) -> dict:
-    """Concatenate the points of all branches (period-1 first) into flat arrays."""
-    rows = [(b_i, b, p) for b_i, b in enumerate(branches) for p in b.points]
-    n = rows[0][2].u0.size if rows else 0
-    param = np.array([p.param for _, _, p in rows], dtype=float)
-    scale = np.array([b.period_scale for _, b, _ in rows], dtype=float)
-    return {
-        "param": param,
-        "period": scale / param if rows else np.zeros(0),
-        "u0": np.array([p.u0 for _, _, p in rows]).reshape(len(rows), n),
-        "floquet": np.array([p.floquet for _, _, p in rows], dtype=complex).reshape(len(rows), n),
-        "stable": np.array([p.stable for _, _, p in rows], dtype=bool),
-        "label": np.array([p.label for _, _, p in rows], dtype="<U2"),
-        "branch": np.array([i for i, _, _ in rows], dtype=np.int64),
-        "n_periods": np.array([b.n_periods for _, b, _ in rows], dtype=np.int64),
-        "qmin": np.array([p.qmin for _, _, p in rows], dtype=float),
-        "qmax": np.array([p.qmax for _, _, p in rows], dtype=float),
-        "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
-        "residual": np.array([p.residual for _, _, p in rows], dtype=float),
-        "neutral": np.array([p.neutral for _, _, p in rows], dtype=np.int64),
-        "max_abs_multiplier": np.array([p.max_abs_multiplier for _, _, p in rows], dtype=float),
-    }
 
 
 def _cell(x) -> str:

@@ -5,11 +5,10 @@ triangles, PD squares, NS diamonds); sweep points (up/down) can be overlaid.
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_branches", "draw_branches", "branch_legend", "stability_segments",
            "label_special_points"]
@@ -176,10 +175,11 @@ def _inset_period_doubling(ax, arrays, quantity):
     return ins
 
 
-def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "max q",
+def plot_branches(arrays: dict, *, quantity: str = "qmax", ylabel: str = "max q",
                   xlabel: str = "Omega", title: str = "", sweep: dict | None = None,
-                  bounds=(), formats=("png", "svg"), dpi: int = 150) -> list[Path]:
-    """Plot ``arrays[quantity]`` (e.g. qmax or qmin) of every branch against param."""
+                  bounds=()):
+    """``arrays[quantity]`` (e.g. qmax or qmin) of every branch against param, as a Figure
+    (the report writer saves it)."""
     from matplotlib.lines import Line2D
 
     fig = new_figure((9.0, 5.0))
@@ -211,4 +211,4 @@ def plot_branches(arrays: dict, path, *, quantity: str = "qmax", ylabel: str = "
     if ins is not None:           # the inset's points named in the inset, not under it
         label_special_points(ins, arrays, quantity, fontsize=6)
     label_special_points(ax, arrays, quantity, avoid=() if ins is None else (ins,))
-    return save_figure(fig, path, formats, dpi)
+    return fig

@@ -7,19 +7,18 @@ canvas: no pyplot state.
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_fold_cusp"]
 
 
-def plot_fold_cusp(result, path, *, title: str = "", extra_scans=(), formats=("png", "svg"),
-                   dpi: int = 150) -> list[Path]:
-    """``result``: a :class:`~vibrogear.analyses.critical_damping.CriticalDampingResult`;
-    ``extra_scans``: more :class:`FoldScan` s (not part of the bisection) for the curves."""
+def plot_fold_cusp(result, *, title: str = "", extra_scans=()):
+    """The fold cusp as a Figure (the report writer saves it).  ``result``: a
+    :class:`~vibrogear.analyses.critical_damping.CriticalDampingResult`; ``extra_scans``:
+    more :class:`FoldScan` s (not part of the bisection) for the curves."""
     fig = new_figure((7.5, 4.8))
     ax = fig.add_subplot(111)
     with_f = sorted((s for s in [*result.scans, *extra_scans] if s.has_fold_pair),
@@ -52,4 +51,4 @@ def plot_fold_cusp(result, path, *, title: str = "", extra_scans=(), formats=("p
                  "bisection)", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="best")
-    return save_figure(fig, path, formats, dpi)
+    return fig

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..pipeline.files import atomic_write_text, finite_json
 from .critical_damping_plots import plot_fold_cusp
+from .figure import save_figure
 
 __all__ = ["write"]
 
@@ -20,7 +21,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     out = Path(out)
     files = {"json": str(atomic_write_text(out / "critical_damping.json",
                                            json.dumps(finite_json(outcome.summary), indent=2)))}
-    plot_fold_cusp(r.result, out / "critical_damping", title=r.title,
-                   extra_scans=list(r.extra_scans))
+    save_figure(plot_fold_cusp(r.result, title=r.title, extra_scans=list(r.extra_scans)),
+                out / "critical_damping")
     files["png"] = str(out / "critical_damping.png")
     return files

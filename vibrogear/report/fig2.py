@@ -34,12 +34,11 @@ _DOTS = {"up": dict(color="tab:blue", marker="^", label="sweep up: min / max"),
          "down": dict(color="tab:red", marker="v", label="sweep down: min / max")}
 
 
-def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "parameter",
+def plot_fig2(sweep: dict, branches: dict | None, *, param_label: str = "parameter",
               ylabel: str = "deformation", title: str = "", zero_line: bool = True,
-              formats=("png", "svg"), dpi: int = 150,
-              per_contact_rows: bool = False) -> list[Path]:
-    """Draw the figure of the module docstring from sweep arrays ``sweep`` and branch
-    arrays ``branches`` (branch.npz's; None or empty: the sweep alone) to ``path``."""
+              per_contact_rows: bool = False):
+    """The figure of the module docstring from sweep arrays ``sweep`` and branch arrays
+    ``branches`` (branch.npz's; None or empty: the sweep alone), as a Figure."""
     param = np.asarray(sweep["param"], float)
     direction = np.asarray(sweep["direction"]).astype(str)
     qmin = np.asarray(sweep["qmin"], float)
@@ -83,7 +82,7 @@ def plot_fig2(sweep: dict, branches: dict | None, path, *, param_label: str = "p
     fig.tight_layout()
     if drawn_branches:                  # named once the axes have their final size
         label_special_points(ax, branches, "qmax")
-    return save_figure(fig, path, formats, dpi)
+    return fig
 
 
 def write_fig2(result, out, sweep_data: dict, *, per_contact_rows: bool = False) -> list[Path]:
@@ -96,6 +95,6 @@ def write_fig2(result, out, sweep_data: dict, *, per_contact_rows: bool = False)
     below = " (below 0: the teeth lose contact)" if mon.zero_line else ""
     title = (f"{plain_title(study.title)}: response against speed{below}\nsweep minima / "
              "maxima, continuation branches (stable solid, unstable dashed), motion classes")
-    return plot_fig2(sweep_data, arrays, Path(out) / "fig2", param_label=study.param_label,
-                     ylabel=mon.axis_label(), title=title, zero_line=mon.zero_line,
-                     per_contact_rows=per_contact_rows)
+    return save_figure(plot_fig2(sweep_data, arrays, param_label=study.param_label,
+                                 ylabel=mon.axis_label(), title=title, zero_line=mon.zero_line,
+                                 per_contact_rows=per_contact_rows), Path(out) / "fig2")

@@ -30,7 +30,7 @@ from pathlib import Path
 
 from .figure import new_figure, save_figure
 
-__all__ = ["Shape", "Layout", "gearbox_layout", "draw_gearbox"]
+__all__ = ["Shape", "Layout", "gearbox_layout", "figure_of", "draw_gearbox"]
 
 _MM = 1e3
 

@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .figure import save_figure
 from .gearbox_plots import plot_resonance_map, write_modes_csv
 
-__all__ = ["write"]
+__all__ = ["write", "figure"]
 
 
 def write(scene, outcome, out, previous=None) -> dict:
@@ -21,7 +22,14 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {"csv": str(write_modes_csv(out / "modes.csv", r.f_hz, r.fd_hz, r.zeta,
                                         list(r.names), r.shares, r.mesh,
                                         list(r.mesh_names)))}
-    plot_resonance_map(out / "resonance_map", r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo,
-                       r.rpm_hi, title=r.title, orders=r.orders, crossings=r.resonances)
+    save_figure(figure(r), out / "resonance_map")
     files["png"] = str(out / "resonance_map.png")
     return files
+
+
+def figure(r):
+    """The resonance map of a gearbox's modes
+    (:class:`~vibrogear.analyses.gearbox_modes.GearboxModesResult`) as a Figure, the
+    report's ``resonance_map.png``."""
+    return plot_resonance_map(r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo, r.rpm_hi, title=r.title,
+                              orders=r.orders, crossings=r.resonances)

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response",
@@ -32,15 +32,16 @@ def _grey(s: float):
     return (0.8 - 0.8 * min(1.0, 4 * s),) * 3
 
 
-def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: float, *,
+def plot_resonance_map(f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: float, *,
                        title: str = "", f_max: float | None = None, orders=None,
-                       crossings=(), formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+                       crossings=()):
     """Natural frequencies (horizontal lines, darker = more mesh strain energy, with its
     scale) against the orders 1x and 2x of every mesh's frequency over the speed range; the
     crossings with modes of mesh strain-energy share > 5 % are the resonance speeds, marked
     and written on the speed axis.  ``orders``: [(mesh name, Hz per rpm)] (default: one
     mesh of ``teeth`` teeth on the driving shaft); ``crossings``: the resonance speeds of
-    the modes analysis (dicts with rpm, frequency_hz, mesh, mesh_order).  Returns the paths."""
+    the modes analysis (dicts with rpm, frequency_hz, mesh, mesh_order).  Returns the Figure
+    (the report writer saves it)."""
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import LinearSegmentedColormap, Normalize
 
@@ -92,14 +93,14 @@ def plot_resonance_map(path, f_hz, mesh, teeth: int, rpm_lo: float, rpm_hi: floa
     head = plain_title(title)
     ax.set_title((head + "\n" if head else "") + "natural frequencies against the mesh "
                  "orders: crossings are resonance speeds", fontsize=9)
-    return save_figure(fig, path, formats, dpi)
+    return fig
 
 
-def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearing_forces, *,
-                               mesh_period_s: float, backlash=(), title: str = "",
-                               formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+def plot_gearbox_time_response(t_s, delta, ddot, force, mesh_names, bearing_forces, *,
+                               mesh_period_s: float, backlash=(), title: str = ""):
     """Mesh deformations (zero line: mesh interruption below), phase trajectories of the
-    last half, mesh forces and the total radial load of each bearing's elements."""
+    last half, mesh forces and the total radial load of each bearing's elements, as a
+    Figure (the report writer saves it)."""
     fig = new_figure((11.0, 8.0))
     axes = fig.subplots(3, 2, gridspec_kw={"width_ratios": [2.2, 1]})
     tp = t_s / mesh_period_s
@@ -136,4 +137,4 @@ def plot_gearbox_time_response(path, t_s, delta, ddot, force, mesh_names, bearin
         axes[1, 0].set_visible(False)
         axes[1, 1].set_visible(False)
     fig.suptitle(plain_title(title), fontsize=9)
-    return save_figure(fig, path, formats, dpi)
+    return fig

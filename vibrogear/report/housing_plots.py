@@ -1,34 +1,31 @@
 """Plots of housing results: mode previews, geometry sweeps, error against run time.
 
-Takes result objects and plain tables; matplotlib (Agg) is imported inside the functions.
+Takes result objects and plain tables and returns matplotlib Figures (on their own Agg
+canvas, no pyplot state); the report writer saves them (:mod:`.housing_report`, at 110 dpi).
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
-from .figure import write_figure
+from .figure import new_figure
 
-__all__ = ["plot_mode_previews", "plot_sweep", "plot_error_vs_time"]
+__all__ = ["plot_mode_previews", "plot_sweep", "plot_error_vs_time", "DPI"]
 
-
-def _plt():
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    return plt
+#: resolution the housing figures are saved at
+DPI = 110
 
 
-def plot_mode_previews(res, path: Path, *, n: int = 6, title: str = "") -> Path:
-    """First ``n`` mode shapes on the outer surface (deformed, coloured by |u|)."""
-    plt = _plt()
+def plot_mode_previews(res, *, n: int = 6, title: str = ""):
+    """First ``n`` mode shapes on the outer surface (deformed, coloured by |u|), a Figure."""
+    import mpl_toolkits.mplot3d  # noqa: F401  (the "3d" projection)
+
     pts, vals = res.preview_points, res.preview_values
     n = min(n, vals.shape[-1] if vals.ndim == 3 else 0, res.n_modes)
     cols = 3
     rows = max(1, -(-n // cols))
-    fig = plt.figure(figsize=(4.2 * cols, 3.8 * rows))
+    fig = new_figure((4.2 * cols, 3.8 * rows))
     span = float(np.ptp(pts, axis=0).max()) if len(pts) else 1.0
     for i in range(n):
         ax = fig.add_subplot(rows, cols, i + 1, projection="3d")
@@ -42,15 +39,13 @@ def plot_mode_previews(res, path: Path, *, n: int = 6, title: str = "") -> Path:
         ax.set_axis_off()
     fig.suptitle(title or f"housing master modes (P{res.degree}, {res.n_dofs} DOF)")
     fig.tight_layout()
-    write_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig
 
 
-def plot_sweep(param: str, values: Sequence[float], freqs: np.ndarray, path: Path) -> Path:
-    """First N frequencies (columns of ``freqs``) against the swept parameter."""
-    plt = _plt()
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+def plot_sweep(param: str, values: Sequence[float], freqs: np.ndarray):
+    """First N frequencies (columns of ``freqs``) against the swept parameter, a Figure."""
+    fig = new_figure((6.5, 4.5))
+    ax = fig.subplots()
     freqs = np.asarray(freqs, dtype=float)
     for j in range(freqs.shape[1]):
         ax.plot(values, freqs[:, j], "o-", ms=3, label=f"f{j + 1}")
@@ -59,15 +54,14 @@ def plot_sweep(param: str, values: Sequence[float], freqs: np.ndarray, path: Pat
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    write_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig
 
 
-def plot_error_vs_time(rows: Sequence[dict], path: Path, *, target: float = 0.01) -> Path:
-    """Max relative error of the first frequencies against DOF and against wall time."""
-    plt = _plt()
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+def plot_error_vs_time(rows: Sequence[dict], *, target: float = 0.01):
+    """Max relative error of the first frequencies against DOF and against wall time, a
+    Figure."""
+    fig = new_figure((10, 4.2))
+    axes = fig.subplots(1, 2)
     for degree, marker in ((1, "s--"), (2, "o-")):
         sel = sorted((r for r in rows if r["degree"] == degree), key=lambda r: r["n_dofs"])
         if not sel:
@@ -82,6 +76,4 @@ def plot_error_vs_time(rows: Sequence[dict], path: Path, *, target: float = 0.01
         ax.grid(alpha=0.3, which="both")
         ax.legend()
     fig.tight_layout()
-    write_figure(fig, path, dpi=110)
-    plt.close(fig)
-    return path
+    return fig

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_copy, atomic_write_csv, atomic_write_npz
+from .figure import write_figure
 
 __all__ = ["write_modes", "write_sweep", "write_convergence", "write_modes_outputs"]
 
@@ -66,8 +67,8 @@ def write_modes_outputs(res, out: Path, *, plot: bool = True,
     if plot and res.n_modes and getattr(res, "has_shapes", False):
         files.update(_shaded_modes(res, out, draw))
     elif plot and res.n_modes and len(res.preview_points):
-        from .housing_plots import plot_mode_previews
-        plot_mode_previews(res, out / "housing_modes.png")
+        from .housing_plots import DPI, plot_mode_previews
+        write_figure(plot_mode_previews(res), out / "housing_modes.png", dpi=DPI)
         files["plot"] = "housing_modes.png"
     return files
 
@@ -76,13 +77,13 @@ def _shaded_modes(res, out: Path, draw) -> dict[str, str]:
     """The modes ``draw`` (1-based; those beyond the solved count left out) 6 per figure, and
     the first one animated."""
     from .housing_animation import animate_surface
-    from .housing_surface_plots import _hatched, mode_panel_data, plot_mode_shapes
+    from .housing_surface_plots import DPI, _hatched, mode_panel_data, plot_mode_shapes
 
     modes = [i - 1 for i in dict.fromkeys(draw) if i <= res.n_modes]
     files = {}
     for g in range(0, len(modes), 6):
         name = "housing_modes.png" if g == 0 else f"housing_modes_{g // 6 + 1}.png"
-        plot_mode_shapes(res, out / name, modes[g:g + 6])
+        write_figure(plot_mode_shapes(res, modes[g:g + 6]), out / name, dpi=DPI)
         files["plot" if g == 0 else f"plot_{g // 6 + 1}"] = name
     if modes:
         from matplotlib import colors
@@ -103,7 +104,7 @@ def write_modes(scene, outcome, out, previous=None) -> dict[str, str]:
 
 def write_sweep(scene, outcome, out, previous=None) -> dict[str, str]:
     """``housing_sweep.csv`` and ``.png``."""
-    from .housing_plots import plot_sweep
+    from .housing_plots import DPI, plot_sweep
 
     r = outcome.result
     out = Path(out)
@@ -112,13 +113,14 @@ def write_sweep(scene, outcome, out, previous=None) -> dict[str, str]:
                      [r.parameter, "n_dofs"] + [f"f{j + 1}_hz" for j in range(n)],
                      [[f"{row['value']:.6g}", row["n_dofs"]] + [f"{x:.6g}" for x in fr]
                       for row, fr in zip(r.rows, r.freqs)])
-    plot_sweep(r.parameter, [row["value"] for row in r.rows], r.freqs, out / "housing_sweep.png")
+    write_figure(plot_sweep(r.parameter, [row["value"] for row in r.rows], r.freqs),
+                 out / "housing_sweep.png", dpi=DPI)
     return {"csv": "housing_sweep.csv", "plot": "housing_sweep.png"}
 
 
 def write_convergence(scene, outcome, out, previous=None) -> dict[str, str]:
     """``housing_convergence.csv`` and ``housing_error_vs_time.png``."""
-    from .housing_plots import plot_error_vs_time
+    from .housing_plots import DPI, plot_error_vs_time
 
     r = outcome.result
     out = Path(out)
@@ -128,5 +130,6 @@ def write_convergence(scene, outcome, out, previous=None) -> dict[str, str]:
                      [[row["degree"], f"{row['size']:.5g}", row["n_dofs"],
                        f"{row['fe_seconds']:.3f}", f"{row['max_rel_error']:.4e}"] +
                       [f"{f:.6g}" for f in row["freqs"]] for row in r.rows])
-    plot_error_vs_time(list(r.rows), out / "housing_error_vs_time.png", target=r.target_error)
+    write_figure(plot_error_vs_time(list(r.rows), target=r.target_error),
+                 out / "housing_error_vs_time.png", dpi=DPI)
     return {"csv": "housing_convergence.csv", "plot": "housing_error_vs_time.png"}

@@ -13,13 +13,12 @@ the outward normal of the region that moves most, turned 25 degrees sideways and
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Sequence
 
 import numpy as np
 
 from ..models.housing.surface_mesh import outer_skin
-from .figure import write_figure
+from .figure import new_figure
 
 __all__ = ["view_angles", "feature_edges", "face_normals", "draw_surface", "plot_mode_shapes",
            "plot_surface_field", "mode_panel_data", "DEFAULT_FRACTION", "vertex_normal_field",
@@ -181,17 +180,22 @@ def mode_panel_data(res, i: int, fraction: float = DEFAULT_FRACTION, motion=None
     return fraction * span / top * u, mag[tris].mean(axis=1) / top, view, title
 
 
-def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float = DEFAULT_FRACTION,
-                     title: str = "") -> Path:
-    """One figure of the 0-based ``modes`` (up to 6 panels, 3 per row): each deformed on the
-    housing's boundary surface, coloured by |u| / max |u|, with one colour bar."""
+#: resolution the surface figures are saved at (:func:`~.figure.write_figure`)
+DPI = 100
+
+
+def plot_mode_shapes(res, modes: Sequence[int], *, fraction: float = DEFAULT_FRACTION,
+                     title: str = ""):
+    """One Figure of the 0-based ``modes`` (up to 6 panels, 3 per row): each deformed on the
+    housing's boundary surface, coloured by |u| / max |u|, with one colour bar (the report
+    writer saves it at :data:`DPI`)."""
+    import mpl_toolkits.mplot3d  # noqa: F401  (the "3d" projection)
     from matplotlib import cm, colors
 
-    plt = _plt()
     modes = list(modes)
     cols = min(3, len(modes))
     rows = -(-len(modes) // cols)
-    fig = plt.figure(figsize=(4.4 * cols + 0.8, 4.0 * rows + 0.7))
+    fig = new_figure((4.4 * cols + 0.8, 4.0 * rows + 0.7))
     hatch = _hatched(res.shape_triangles, res.shape_facet_tag)
     norm = colors.Normalize(0.0, 1.0)
     axes = []
@@ -212,9 +216,7 @@ def plot_mode_shapes(res, path: Path, modes: Sequence[int], *, fraction: float =
                            f"displacement drawn as {100 * fraction:.0f} % of the box "
                            f"({span:.3g} m); numbered rings: bores; hatched: supported faces\n"
                            + _wall_key(res.region_normals, getattr(res, "region_names", ()))), fontsize=10)
-    write_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def _wall_key(normals, names=()) -> str:
@@ -242,13 +244,14 @@ def _hatched(tris, tags) -> np.ndarray:
     return (tags == 1) | np.isin(tris, fixed_nodes).any(axis=1)
 
 
-def plot_surface_field(path: Path, verts, tris, face_value, *, displacement=None, label: str,
-                       title: str, view=(22.0, -65.0), cmap="inferno", vmin=None, vmax=None) -> Path:
-    """One shaded panel of a field per face (e.g. the velocity level, dB) with a colour bar."""
+def plot_surface_field(verts, tris, face_value, *, displacement=None, label: str,
+                       title: str, view=(22.0, -65.0), cmap="inferno", vmin=None, vmax=None):
+    """One shaded panel of a field per face (e.g. the velocity level, dB) with a colour bar,
+    a Figure (the report writer saves it at :data:`DPI`)."""
+    import mpl_toolkits.mplot3d  # noqa: F401  (the "3d" projection)
     from matplotlib import cm, colors
 
-    plt = _plt()
-    fig = plt.figure(figsize=(7.5, 5.6))
+    fig = new_figure((7.5, 5.6))
     ax = fig.add_subplot(1, 1, 1, projection="3d")
     v = np.asarray(face_value, float)
     norm = colors.Normalize(float(np.min(v) if vmin is None else vmin),
@@ -256,9 +259,7 @@ def plot_surface_field(path: Path, verts, tris, face_value, *, displacement=None
     draw_surface(ax, verts, tris, v, displacement=displacement, cmap=cmap, norm=norm, view=view)
     fig.colorbar(cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7, pad=0.02, label=label)
     ax.set_title(title, fontsize=9)
-    write_figure(fig, path, dpi=100)
-    plt.close(fig)
-    return path
+    return fig
 
 
 def vertex_normal_field(verts, tris, mid_values) -> tuple[np.ndarray, np.ndarray]:

@@ -19,7 +19,7 @@ import numpy as np
 from .figure import new_figure, plain_title, save_figure
 from .sweep_plots import _CATS, class_categories
 
-__all__ = ["plot_map_figures", "plot_class_map", "plot_value_map"]
+__all__ = ["write_map_figures", "plot_class_map", "plot_value_map"]
 
 _CURVE_STYLE = {"LP": dict(color="black", ls="-", marker="o"),
                 "PD": dict(color="magenta", ls="--", marker="s")}
@@ -65,8 +65,9 @@ def _panels(arrays, figsize_per=(6.2, 4.0)):
     return fig, axes, dirs
 
 
-def plot_class_map(arrays, path, *, title: str = "") -> Path:
-    """The motion class of every point as categorical colours (module docstring)."""
+def plot_class_map(arrays, *, title: str = ""):
+    """The motion class of every point as categorical colours (module docstring), a Figure
+    laid out (the writer saves it with ``tight=False``)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.patches import Patch
 
@@ -87,12 +88,12 @@ def plot_class_map(arrays, path, *, title: str = "") -> Path:
                title="motion class", title_fontsize=8)
     fig.suptitle(plain_title(title), fontsize=10)
     fig.tight_layout(rect=(0, 0, 1 - 1.4 / fig.get_figwidth(), 1))
-    saved = save_figure(fig, Path(path), formats=("png",), tight=False)
-    return saved[0]
+    return fig
 
 
-def plot_value_map(arrays, key, path, *, label: str, title: str = "", log: bool = False) -> Path:
-    """A colour map of ``arrays[key]`` (directions x loads x speeds); failed points blank."""
+def plot_value_map(arrays, key, *, label: str, title: str = "", log: bool = False):
+    """A colour map of ``arrays[key]`` (directions x loads x speeds); failed points blank; a
+    Figure (the writer saves it with ``tight=False``)."""
     from matplotlib.colors import LogNorm
 
     fig, axes, _ = _panels(arrays)
@@ -112,22 +113,28 @@ def plot_value_map(arrays, key, path, *, label: str, title: str = "", log: bool 
         _draw_curves(ax, arrays)
     fig.colorbar(mesh, ax=axes, label=label, fraction=0.04, pad=0.02)
     fig.suptitle(plain_title(title), fontsize=10)
-    return save_figure(fig, Path(path), formats=("png",), tight=False)[0]
+    return fig
 
 
-def plot_map_figures(arrays, meshes, out, *, title: str = "",
-                     energy_unit: str = "model units") -> dict:
-    """Every figure of a map into ``out``; returns {name: path}."""
+def write_map_figures(arrays, meshes, out, *, title: str = "",
+                      energy_unit: str = "model units") -> dict:
+    """Every figure of a map saved into ``out`` (PNG); returns {name: path}."""
     out = Path(out)
-    files = {"class_png": plot_class_map(arrays, out / "map_class", title=title)}
+
+    def save(fig, stem):
+        return save_figure(fig, out / stem, formats=("png",), tight=False)[0]
+
+    files = {"class_png": save(plot_class_map(arrays, title=title), "map_class")}
     for m in meshes:
-        files[f"impacts_{m}_png"] = plot_value_map(
-            arrays, f"impacts_{m}", out / f"map_impacts_{m}",
-            label=f"{m}: contact onsets per mesh period (both flanks)", title=title)
-        files[f"rattle_{m}_png"] = plot_value_map(
-            arrays, f"rattle_{m}", out / f"map_rattle_{m}", log=True,
-            label=f"{m}: impact energy per period [{energy_unit}]", title=title)
-        files[f"max_force_{m}_png"] = plot_value_map(
-            arrays, f"max_force_{m}", out / f"map_max_force_{m}",
-            label=f"{m}: largest mesh force [N]", title=title)
+        files[f"impacts_{m}_png"] = save(plot_value_map(
+            arrays, f"impacts_{m}",
+            label=f"{m}: contact onsets per mesh period (both flanks)", title=title),
+            f"map_impacts_{m}")
+        files[f"rattle_{m}_png"] = save(plot_value_map(
+            arrays, f"rattle_{m}", log=True,
+            label=f"{m}: impact energy per period [{energy_unit}]", title=title),
+            f"map_rattle_{m}")
+        files[f"max_force_{m}_png"] = save(plot_value_map(
+            arrays, f"max_force_{m}", label=f"{m}: largest mesh force [N]", title=title),
+            f"map_max_force_{m}")
     return files

@@ -27,43 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analyses.operating_map import METRICS_PER_MESH, map_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
-from .map_plots import plot_map_figures
+from .map_plots import write_map_figures
 
 __all__ = ["write", "map_arrays", "METRICS_PER_MESH"]
 
-METRICS_PER_MESH = ("impacts_drive", "impacts_back", "rattle", "contact_fraction", "max_force")
-
-
-def _finite(a, fill=0.0):
-    a = np.asarray(a, dtype=float)
-    return np.where(np.isfinite(a), a, fill)
-
-
-def map_arrays(res) -> dict:
-    """The arrays of ``map.npz`` (NaN replaced) as a plain dict."""
-    g = res.grid
-    status = g("status")
-    out = dict(rpm=np.asarray(res.rpm, float), torque=np.asarray(res.torque, float),
-               twist=np.asarray(res.twist, float), load_scale=np.asarray(res.scale, float),
-               direction=np.asarray(res.directions, dtype="<U4"),
-               load_given_as=np.asarray(res.load_kind),
-               motion_class=g("motion_class"), motion_class_legend=np.asarray(res.legend),
-               period_n=g("period_n"), qmin=_finite(g("qmin")), qmax=_finite(g("qmax")),
-               status=status, ok=status == 0, wall_time=_finite(g("point_wall")))
-    for m in res.meshes:
-        for k in METRICS_PER_MESH:
-            out[f"{k}_{m}"] = _finite(g(f"{k}_{m}"))
-        out[f"impacts_{m}"] = out[f"impacts_drive_{m}"] + out[f"impacts_back_{m}"]
-    for b in res.bearings:
-        out[f"unloaded_{b}"] = _finite(g(f"unloaded_{b}"))
-    curves = res.curves.curves if res.curves is not None else ()
-    out["curve_label"] = np.asarray([c.label for c in curves], dtype="<U2")
-    out["curve_start"] = np.concatenate([[0], np.cumsum([c.rpm.size for c in curves])]).astype(int)
-    for key in ("rpm", "torque", "twist"):
-        out[f"curve_{key}"] = (np.concatenate([getattr(c, key) for c in curves]) if curves
-                               else np.zeros(0))
-    return out
 
 
 def _cell(x) -> str:
@@ -114,7 +83,7 @@ def write(scene, outcome, out, previous=None) -> dict:
                                                      _curves_csv(res.curves)))
     title = res.study.title if res.study is not None else scene.scene.name
     unit = res.study.energy_unit if res.study is not None else "model units"
-    for name, path in plot_map_figures(arrays, res.meshes, out, title=title,
-                                       energy_unit=unit).items():
+    for name, path in write_map_figures(arrays, res.meshes, out, title=title,
+                                        energy_unit=unit).items():
         files[name] = str(path)
     return files

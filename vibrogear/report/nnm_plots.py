@@ -6,7 +6,7 @@ from fractions import Fraction
 import numpy as np
 
 from .branch_plots import stability_segments
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_fep", "plot_backbone"]
 
@@ -28,9 +28,10 @@ def _labels(ax, x, y, labels):
             ax.annotate(lab, (xv, yv), textcoords="offset points", xytext=(4, 4), fontsize=7)
 
 
-def plot_fep(r, arrays, path):
+def plot_fep(r, arrays):
     """Frequency against log energy, one line per backbone; the other modes' linear
-    frequencies divided by small integers (where they fall in the plotted band) dotted."""
+    frequencies divided by small integers (where they fall in the plotted band) dotted; a
+    Figure (the report writer saves it)."""
     fig = new_figure((8.0, 5.0))
     ax = fig.add_subplot(111)
     f, e = arrays[r.freq_key], arrays["energy"]
@@ -58,12 +59,12 @@ def plot_fep(r, arrays, path):
                  "unstable dashed)", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    return save_figure(fig, path)
+    return fig
 
 
-def plot_backbone(r, arrays, path, forced=None, sweep=None, to_freq: float = 1.0):
+def plot_backbone(r, arrays, forced=None, sweep=None, to_freq: float = 1.0):
     """The backbone(s) in (frequency, amplitude) over the forced branches and sweep points
-    (amplitude: max |delta| over the orbit, display unit)."""
+    (amplitude: max |delta| over the orbit, display unit); a Figure."""
     mon = r.study.monitor
     fig = new_figure((8.0, 5.0))
     ax = fig.add_subplot(111)
@@ -93,4 +94,4 @@ def plot_backbone(r, arrays, path, forced=None, sweep=None, to_freq: float = 1.0
     ax.set_title(f"{plain_title(r.study.title)}\nbackbone over the forced response", fontsize=9)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
-    return save_figure(fig, path)
+    return fig

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from .figure import save_figure
 from .nnm_plots import plot_backbone, plot_fep
 
 __all__ = ["write", "nnm_arrays", "CSV_COLUMNS"]
@@ -124,12 +125,12 @@ def write(scene, outcome, out, previous=None) -> dict:
             float(arrays["max_abs_multiplier"][k]), float(arrays["residual"][k]))])
     csv_path = atomic_write_bytes(out / "nnm.csv", text.getvalue().encode())
     files = {"npz": str(npz), "csv": str(csv_path)}
-    files["fep_png"] = str(plot_fep(r, arrays, out / "nnm_fep")[0])
+    files["fep_png"] = str(save_figure(plot_fep(r, arrays), out / "nnm_fep")[0])
     study = r.study
     forced = _forced(previous, out, study, "continuation", "branch.npz")
     sweep = _forced(previous, out, study, "sweep", "sweep.npz")
     # the forced parameter -> its excitation frequency in the backbone's unit
     to_freq = study.model.omega_per_param * r.freq_scale
-    files["backbone_png"] = str(plot_backbone(r, arrays, out / "nnm_backbone", forced, sweep,
-                                              to_freq)[0])
+    files["backbone_png"] = str(save_figure(plot_backbone(r, arrays, forced, sweep, to_freq),
+                                            out / "nnm_backbone")[0])
     return files

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_waterfall", "plot_erp", "db_reference", "levels_db", "unidentified_note",
            "REFERENCES"]
@@ -40,7 +40,7 @@ def _edges(x: np.ndarray) -> np.ndarray:
     return np.concatenate([[2 * x[0] - mid[0]], mid, [2 * x[-1] - mid[-1]]])
 
 
-def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: float,
+def plot_waterfall(rpm, freq_hz, amp, *, label: str, unit: str, max_hz: float,
                    mesh_hz, shaft_hz, max_order: float, shaft_names=(), title: str = "",
                    power: bool = False, lines=None, unstable=None, span_db: float = 80.0,
                    mesh_names=()):
@@ -102,7 +102,7 @@ def plot_waterfall(path, rpm, freq_hz, amp, *, label: str, unit: str, max_hz: fl
     ax.set_xlabel("frequency [Hz]")
     head = plain_title(title)
     ax.set_title(head + (f"\n{note}" if note else ""), fontsize=9)
-    return save_figure(fig, path, formats=("png",))
+    return fig
 
 
 _KIND_STYLE = {"mesh": ("o", "w"), "shaft": ("s", "tab:red"), "free gear": ("D", "tab:orange"),
@@ -160,8 +160,8 @@ def _mark_unstable(ax, r_edges, unstable, max_hz: float) -> None:
                            hatch="////", label="orbit unstable at this speed (not observed)"))
 
 
-def plot_erp(path, rpm, erp_w, *, title: str = ""):
-    """ERP against speed in W (log scale) and in dB re 1 pW (right axis)."""
+def plot_erp(rpm, erp_w, *, title: str = ""):
+    """ERP against speed in W (log scale) and in dB re 1 pW (right axis), a Figure."""
     rpm, erp_w = np.asarray(rpm), np.asarray(erp_w)
     fig = new_figure((8.0, 4.5))
     ax = fig.add_subplot(111)
@@ -175,4 +175,4 @@ def plot_erp(path, rpm, erp_w, *, title: str = ""):
     right.set_ylim(10 * np.log10(lo / 1e-12), 10 * np.log10(hi / 1e-12))
     right.set_ylabel("ERP [dB re 1 pW]")
     ax.set_title(plain_title(title), fontsize=9)
-    return save_figure(fig, path, formats=("png",))
+    return fig

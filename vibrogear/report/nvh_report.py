@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from .figure import save_figure
 from .nvh_plots import plot_erp, plot_waterfall
 
 __all__ = ["write", "write_branch", "write_surface_velocity", "line_arrays", "write_ods", "V_REF"]
@@ -55,6 +56,11 @@ V_REF = 1e-9
 
 _LABELS = {"dte": "dynamic transmission error", "mesh_force": "mesh force",
            "bearing_force": "bearing force"}
+
+
+def _png(fig, path) -> None:
+    """The NVH figures are PNG only."""
+    save_figure(fig, path, formats=("png",))
 
 
 def _rss(amp: np.ndarray) -> np.ndarray:
@@ -102,12 +108,12 @@ def write(scene, outcome, out, previous=None) -> dict:
             continue
         label = _LABELS[q] + (" (RSS over channels)" if amp.shape[1] > 1 else "")
         path = out / f"nvh_waterfall_{q}.png"
-        plot_waterfall(path, r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
-                       max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
-                       max_order=cfg.max_order, shaft_names=r.shaft_names,
-                       mesh_names=tuple(r.channels.get("dte", ())),
-                       title=f"{title}\n{_LABELS[q]}, steady points from {r.source}",
-                       lines=_lines_of(r, q))
+        _png(plot_waterfall(r.rpm, r.freq_hz, _rss(amp), label=label, unit=r.units[q],
+                            max_hz=max_hz, mesh_hz=r.mesh_hz, shaft_hz=r.shaft_hz,
+                            max_order=cfg.max_order, shaft_names=r.shaft_names,
+                            mesh_names=tuple(r.channels.get("dte", ())),
+                            title=f"{title}\n{_LABELS[q]}, steady points from {r.source}",
+                            lines=_lines_of(r, q)), path)
         files[f"waterfall_{q}"] = str(path)
     if r.erp_w is not None:
         lines = ["rpm,erp_w,erp_db"] + [f"{p!r},{w!r},{d!r}" for p, w, d in
@@ -115,16 +121,17 @@ def write(scene, outcome, out, previous=None) -> dict:
                                             r.erp_db.tolist())]
         files["erp_csv"] = str(atomic_write_bytes(out / "erp.csv",
                                                   ("\n".join(lines) + "\n").encode()))
-        plot_waterfall(out / "nvh_waterfall_erp.png", r.rpm, r.freq_hz, r.erp_per_bin,
-                       label="ERP per bin", unit="W", max_hz=max_hz, mesh_hz=r.mesh_hz,
-                       shaft_hz=r.shaft_hz, max_order=cfg.max_order, shaft_names=r.shaft_names,
-                       mesh_names=tuple(r.channels.get("dte", ())),
-                       title=f"{title}\nERP of the outer housing surface per frequency bin",
-                       power=True)
+        _png(plot_waterfall(r.rpm, r.freq_hz, r.erp_per_bin,
+                            label="ERP per bin", unit="W", max_hz=max_hz, mesh_hz=r.mesh_hz,
+                            shaft_hz=r.shaft_hz, max_order=cfg.max_order,
+                            shaft_names=r.shaft_names,
+                            mesh_names=tuple(r.channels.get("dte", ())),
+                            title=f"{title}\nERP of the outer housing surface per frequency "
+                                  "bin", power=True), out / "nvh_waterfall_erp.png")
         files["waterfall_erp"] = str(out / "nvh_waterfall_erp.png")
-        plot_erp(out / "erp.png", r.rpm, r.erp_w,
-                 title=f"{title}\nequivalent radiated power of the outer housing surface "
-                       f"(rho c = {cfg.rho_air:g} x {cfg.c_air:g})")
+        _png(plot_erp(r.rpm, r.erp_w,
+                      title=f"{title}\nequivalent radiated power of the outer housing surface "
+                            f"(rho c = {cfg.rho_air:g} x {cfg.c_air:g})"), out / "erp.png")
         files["erp_png"] = str(out / "erp.png")
         s = r.surface
         for p, v in r.velocity_fields.items():
@@ -145,14 +152,15 @@ def write_ods(r, out: Path, draw=(1, 2, 3, 4, 5, 6)) -> dict:
     the housing's master modes ``draw`` (1-based, the first six of them) in this synthesis,
     shaded (when they carry the boundary surface)."""
     from .housing_animation import animate_surface
-    from .housing_surface_plots import ods_drawing, plot_mode_shapes, plot_surface_field
+    from .figure import write_figure
+    from .housing_surface_plots import DPI, ods_drawing, plot_mode_shapes, plot_surface_field
 
     files, s, ods = {}, r.surface, r.ods
     hm = getattr(getattr(r.study, "gearbox", None), "housing", None)
     if hm is not None and getattr(hm, "has_shapes", False):
         modes = [i - 1 for i in dict.fromkeys(draw) if i <= hm.n_modes][:6]
         if modes:
-            plot_mode_shapes(hm, out / "nvh_housing_modes.png", modes)
+            write_figure(plot_mode_shapes(hm, modes), out / "nvh_housing_modes.png", dpi=DPI)
             files["housing_modes_png"] = str(out / "nvh_housing_modes.png")
     if not ods or ods["rpm"] not in r.velocity_fields:
         return files
@@ -165,9 +173,10 @@ def write_ods(r, out: Path, draw=(1, 2, 3, 4, 5, 6)) -> dict:
     label = "RMS normal velocity, dB re 1e-9 m/s"
     what = (f"ERP peak {r.erp_db[k]:.1f} dB re 1e-12 W at {ods['rpm']:.0f} rpm; shape: order "
             f"{r.order[ods['bin']]:.3g} ({f_hz:.0f} Hz, {100 * ods['erp_share']:.0f} % of the ERP)")
-    plot_surface_field(out / "housing_ods.png", s.vertices, s.triangles, level, displacement=np.real(disp),
-                       label=label, view=view, vmin=top - 40.0, vmax=top,
-                       title=f"operating deflection shape of the housing\n{what}")
+    write_figure(plot_surface_field(s.vertices, s.triangles, level, displacement=np.real(disp),
+                                    label=label, view=view, vmin=top - 40.0, vmax=top,
+                                    title=f"operating deflection shape of the housing\n{what}"),
+                 out / "housing_ods.png", dpi=DPI)
     files["ods_png"] = str(out / "housing_ods.png")
     from matplotlib import colors
 
@@ -249,12 +258,12 @@ def write_branch(scene, r, out: Path, max_hz: float, title: str) -> dict:
         names = r.shaft_names
         path = out / "nvh_waterfall_branch_dte.png"
         label = _LABELS["dte"] + (" (RSS over channels)" if amp.shape[1] > 1 else "")
-        plot_waterfall(path, b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
-                       unit=r.units["dte"], max_hz=max_hz, mesh_hz=mesh_hz, shaft_hz=shaft_hz,
-                       max_order=cfg.max_order, shaft_names=names,
-                       mesh_names=tuple(r.channels.get("dte", ())),
-                       unstable=~np.asarray(b.stable, bool)[sel],
-                       title=f"{title}\n{_LABELS['dte']} of the continuation branch (first "
-                             "pass, one orbit period per point)")
+        _png(plot_waterfall(b.rpm[sel], b.freq_hz[sel], _rss(amp[sel]), label=label,
+                            unit=r.units["dte"], max_hz=max_hz, mesh_hz=mesh_hz,
+                            shaft_hz=shaft_hz, max_order=cfg.max_order, shaft_names=names,
+                            mesh_names=tuple(r.channels.get("dte", ())),
+                            unstable=~np.asarray(b.stable, bool)[sel],
+                            title=f"{title}\n{_LABELS['dte']} of the continuation branch "
+                                  "(first pass, one orbit period per point)"), path)
         files["waterfall_branch_dte"] = str(path)
     return files

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_convergence", "plot_landscape"]
 
@@ -22,7 +22,9 @@ def _split(history):
             [h for h in history if h["status"] != "ok"])
 
 
-def plot_convergence(history, best_so_far, path, *, label: str, title: str = ""):
+def plot_convergence(history, best_so_far, *, label: str, title: str = ""):
+    """The objective of every evaluation and the best feasible one so far, a Figure (the
+    report writer saves it)."""
     fig = new_figure((7.5, 4.5))
     ax = fig.add_subplot(111)
     feas, infeas, failed = _split(history)
@@ -46,7 +48,7 @@ def plot_convergence(history, best_so_far, path, *, label: str, title: str = "")
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)
-    return save_figure(fig, path)
+    return fig
 
 
 def _constraints_panel(ax, ok, key, constraints):
@@ -65,10 +67,10 @@ def _constraints_panel(ax, ok, key, constraints):
     ax.legend(fontsize=8)
 
 
-def plot_landscape(history, variables, best, path, *, label: str, title: str = "",
+def plot_landscape(history, variables, best, *, label: str, title: str = "",
                    constraints=()):
     """One or two variables: the objective of the successful evaluations over them (one
-    variable with constraints: their values in a second panel)."""
+    variable with constraints: their values in a second panel), a Figure."""
     ok = [h for h in history if h["status"] == "ok"]
     keys = [v.key for v in variables]
     two = len(keys) == 1 and len(constraints) > 0
@@ -122,4 +124,4 @@ def plot_landscape(history, variables, best, path, *, label: str, title: str = "
     ax.grid(alpha=0.3)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(fontsize=8)
-    return save_figure(fig, path)
+    return fig

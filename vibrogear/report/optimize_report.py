@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..config.optimize_section import data_with
 from ..pipeline.files import atomic_write_csv, atomic_write_text, finite_json
+from .figure import save_figure
 from .optimize_plots import plot_convergence, plot_landscape
 
 __all__ = ["write", "toml_text", "best_so_far"]
@@ -121,11 +122,11 @@ def write(scene, outcome, out, previous=None) -> dict:
         files["best_scene"] = str(atomic_write_text(out / "best_scene.toml", _best_scene(r)))
     label = (r.objective.metric if r.objective.metric in {v.key for v in r.variables}
              and r.objective.analysis is None else f"{r.objective.reduce} {r.objective.metric}")
-    plot_convergence(r.history, best_so_far(r), out / "optimize_convergence", label=label,
-                     title=r.title)
+    save_figure(plot_convergence(r.history, best_so_far(r), label=label, title=r.title),
+                out / "optimize_convergence")
     files["convergence_png"] = str(out / "optimize_convergence.png")
     if len(r.variables) <= 2 and any(h["status"] == "ok" for h in r.history):
-        plot_landscape(r.history, r.variables, r.best, out / "optimize_landscape",
-                       label=label, title=r.title, constraints=r.constraints)
+        save_figure(plot_landscape(r.history, r.variables, r.best, label=label, title=r.title,
+                                   constraints=r.constraints), out / "optimize_landscape")
         files["landscape_png"] = str(out / "optimize_landscape.png")
     return files

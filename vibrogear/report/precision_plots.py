@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_csv
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["write_table", "plot_work_precision", "plot_shooting_precision",
            "plot_accuracy_rule"]
@@ -42,14 +42,14 @@ def _figure(ncols: int):
     return fig, [fig.add_subplot(1, ncols, k + 1) for k in range(ncols)]
 
 
-def _finish(fig, axes, title, path, formats, dpi) -> list[Path]:
-    """Grid and legend on every axis, the title, and the files."""
+def _finish(fig, axes, title):
+    """Grid and legend on every axis, and the title: the Figure."""
     for ax in axes:
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7, loc="best")
     if title:
         fig.suptitle(plain_title(title), fontsize=9)
-    return save_figure(fig, path, formats, dpi)
+    return fig
 
 
 def _annotate(ax, xs, ys, labels, color="0.25") -> None:
@@ -70,9 +70,8 @@ def _guide(ax, x, y, slope: float, label: str, **kw) -> None:
     ax.plot(np.exp(xs), np.exp(ly.mean() + slope * (xs - lx.mean())), label=label, **kw)
 
 
-def plot_work_precision(table: dict, slopes: dict, path, *, title: str = "",
-                        formats=("png", "svg"), dpi: int = 150) -> list[Path]:
-    """Left: error vs wall time; right: error vs rtol (with the fitted slope)."""
+def plot_work_precision(table: dict, slopes: dict, *, title: str = ""):
+    """Left: error vs wall time; right: error vs rtol (with the fitted slope); a Figure."""
     fig, (a1, a2) = _figure(2)
     rtol = np.asarray(table["rtol"], float)
     err = np.asarray(table["error"], float)
@@ -94,12 +93,12 @@ def plot_work_precision(table: dict, slopes: dict, path, *, title: str = "",
     a2.set_xlabel("rtol (atol = rtol * 1e-2)")
     a2.set_ylabel("max |q - q_exact|")
     a2.set_title("tolerance proportionality", fontsize=9)
-    return _finish(fig, (a1, a2), title, path, formats, dpi)
+    return _finish(fig, (a1, a2), title)
 
 
-def plot_shooting_precision(table: dict, path, *, title: str = "",
-                            formats=("png", "svg"), dpi: int = 150) -> list[Path]:
-    """Left: residual / errors vs wall time; right: the same vs the shooting tolerance."""
+def plot_shooting_precision(table: dict, *, title: str = ""):
+    """Left: residual / errors vs wall time; right: the same vs the shooting tolerance; a
+    Figure."""
     fig, (a1, a2) = _figure(2)
     tol = np.asarray(table["tol"], float)
     wall = np.asarray(table["wall_s"], float) * 1e3
@@ -119,14 +118,15 @@ def plot_shooting_precision(table: dict, path, *, title: str = "",
     a1.set_title("shooting: accuracy vs work", fontsize=9)
     a2.set_xlabel("shooting tol (integrator rtol = tol)")
     a2.set_title("shooting: accuracy vs tolerance", fontsize=9)
-    return _finish(fig, (a1, a2), title, path, formats, dpi)
+    return _finish(fig, (a1, a2), title)
 
 
-def plot_accuracy_rule(points, rule: dict, accuracy: float, chosen_rtol: float, path, *,
-                       title: str = "", formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+def plot_accuracy_rule(points, rule: dict, accuracy: float, chosen_rtol: float, *,
+                       title: str = ""):
     """``points``: dicts with ``label``, ``rtols``, ``errors``, ``steps_per_period``; ``rule``:
     coefficient, exponent, safety (err = c rtol^p; the rtol picked meets accuracy / safety).
-    Left: error vs steps per mesh period (work); right: error vs rtol with the fit."""
+    Left: error vs steps per mesh period (work); right: error vs rtol with the fit.  A
+    Figure."""
     fig, (a1, a2) = _figure(2)
     for k, pt in enumerate(points):
         col = f"C{k % 10}"
@@ -148,4 +148,4 @@ def plot_accuracy_rule(points, rule: dict, accuracy: float, chosen_rtol: float, 
     a1.set_title("mesh-deformation error vs work", fontsize=9)
     a2.set_xlabel("rtol (atol = 1e-6 rtol)")
     a2.set_title("error vs tolerance: the rule", fontsize=9)
-    return _finish(fig, (a1, a2), title, path, formats, dpi)
+    return _finish(fig, (a1, a2), title)

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .figure import save_figure
 from .precision_plots import plot_shooting_precision, plot_work_precision, write_table
 
 __all__ = ["write"]
@@ -28,8 +29,8 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {"work_precision_csv": str(write_table(out / "work_precision.csv", r.wp, _columns(r.wp))),
              "shooting_precision_csv": str(write_table(out / "shooting_precision.csv", r.sh,
                                                        _columns(r.sh)))}
-    plot_work_precision(r.wp, r.slopes, out / "work_precision", title=r.wp_title)
-    plot_shooting_precision(r.sh, out / "shooting_precision", title=r.sh_title)
+    save_figure(plot_work_precision(r.wp, r.slopes, title=r.wp_title), out / "work_precision")
+    save_figure(plot_shooting_precision(r.sh, title=r.sh_title), out / "shooting_precision")
     files["work_precision_png"] = str(out / "work_precision.png")
     files["shooting_precision_png"] = str(out / "shooting_precision.png")
     return files

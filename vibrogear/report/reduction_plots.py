@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 from ..pipeline.files import atomic_write_bytes
 
 __all__ = ["write_reduction_tables", "plot_reduction_study"]
@@ -52,12 +52,12 @@ def write_reduction_tables(out_dir, rows, extra=()) -> dict:
     return paths
 
 
-def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
-                         dpi: int = 150) -> list[Path]:
+def plot_reduction_study(rows, *, title: str = ""):
     """Left: frequency error against the full model; middle: the nonlinear response's
     error against the largest level over the simulation's wall time, pointwise where the
     motion is periodic, the converging statistics' error with its batch-means error bar
-    (lower end clipped at the axis) where it is not; right: MAC of the largest level."""
+    (lower end clipped at the axis) where it is not; right: MAC of the largest level.  A
+    Figure (the report writer saves it)."""
     fig = new_figure((13.0, 4.6))
     a1, a2, a3 = fig.subplots(1, 3)
     m = np.array([r["m"] for r in rows], float)
@@ -86,7 +86,7 @@ def plot_reduction_study(path, rows, *, title: str = "", formats=("png", "svg"),
     for a in (a1, a2, a3):
         a.tick_params(labelsize=8)
     fig.suptitle(plain_title(title), fontsize=9)
-    return save_figure(fig, path, formats, dpi)
+    return fig
 
 
 def _error_panel(ax, rows, wall, m, cnt):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .figure import save_figure
 from .reduction_plots import plot_reduction_study, write_reduction_tables
 
 __all__ = ["write"]
@@ -20,7 +21,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     out = Path(out)
     rows, extra = list(r.rows), list(r.extra)
     paths = write_reduction_tables(out, rows, extra)
-    plot_reduction_study(out / "reduction_accuracy", rows + extra, title=r.title)
+    save_figure(plot_reduction_study(rows + extra, title=r.title), out / "reduction_accuracy")
     files = {k: str(v) for k, v in paths.items()}
     files["png"] = str(out / "reduction_accuracy.png")
     return files

@@ -1,11 +1,10 @@
-"""Rotor plots: Campbell diagram and mode shapes (PNG + SVG).  Takes result objects only."""
+"""Rotor plots: Campbell diagram and mode shapes, as Figures (the report writer saves them
+as PNG + SVG).  Takes result objects only."""
 from __future__ import annotations
-
-from pathlib import Path
 
 import numpy as np
 
-from .figure import write_figure
+from .figure import new_figure
 
 __all__ = ["plot_campbell", "plot_mode_shapes"]
 
@@ -13,26 +12,11 @@ _WHIRL_STYLE = {"forward": ("tab:blue", "-"), "backward": ("tab:red", "--"),
                 "mixed": ("tab:purple", "-."), "-": ("0.4", ":")}
 
 
-def _figure(size=(7.0, 4.8)):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=size)
-    return plt, fig, ax
-
-
-def _save(plt, fig, path: Path) -> list[Path]:
-    out = [path.with_suffix(".png"), path.with_suffix(".svg")]
-    fig.tight_layout()
-    for p in out:
-        write_figure(fig, p, dpi=150)
-    plt.close(fig)
-    return out
-
-
-def plot_campbell(result, path: Path, *, title: str = "") -> list[Path]:
-    """Frequency lines coloured by whirl at each speed, order lines, critical speeds."""
-    plt, fig, ax = _figure()
+def plot_campbell(result, *, title: str = ""):
+    """Frequency lines coloured by whirl at each speed, order lines, critical speeds; a
+    Figure."""
+    fig = new_figure((7.0, 4.8))
+    ax = fig.subplots()
     s = result.speeds_rpm
     for line in range(result.frequencies_hz.shape[1]):
         f = result.frequencies_hz[:, line]
@@ -56,16 +40,15 @@ def plot_campbell(result, path: Path, *, title: str = "") -> list[Path]:
            ylabel="frequency [Hz]", title=title or "Campbell diagram")
     ax.legend(fontsize=8, loc="upper left")
     ax.grid(alpha=0.3)
-    return _save(plt, fig, Path(path))
+    return fig
 
 
-def plot_mode_shapes(model, modes, path: Path, *, n: int = 6, title: str = "") -> list[Path]:
+def plot_mode_shapes(model, modes, *, n: int = 6, title: str = ""):
     """Deflection of the first ``n`` modes along the shaft (|u|, |v| for lateral modes, the
-    axial or torsional component otherwise), normalised to 1."""
-    plt, fig, ax = _figure((7.0, 1.2 + 0.9 * min(n, modes.shapes.shape[1])))
-    plt.close(fig)
+    axial or torsional component otherwise), normalised to 1; a Figure."""
     k = min(n, modes.shapes.shape[1])
-    fig, axes = plt.subplots(k, 1, figsize=(7.0, 1.2 + 1.1 * k), sharex=True, squeeze=False)
+    fig = new_figure((7.0, 1.2 + 1.1 * k))
+    axes = fig.subplots(k, 1, sharex=True, squeeze=False)
     z = model.node_z
     idx = 6 * np.arange(model.n_nodes)
     for j in range(k):
@@ -90,4 +73,4 @@ def plot_mode_shapes(model, modes, path: Path, *, n: int = 6, title: str = "") -
         ax.legend(fontsize=7, loc="lower left")
     axes[-1, 0].set_xlabel("z [m]")
     axes[0, 0].set_title(title or f"mode shapes at {modes.speed_rpm:g} rpm (real part)")
-    return _save(plt, fig, Path(path))
+    return fig

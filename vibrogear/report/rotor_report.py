@@ -41,8 +41,9 @@ def write_modes(scene, outcome, out, previous=None) -> list[str]:
         free_gear_dofs=np.array(model.free_gear_dofs, int), n_rigid=master.n_rigid))
     plots = []
     if res.frequencies_hz.size:
+        from .figure import save_figure
         from .rotor_plots import plot_mode_shapes
-        plots = plot_mode_shapes(model, res, out / "mode_shapes", title=r.title)
+        plots = save_figure(plot_mode_shapes(model, res, title=r.title), out / "mode_shapes")
     return ["modes.csv", "master_modes.csv", "master_modes.npz", *(p.name for p in plots)]
 
 
@@ -65,6 +66,7 @@ def write_campbell(scene, outcome, out, previous=None) -> list[str]:
                      ["order", "line", "speed_rpm", "frequency_hz", "whirl", "mode_type"],
                      [[f"{c.order:g}", c.line + 1, f"{c.speed_rpm:.6g}", f"{c.frequency_hz:.6g}",
                        c.whirl, c.mode_type] for c in res.critical_speeds])
+    from .figure import save_figure
     from .rotor_plots import plot_campbell
-    plots = plot_campbell(res, out / "campbell", title=r.title)
+    plots = save_figure(plot_campbell(res, title=r.title), out / "campbell")
     return ["campbell.csv", "critical_speeds.csv", *(p.name for p in plots)]

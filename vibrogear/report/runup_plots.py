@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_envelopes", "plot_orders", "plot_waterfall"]
 
@@ -48,7 +48,7 @@ def _steady(ax, sweep, branch, unit_label):
             first = False
 
 
-def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
+def plot_envelopes(result, *, sweep=None, branch=None):
     """Per mesh: the envelope (min and max per mesh period) against the speed for each
     run (with inertia_torque = "both" the runs without the inertia torque dashed); on the
     monitored mesh, the steady-state sweep and branches overlaid."""
@@ -93,11 +93,10 @@ def plot_envelopes(result, path, *, sweep=None, branch=None) -> list:
                else "without the inertia torque")
     fig.axes[0].set_title(f"{plain_title(study.title)}\nenvelope per mesh period ({rates}; "
                           f"{inertia})", fontsize=9)
-    out = save_figure(fig, path, formats=("png",))
-    return out
+    return fig
 
 
-def plot_orders(result, path) -> list:
+def plot_orders(result):
     """Per mesh: amplitude of each tracked order against the speed (run-up solid,
     run-down dashed; the main runs, with the inertia torque where "both")."""
     study = result.study
@@ -122,10 +121,10 @@ def plot_orders(result, path) -> list:
     fig.axes[0].set_title(f"{plain_title(study.title)}\norder tracks (window "
                           f"{result.runs[0].tracks[result.mesh_names[0]].window_revs} rev; "
                           "run-up solid, run-down dashed)", fontsize=9)
-    return save_figure(fig, path, formats=("png",))
+    return fig
 
 
-def plot_waterfall(result, path) -> list:
+def plot_waterfall(result):
     """Per direction: amplitude spectrum (dB) of the monitored mesh deformation against
     speed and frequency, with the order lines f = order x speed / 60 drawn."""
     study = result.study
@@ -162,4 +161,4 @@ def plot_waterfall(result, path) -> list:
                      f"{result.mesh_names[0] if len(result.mesh_names) == 1 else 'monitored mesh'}"
                      " deformation", fontsize=9)
     fig.axes[0].set_title(f"{plain_title(study.title)}\n" + fig.axes[0].get_title(), fontsize=9)
-    return save_figure(fig, path, formats=("png",))
+    return fig

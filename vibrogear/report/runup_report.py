@@ -25,34 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analyses.runup import runup_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .branch_io import branch_arrays
+from .figure import save_figure
 from .runup_plots import plot_envelopes, plot_orders, plot_waterfall
 from .sweep_io import read_sweep_npz, sweep_arrays
 
 __all__ = ["write", "runup_arrays", "steady_state"]
-
-
-def runup_arrays(result) -> dict:
-    """The arrays of ``runup.npz`` (see the module docstring)."""
-    out = {"meshes": np.array(result.mesh_names), "order_names": np.array(result.order_names),
-           "orders": np.asarray(result.orders, float), "unit": np.array(result.study.monitor.unit),
-           "directions": np.array(list(dict.fromkeys(r.direction for r in result.runs))),
-           "runs": np.array([r.key or r.direction for r in result.runs]),
-           "inertia_torque": np.array([r.inertia_torque for r in result.runs], dtype=bool)}
-    for r in result.runs:
-        d = r.key or r.direction
-        out[f"{d}_time"] = r.time_s
-        out[f"{d}_rpm"] = r.rpm
-        out[f"{d}_track_rpm"] = r.track_rpm
-        for i, name in enumerate(result.mesh_names):
-            out[f"{d}_env_min_{name}"] = r.env_min[i]
-            out[f"{d}_env_max_{name}"] = r.env_max[i]
-            out[f"{d}_losses_{name}"] = r.losses[i].astype(np.int64)
-            tr = r.tracks[name]
-            for k, oname in enumerate(result.order_names):
-                out[f"{d}_order_{name}_{oname}"] = tr.amplitude[k]
-    return out
 
 
 def _csv(result) -> bytes:
@@ -101,10 +81,13 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {"npz": str(atomic_write_npz(out / "runup.npz", runup_arrays(result))),
              "csv": str(atomic_write_bytes(out / "runup.csv", _csv(result)))}
     sweep, branch = steady_state(previous, out, result.study)
-    files["envelope_png"] = str(plot_envelopes(result, out / "runup_envelope", sweep=sweep,
-                                               branch=branch)[0])
-    files["orders_png"] = str(plot_orders(result, out / "runup_orders")[0])
-    files["waterfall_png"] = str(plot_waterfall(result, out / "runup_waterfall")[0])
+    png = ("png",)
+    files["envelope_png"] = str(save_figure(plot_envelopes(result, sweep=sweep, branch=branch),
+                                            out / "runup_envelope", formats=png)[0])
+    files["orders_png"] = str(save_figure(plot_orders(result), out / "runup_orders",
+                                          formats=png)[0])
+    files["waterfall_png"] = str(save_figure(plot_waterfall(result), out / "runup_waterfall",
+                                             formats=png)[0])
     files["overlaid"] = [k for k, v in (("sweep", sweep), ("continuation", branch))
                          if v is not None]
     return files

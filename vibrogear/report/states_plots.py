@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .branch_plots import stability_segments
-from .figure import new_figure, save_figure
+from .figure import new_figure
 
 __all__ = ["plot_danger_map", "CATEGORIES", "category"]
 
@@ -29,9 +29,10 @@ def category(motion_class: int, period_n: int) -> int:
     return {2: 3, 3: 4}.get(int(motion_class), 5)
 
 
-def plot_danger_map(arrays: dict, path, *, param_label: str, q_label: str, scale: float,
-                    title: str = "") -> list:
-    """The danger map from ``states.npz``'s arrays (``arrays``) into ``path`` (PNG + SVG)."""
+def plot_danger_map(arrays: dict, *, param_label: str, q_label: str, scale: float,
+                    title: str = ""):
+    """The danger map from ``states.npz``'s arrays (``arrays``) as a Figure (the report
+    writer saves it as PNG + SVG)."""
     fig = new_figure((9.0, 7.0))
     axes = fig.subplots(2, 1, sharex=True)
     p = np.asarray(arrays["attractor_param"], float)
@@ -69,7 +70,7 @@ def plot_danger_map(arrays: dict, path, *, param_label: str, q_label: str, scale
     axes[0].legend(uniq.values(), uniq.keys(), loc="best", fontsize=7, markerscale=0.6)
     axes[0].set_title((title + "\n" if title else "") +
                       "attractors from random starts; marker area = basin fraction", fontsize=9)
-    return save_figure(fig, path)
+    return fig
 
 
 def _branches(ax, arrays, q: str, scale: float) -> None:

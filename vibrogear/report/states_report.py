@@ -33,73 +33,12 @@ import io
 import math
 from pathlib import Path
 
-import numpy as np
-
+from ..analyses.states_summary import states_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from .figure import save_figure
 from .states_plots import plot_danger_map
 
-__all__ = ["write", "states_arrays", "html_caption"]
-
-
-def _flag(v) -> int:
-    return -1 if v is None else int(bool(v))
-
-
-def _fin(a) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    return np.where(np.isfinite(a), a, 0.0)
-
-
-def states_arrays(res) -> dict:
-    """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.StatesResult`."""
-    atts = res.attractors
-    meshes = sorted({g for a in atts for g in a.metrics})
-    ci = np.array([a.ci for a in atts], dtype=float).reshape(-1, 2)
-    out = {
-        "param": np.asarray(res.params, float), "n_starts": np.asarray(res.n_starts, int),
-        "n_failed": np.asarray(res.n_failed, int),
-        "attractor_param": np.array([a.param for a in atts], float),
-        "attractor_class": np.array([a.motion_class for a in atts], int),
-        "attractor_class_legend": np.asarray(res.legend),
-        "attractor_period_n": np.array([a.period_n for a in atts], int),
-        "attractor_qmin": _fin([a.qmin for a in atts]),
-        "attractor_qmax": _fin([a.qmax for a in atts]),
-        "basin_fraction": _fin([a.fraction for a in atts]),
-        "basin_ci_lo": ci[:, 0], "basin_ci_hi": ci[:, 1],
-        "attractor_starts": np.array([a.count for a in atts], int),
-        "attractor_stable": np.array([_flag(a.stable) for a in atts], int),
-        "attractor_max_multiplier": _fin([a.max_multiplier for a in atts]),
-        "attractor_refined": np.array([a.refined for a in atts], bool),
-        "attractor_seen_by_sweep": np.array([_flag(a.seen_by_sweep) for a in atts], int),
-        "q_display_scale": np.float64(res.study.monitor.scale),
-        "q_display_unit": np.asarray(res.study.monitor.unit),
-        "param_name": np.asarray(res.study.param_name),
-    }
-    for g in meshes:
-        out[f"attractor_impacts_{g}"] = _fin([a.metrics.get(g, {}).get("impacts", math.nan)
-                                              for a in atts])
-        out[f"attractor_rattle_{g}"] = _fin([a.metrics.get(g, {}).get("rattle", math.nan)
-                                             for a in atts])
-    brs = res.branches
-    pts = [p for b in brs for p in b.points]
-    out["branch_start"] = np.concatenate([[0], np.cumsum([len(b.points) for b in brs])]).astype(int)
-    out["branch_n_periods"] = np.array([b.n_periods for b in brs], int)
-    out["branch_param"] = np.array([p.param for p in pts], float)
-    out["branch_qmin"] = np.array([p.qmin for p in pts], float)
-    out["branch_qmax"] = np.array([p.qmax for p in pts], float)
-    out["branch_stable"] = np.array([p.stable for p in pts], bool)
-    out["branch_label"] = np.array([p.label for p in pts], dtype="<U2")
-    for k, v in (res.starts or {}).items():
-        out[f"start_{k}"] = np.asarray(v)
-    sw = res.sweep or {}
-    for k in ("param", "qmin", "qmax"):
-        v = np.asarray(sw.get(k, np.zeros(0)), float)
-        out[f"sweep_{k}"] = v
-    if sw:
-        ok = np.isfinite(out["sweep_qmin"]) & np.isfinite(out["sweep_qmax"])
-        for k in ("param", "qmin", "qmax"):
-            out[f"sweep_{k}"] = out[f"sweep_{k}"][ok]
-    return out
+__all__ = ["write", "states_arrays", "html_caption", "figure"]
 
 
 def _csv(res, arrays) -> bytes:
@@ -156,10 +95,16 @@ def write(scene, outcome, out, previous=None) -> dict:
     arrays = states_arrays(res)
     files = {"npz": str(atomic_write_npz(out / "states.npz", arrays)),
              "csv": str(atomic_write_bytes(out / "states.csv", _csv(res, arrays)))}
-    st = res.study
-    paths = plot_danger_map(arrays, out / "states.png", param_label=st.param_label,
-                            q_label=st.monitor.axis_label(), scale=st.monitor.scale,
-                            title=st.title)
+    paths = save_figure(figure(res, arrays), out / "states.png")
     for p in paths:
         files[f"danger_map_{Path(p).suffix.lstrip('.')}"] = str(p)
     return files
+
+
+def figure(res, arrays: dict | None = None):
+    """The danger map of a census (:class:`~vibrogear.analyses.states.StatesResult`) as a
+    Figure, the report's ``states.png``; ``arrays``: its :func:`states_arrays` when at hand."""
+    st = res.study
+    return plot_danger_map(states_arrays(res) if arrays is None else arrays,
+                           param_label=st.param_label, q_label=st.monitor.axis_label(),
+                           scale=st.monitor.scale, title=st.title)

@@ -99,69 +99,16 @@ def csv_header(columns, *, param_name: str = "param", param_unit: str = "",
     return out
 
 
-def _finite(a, fill=0.0) -> np.ndarray:
-    a = np.asarray(a, dtype=float)
-    return np.where(np.isfinite(a), a, fill)
-
-
 def _cell(x) -> str:
     if isinstance(x, (float, np.floating)):
         return repr(float(x)) if math.isfinite(x) else ""
     return str(x)
 
 
-def _extra(result) -> dict:
-    """Motion class, evidence and metrics (absent on results made before them)."""
-    N = result.param.size
-    if result.motion_class is None:
-        return {}
-    out = dict(motion_class=np.asarray(result.motion_class, np.int64),
-               motion_class_legend=np.asarray(result.motion_legend),
-               lyapunov=_finite(result.lyapunov), lyapunov_ok=np.isfinite(result.lyapunov),
-               lyapunov_ci=_finite(np.asarray(result.lyapunov_ci).reshape(N, 2)),
-               transient_used=np.asarray(result.transient_used, np.int64),
-               settled_by=np.asarray(result.settled_by, dtype="<U10"))
-    for k, v in result.metrics.items():
-        v = np.asarray(v)
-        out[k] = v if v.dtype.kind == "i" else _finite(v)
-    out.update(result.spectral)
-    out.update(hysteresis_arrays(result))
-    return out
-
-
-def hysteresis_arrays(result) -> dict:
-    """``hysteresis_<monitored>``: per point, |qmax up - qmax down| at its speed (the same
-    value on the up and the down point; 0 where either failed or the sweep ran one way)."""
-    key = getattr(result, "monitored", "") or "monitored"
-    param = np.asarray(result.param, float)
-    d = np.asarray(result.direction, str)
-    ok = (np.asarray(result.status) == 0) & np.isfinite(np.asarray(result.qmax, float))
-    q = np.asarray(result.qmax, float)
-    h = np.zeros(param.size)
-    if np.any(d == "up") and np.any(d == "down"):
-        for k in range(param.size):
-            other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
-            if ok[k] and other.size:
-                h[k] = abs(q[k] - q[other[0]])
-    return {f"hysteresis_{key}": h}
-
-
 def sweep_arrays(result) -> dict:
-    """The arrays that ``sweep.npz`` holds (NaN/inf replaced), as a plain dict."""
-    ok = result.status == 0
-    return dict(**_extra(result),
-        param=_finite(result.param), direction=np.asarray(result.direction, dtype="<U4"),
-        qmin=_finite(result.qmin), qmax=_finite(result.qmax),
-        poincare=_finite(result.poincare), period_n=np.asarray(result.period_n, np.int64),
-        impacts=_finite(result.impacts), index=np.asarray(result.index, np.int64),
-        status=np.asarray(result.status, np.int64), ok=ok,
-        defect=_finite(result.defect), clusters=np.asarray(result.clusters, np.int64),
-        u_end=_finite(result.u_end), point_wall=_finite(result.point_wall),
-        message=np.asarray(result.message, dtype=str) if result.message else np.zeros(0, "<U1"),
-        rtol=np.asarray(result.rtol, np.float64), atol=np.asarray(result.atol, np.float64),
-        period_tol=np.asarray(result.period_tol, np.float64),
-        param_name=np.asarray(result.param_name),
-    )
+    """The arrays that ``sweep.npz`` holds (NaN/inf replaced), as a plain dict
+    (:meth:`~vibrogear.solvers.sequential.sweep.SweepResult.arrays`)."""
+    return result.arrays()
 
 
 def write_sweep(result, out_dir, *, stem: str = "sweep", param_unit: str = "",

@@ -21,11 +21,10 @@ unstable dashed, LP / PD / NS marked and named with their speeds, never overprin
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_bifurcation", "class_categories", "motion_rows", "draw_band"]
 
@@ -170,14 +169,13 @@ def _rect(x, y, w, h, color):
     return Rectangle((x, y), w, h, color=color, lw=0)
 
 
-def plot_bifurcation(data, path, *, param_label: str | None = None,
+def plot_bifurcation(data, *, param_label: str | None = None,
                      deformation_label: str = "monitored deformation",
                      zero_line: bool = True, bounds=None, title: str | None = None,
-                     branches: dict | None = None, formats=("png", "svg"),
-                     dpi: int = 150, energy_unit: str = "model units",
-                     per_contact_rows: bool = False, spectral: bool = False) -> list[Path]:
-    """Draw the bifurcation diagram of ``data`` (a SweepResult or the dict of a read
-    ``sweep.npz``) to ``path`` with each suffix in ``formats``; returns the paths.
+                     branches: dict | None = None, energy_unit: str = "model units",
+                     per_contact_rows: bool = False, spectral: bool = False):
+    """The bifurcation diagram of ``data`` (a SweepResult or the dict of a read
+    ``sweep.npz``) as a Figure (the report writer saves it, :func:`.figure.save_figure`).
 
     ``bounds``: values drawn as dashed horizontal lines (e.g. (-b_r, b_r)).  Failed
     points (status != 0) are left out of the top panel and black in the class band.
@@ -276,4 +274,4 @@ def plot_bifurcation(data, path, *, param_label: str | None = None,
     if drawn_branches:
         from .branch_plots import label_special_points
         label_special_points(ax, branches, "qmax")
-    return save_figure(fig, path, formats, dpi)
+    return fig

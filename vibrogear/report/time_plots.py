@@ -1,15 +1,14 @@
 """Time response: table and plots (time trace, phase trajectory)."""
 from __future__ import annotations
 
-from pathlib import Path
-
-from .figure import new_figure, plain_title, save_figure
+from .figure import new_figure, plain_title
 
 __all__ = ["plot_time_response"]
 
 
-def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str = "",
-                       formats=("png", "svg"), dpi: int = 150) -> list[Path]:
+def plot_time_response(t, q, dq, *, period: float, bounds=(), title: str = ""):
+    """The deformation ``q`` against time ``t`` / ``period`` and its phase trajectory
+    (second half) as a matplotlib Figure (saved by the report writer)."""
     fig = new_figure((10.0, 4.2))
     ax1, ax2 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
     ax1.plot(t / period, q, lw=0.8)
@@ -24,4 +23,4 @@ def plot_time_response(path, t, q, dq, *, period: float, bounds=(), title: str =
         ax1.axhline(b, color="0.6", ls=":", lw=0.8)
         ax2.axvline(b, color="0.6", ls=":", lw=0.8)
     fig.suptitle(plain_title(title), fontsize=9)
-    return save_figure(fig, path, formats, dpi)
+    return fig

@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from .figure import save_figure
 from .gearbox_plots import plot_gearbox_time_response
 from .time_plots import plot_time_response
 
-__all__ = ["write"]
+__all__ = ["write", "figure"]
 
-_STATES_NPZ = 64
 _STATES_CSV = 8
 
 
@@ -41,11 +41,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     study, model = r.study, r.study.model
     out = Path(out)
     names = _names(r)
-    arrays = dict(t=r.t, t_s=r.t_s, delta=r.delta, delta_dot=r.delta_dot, force=r.force,
-                  names=np.array(names, dtype=str))
-    if model.n_states <= _STATES_NPZ:
-        arrays.update(u=r.u, state_names=np.array(model.state_names, dtype=str))
-    files = {"npz": str(atomic_write_npz(out / "time_response.npz", arrays))}
+    files = {"npz": str(atomic_write_npz(out / "time_response.npz", r.arrays()))}
 
     lu = f"_{study.length_unit}" if study.length_unit else ""
     fu = "_N" if study.length_unit else ""
@@ -61,19 +57,28 @@ def write(scene, outcome, out, previous=None) -> dict:
                fmt="%.10g")
     files["csv"] = str(atomic_write_bytes(out / "time_response.csv", txt.getvalue().encode()))
 
+    save_figure(figure(r), out / "time_response")
+    files["png"] = str(out / "time_response.png")
+    return files
+
+
+def figure(r):
+    """The figure of a time response
+    (:class:`~vibrogear.analyses.time_response.TimeResponseResult`): a gearbox's mesh
+    deformations, phase trajectories, mesh and bearing forces; the impact pair's monitored
+    deformation and its phase trajectory."""
+    study, model = r.study, r.study.model
+    names = _names(r)
     title = f"{study.title}, {study.param_name} = {r.param:g}"
     if "mesh" in study.contact_groups:
         mesh = _primary(r)
         bearings = {k.split(":", 1)[1]: r.force[idx].sum(axis=0)
                     for k, idx in study.contact_groups.items() if k.startswith("bearing:")}
-        plot_gearbox_time_response(out / "time_response", r.t_s, r.delta[mesh],
-                                   r.delta_dot[mesh], r.force[mesh], [names[j] for j in mesh],
-                                   bearings, mesh_period_s=r.period * study.time_unit_s,
-                                   backlash=[model.contacts.gap_lo[j] for j in mesh],
-                                   title=title)
-    else:
-        j = study.monitor.contact
-        plot_time_response(out / "time_response", r.t, r.delta[j], r.delta_dot[j],
-                           period=r.period, bounds=study.monitor.lines, title=title)
-    files["png"] = str(out / "time_response.png")
-    return files
+        return plot_gearbox_time_response(r.t_s, r.delta[mesh], r.delta_dot[mesh],
+                                          r.force[mesh], [names[j] for j in mesh], bearings,
+                                          mesh_period_s=r.period * study.time_unit_s,
+                                          backlash=[model.contacts.gap_lo[j] for j in mesh],
+                                          title=title)
+    j = study.monitor.contact
+    return plot_time_response(r.t, r.delta[j], r.delta_dot[j], period=r.period,
+                              bounds=study.monitor.lines, title=title)

@@ -16,7 +16,7 @@ from .floquet import split_trivial, stability
 from ...status import Outcome, Status
 
 __all__ = ["PeriodicOrbitProblem", "PseudoArclength", "BranchPoint", "Branch", "SpecialPoint",
-           "ContinuationResult", "stability_notes"]
+           "ContinuationResult", "stability_notes", "branch_arrays"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -123,6 +123,22 @@ class SpecialPoint:
 
 @dataclass(frozen=True, eq=False)
 class ContinuationResult:
+    """Branches of periodic orbits traced by shooting + pseudo-arclength continuation.
+
+    ``branches``: the period-1 branch, then the period-2 branch of its first period doubling;
+    each point has the parameter, the start state ``u0`` (n,) [model units], the Floquet
+    multipliers, ``qmin`` / ``qmax`` [model length: m for a gearbox] of the monitored
+    deformation over the orbit, ``impacts`` per period, ``stable``, ``label`` ("", "LP",
+    "PD", "NS": fold, period doubling, Neimark-Sacker).  ``special_points``: those
+    bifurcations; ``status``, ``message``, ``counters``, ``wall_time`` [s]: the solver's.
+
+    :meth:`arrays` (the names of ``branch.npz``; M points of all branches, n states):
+    ``param`` (M,) [rpm or Omega], ``period`` (M,) [model time units],
+    ``u0`` (M, n) [model units], ``floquet`` (M, n) complex [1], ``stable`` (M,) bool,
+    ``label`` (M,) str, ``branch`` (M,) int (index of the branch), ``n_periods`` (M,) int
+    (excitation periods per orbit), ``qmin`` / ``qmax`` (M,) [model length: m],
+    ``impacts`` (M,) int [1/orbit], ``residual`` (M,) [1] shooting residual, ``neutral`` (M,)
+    int, ``max_abs_multiplier`` (M,) [1]."""
     branches: tuple         # Branch: the period-1 branch, then the period-2 branch of its PD
     special_points: tuple   # SpecialPoint, branch by branch in order of continuation
     status: Status
@@ -140,11 +156,40 @@ class ContinuationResult:
                 "max_integration_error": max((p.integration_error for p in pts), default=None),
                 "liouville_det_error": max(dets) if dets else None}
 
+    def arrays(self) -> dict:
+        """The arrays of ``branch.npz`` (see the class docstring)."""
+        return branch_arrays(self.branches)
+
     @property
     def outcome(self) -> Outcome:
         return Outcome(self.status, self.message,
                        {k: v for k, v in self.counters.items() if isinstance(v, (int, np.integer))
                         and not isinstance(v, bool)}, self.wall_time, self.error_estimate)
+
+
+def branch_arrays(branches) -> dict:
+    """The arrays ``branch.npz`` holds: the points of all branches (period-1 first)
+    concatenated into flat arrays (:class:`ContinuationResult` documents them)."""
+    rows = [(b_i, b, p) for b_i, b in enumerate(branches) for p in b.points]
+    n = rows[0][2].u0.size if rows else 0
+    param = np.array([p.param for _, _, p in rows], dtype=float)
+    scale = np.array([b.period_scale for _, b, _ in rows], dtype=float)
+    return {
+        "param": param,
+        "period": scale / param if rows else np.zeros(0),
+        "u0": np.array([p.u0 for _, _, p in rows]).reshape(len(rows), n),
+        "floquet": np.array([p.floquet for _, _, p in rows], dtype=complex).reshape(len(rows), n),
+        "stable": np.array([p.stable for _, _, p in rows], dtype=bool),
+        "label": np.array([p.label for _, _, p in rows], dtype="<U2"),
+        "branch": np.array([i for i, _, _ in rows], dtype=np.int64),
+        "n_periods": np.array([b.n_periods for _, b, _ in rows], dtype=np.int64),
+        "qmin": np.array([p.qmin for _, _, p in rows], dtype=float),
+        "qmax": np.array([p.qmax for _, _, p in rows], dtype=float),
+        "impacts": np.array([p.impacts for _, _, p in rows], dtype=np.int64),
+        "residual": np.array([p.residual for _, _, p in rows], dtype=float),
+        "neutral": np.array([p.neutral for _, _, p in rows], dtype=np.int64),
+        "max_abs_multiplier": np.array([p.max_abs_multiplier for _, _, p in rows], dtype=float),
+    }
 
 
 def stability_notes(pts, name: str) -> str:

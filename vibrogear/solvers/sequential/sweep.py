@@ -50,7 +50,45 @@ DIRECTIONS = ("up", "down")
 @dataclass(frozen=True, eq=False)
 class SweepResult:
     """All points of a sweep in unit order (up units first, then down; each unit in
-    walk order), whatever order the workers finished them in."""
+    walk order), whatever order the workers finished them in.
+
+    N points (grid values x directions), R recorded excitation periods, n states.  Lengths
+    are in the model's length unit (``ReducedModel.length_unit``: m for a gearbox,
+    nondimensional for the impact pair), times in model time units (``time_unit_s`` seconds
+    each: 1 s for a gearbox).  NaN marks a failed point (``status != 0``).
+
+    Fields:
+
+    - ``param``: (N,) the parameter of each point (driving-shaft speed in rpm for a gearbox,
+      Omega for the impact pair; ``param_name``).
+    - ``direction``: (N,) str, ``"up"`` / ``"down"``: the sweep direction.
+    - ``index``: (N,) int, the point's index into the parameter grid.
+    - ``qmin``, ``qmax``: (N,) [model length, m] minimum and maximum of the monitored contact
+      deformation over the record window.
+    - ``poincare``: (N, R) [model length, m] the monitored deformation once per excitation
+      period (stroboscopic, Poincare samples).
+    - ``period_n``: (N,) int, the period in excitation periods (0: not periodic).
+    - ``impacts``: (N,) [1/period] contact losses of the monitored contact per excitation period.
+    - ``defect``: (N,) [1] periodicity defect of a periodic point (NaN: not periodic).
+    - ``clusters``: (N,) int, clusters of the Poincare samples.
+    - ``status``: (N,) int, 0 ok, else the integrator's failure code; ``message``: (N,) str.
+    - ``u_end``: (N, n) [model units] the state at the end of each point (seeds the next).
+    - ``steps``, ``rejected``, ``rhs_calls``, ``events``: int counters of the integrator.
+    - ``wall_time``: [s] of this call; ``point_wall``: (N,) [s] per point.
+    - ``rtol``, ``atol``, ``period_tol``: [1], [model units], [1] the tolerances used.
+    - ``motion_class``: (N,) int code into ``motion_legend`` (periodic, quasi-periodic,
+      chaotic, ...); ``lyapunov``: (N,) [1/model time] largest Lyapunov exponent (NaN: not
+      computed), ``lyapunov_ci``: (N, 2) its 95 % interval.
+    - ``transient_used``: (N,) [periods] transient integrated; ``settled_by``: (N,) str,
+      ``"map"`` / ``"statistics"`` / ``"budget"``.
+    - ``metrics``: {name: (N,)} per contact group: ``period_n_<g>``, ``motion_class_<g>``,
+      ``impacts_drive_<mesh>`` / ``impacts_back_<mesh>`` [1/period],
+      ``impact_velocity_rms_<mesh>`` / ``_max_`` [model length/s, m/s],
+      ``contact_fraction_<mesh>`` [1], ``rattle_<mesh>`` [J per period, model units for the
+      impact pair], ``unloaded_<bearing>`` [1]; each with an ``_err`` companion (batch means).
+    - ``timings``: {phase: s} wall time by phase, summed over the points.
+
+    :meth:`arrays` gives the arrays of ``sweep.npz`` (NaN replaced by 0, ``ok`` flags)."""
     param: np.ndarray            # (N,)
     direction: np.ndarray        # (N,) "up" / "down"
     index: np.ndarray            # (N,) index into the parameter grid
@@ -95,6 +133,60 @@ class SweepResult:
     def ok(self) -> np.ndarray:
         return self.status == 0
 
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays ``sweep.npz`` holds, by the same names (NaN/inf replaced by 0; failed
+        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.sweep_io`
+        describes them)."""
+        ok = self.status == 0
+        return dict(**self._class_arrays(),
+            param=_finite(self.param), direction=np.asarray(self.direction, dtype="<U4"),
+            qmin=_finite(self.qmin), qmax=_finite(self.qmax),
+            poincare=_finite(self.poincare), period_n=np.asarray(self.period_n, np.int64),
+            impacts=_finite(self.impacts), index=np.asarray(self.index, np.int64),
+            status=np.asarray(self.status, np.int64), ok=ok,
+            defect=_finite(self.defect), clusters=np.asarray(self.clusters, np.int64),
+            u_end=_finite(self.u_end), point_wall=_finite(self.point_wall),
+            message=np.asarray(self.message, dtype=str) if self.message else np.zeros(0, "<U1"),
+            rtol=np.asarray(self.rtol, np.float64), atol=np.asarray(self.atol, np.float64),
+            period_tol=np.asarray(self.period_tol, np.float64),
+            param_name=np.asarray(self.param_name),
+        )
+
+    def _class_arrays(self) -> dict:
+        """Motion class, evidence and metrics (absent on results made before them)."""
+        N = self.param.size
+        if self.motion_class is None:
+            return {}
+        out = dict(motion_class=np.asarray(self.motion_class, np.int64),
+                   motion_class_legend=np.asarray(self.motion_legend),
+                   lyapunov=_finite(self.lyapunov), lyapunov_ok=np.isfinite(self.lyapunov),
+                   lyapunov_ci=_finite(np.asarray(self.lyapunov_ci).reshape(N, 2)),
+                   transient_used=np.asarray(self.transient_used, np.int64),
+                   settled_by=np.asarray(self.settled_by, dtype="<U10"))
+        for k, v in self.metrics.items():
+            v = np.asarray(v)
+            out[k] = v if v.dtype.kind == "i" else _finite(v)
+        out.update(self.spectral)
+        out.update(self.hysteresis_arrays())
+        return out
+
+    def hysteresis_arrays(self) -> dict:
+        """``hysteresis_<monitored>``: per point, |qmax up - qmax down| at its speed (the
+        same value on the up and the down point; 0 where either failed or the sweep ran one
+        way)."""
+        key = getattr(self, "monitored", "") or "monitored"
+        param = np.asarray(self.param, float)
+        d = np.asarray(self.direction, str)
+        q = np.asarray(self.qmax, float)
+        ok = (np.asarray(self.status) == 0) & np.isfinite(q)
+        h = np.zeros(param.size)
+        if np.any(d == "up") and np.any(d == "down"):
+            for k in range(param.size):
+                other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
+                if ok[k] and other.size:
+                    h[k] = abs(q[k] - q[other[0]])
+        return {f"hysteresis_{key}": h}
+
     @property
     def motion_legend(self) -> tuple[str, ...]:
         """Names of the ``motion_class`` codes."""
@@ -124,6 +216,11 @@ class SweepResult:
             "steps": self.steps, "rejected": self.rejected, "rhs_calls": self.rhs_calls,
             "events": self.events}, self.wall_time,
             {k: e[k] for k in ("rtol", "atol", "period_tol", "max_periodicity_defect")})
+
+
+def _finite(a, fill=0.0) -> np.ndarray:
+    a = np.asarray(a, dtype=float)
+    return np.where(np.isfinite(a), a, fill)
 
 
 # ---------------------------------------------------------------- the sweep
