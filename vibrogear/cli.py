@@ -149,6 +149,18 @@ def _main(argv: list[str] | None) -> int:
         from .models.scene_notes import derived_lines
         for line in derived_lines(scene):
             print(f"  {line}")
+        if scene.gearbox is not None and scene.gearbox.couplings:
+            if scene.housing is not None:     # check builds no housing FE model
+                print("  load path: `vibrogear run` reports it (with the housing's modes)")
+            else:
+                from .analyses.static_load import static_load
+                try:
+                    lp = static_load(scene, source=str(args.scene)).load_path
+                except ConfigError as exc:
+                    _error("invalid input", exc)
+                    return EXIT_INPUT
+                for line in lp.table_lines():
+                    print(f"  {line}")
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
               f" output folder {out}/)")
         return EXIT_OK
