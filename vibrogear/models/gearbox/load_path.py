@@ -246,6 +246,11 @@ def nominal_torques(cfg, arms, produced: dict | None = None):
     if known and np.max(np.abs(resid)) > 1e-3 * scale:
         given = [i for i in known if cfg.couplings[i].load_given in ("torque", "power")]
         motors = [i for i in given if cfg.couplings[i].role == "motor"] or given[:1]
+        if not any(c.role == "load" for c in cfg.couplings):
+            c = cfg.couplings[motors[0]]
+            raise ConfigError("gearbox.couplings", f"the torque of motor {c.name!r} "
+                              f"({c.static_torque:.6g} N m) reaches no output: the scene has "
+                              "no coupling with role = \"load\"; add one on the output shaft")
         loads = [i for i in given if i not in motors]
         shaft_p, _ = cfg.speed_ratios()
         ratio = {i: abs(shaft_p[cfg.shaft_index(cfg.couplings[motors[0]].shaft, "")]
