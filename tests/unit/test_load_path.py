@@ -210,3 +210,20 @@ def test_check_prints_the_load_path(capsys):
     assert "load path (static state" in out
     assert re.search(r"mesh 'G1' \(loaded\): F_n [\d.]+ N", out)
     assert "bearing 'A front' on 'driving': radial" in out
+
+
+def test_run_writes_the_load_path_to_summary_and_report(tmp_path):
+    """summary.json ``load_path`` (every gearbox run) and its table in report.html."""
+    import json
+    out = tmp_path / "run"
+    assert main(["modes", "configs/gear_pair.toml", "--out", str(out), "--quiet"]) == 0
+    lp = json.loads((out / "summary.json").read_text())["load_path"]
+    (m,) = lp["meshes"]
+    assert m["name"] == "G1" and m["role"] == "loaded"
+    motor = next(c for c in lp["couplings"] if c["role"] == "motor")
+    cfg = load_scene("configs/gear_pair.toml").gearbox
+    assert m["normal_force_N"] * _arm(cfg, "z1", cfg.meshes[0]) == pytest.approx(
+        motor["torque_Nm"], rel=TOL)
+    assert {b["name"] for b in lp["bearings"]} == {b.name for b in cfg.bearings}
+    html = (out / "report.html").read_text()
+    assert "The static load path" in html and "radial reaction [N]" in html
