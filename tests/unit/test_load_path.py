@@ -61,6 +61,9 @@ def test_one_stage_balance(scene):
     ratio = _teeth(cfg, m.gear_b) / _teeth(cfg, m.gear_a)
     assert T["load"] == pytest.approx(T["motor"] * ratio, rel=TOL)
     assert ml.role == "loaded" and ml.torque_ratio == pytest.approx(ratio, rel=1e-9)
+    if scene.endswith("gear_pair.toml"):   # spur, no weight: the bearings take F_n
+        radial = sum(b["radial_N"] for b in lp.bearings if b["shaft"] == "driving")
+        assert radial == pytest.approx(ml.normal_force_N, rel=TOL)
     # the tooth force against the nominal balance of the produced input torque
     assert ml.normal_force_N == pytest.approx(ml.nominal_normal_force_N, rel=TOL)
 
@@ -110,6 +113,17 @@ def test_fva_torque_reaches_the_teeth(fva):
     for m in lp.meshes:
         assert m.role == "loaded"
         assert m.normal_force_N == pytest.approx(m.nominal_normal_force_N, rel=TOL)
+    # the bearings take the helical stages' axial thrust F_n sin(beta_b): shaft 12 carries
+    # stage 1 only, shaft 14 stage 2 only
+    def thrust(m, lm):
+        beta = math.radians(cfg.gears[cfg.gear_index(m.gear_a, "")].helix_angle)
+        return lm.normal_force_N * math.sin(math.asin(math.sin(beta)
+                                                      * math.cos(math.radians(m.pressure_angle))))
+    axial = {}
+    for b in lp.bearings:
+        axial[b["shaft"]] = axial.get(b["shaft"], 0.0) + b["axial_N"]
+    assert axial[cfg.shafts[0].name] == pytest.approx(thrust(s1, l1), rel=5e-3)
+    assert axial[cfg.shafts[2].name] == pytest.approx(thrust(s2, l2), rel=5e-3)
     # the import's assumptions travel with the load path
     assert any("axial stiffness" in a["what"] for a in lp.assumed)
     d = lp.as_dict()
