@@ -243,7 +243,8 @@ def _check_path(cfg, lp: LoadPath) -> None:
         if c["nominal_torque_Nm"] > 0 and c["torque_Nm"] < UNDERLOAD_LIMIT * c["nominal_torque_Nm"]:
             raise ConfigError(f"gearbox.couplings[{i}]", f"the load does not reach the output: "
                               f"coupling {c['name']!r} on shaft {c['shaft']!r} carries "
-                              f"{c['torque_Nm']:.4g} N m of its nominal {c['nominal_torque_Nm']:.4g} "
+                              f"{c['torque_Nm']:.4g} N m of its nominal "
+                              f"{c['nominal_torque_Nm']:.4g} "
                               "N m; check the meshes and bearings between the motor and it")
     for j, m in enumerate(lp.meshes):
         if m.role == "loaded" and m.nominal_normal_force_N > 0 and \

@@ -96,7 +96,8 @@ class LoadPath:
 
     def table_lines(self) -> list[str]:
         """The short table `vibrogear check` prints."""
-        out = [f"load path (static state{'' if self.reference_rpm is None else f', powers at {self.reference_rpm:.6g} rpm'}):"]
+        at = "" if self.reference_rpm is None else f", powers at {self.reference_rpm:.6g} rpm"
+        out = [f"load path (static state{at}):"]
         for c in self.couplings:
             out.append(f"  coupling {c['name']!r} ({c['role']}, {c['given']}): "
                        f"{c['torque_Nm']:.6g} N m, nominal {c['nominal_torque_Nm']:.6g} N m "
@@ -176,7 +177,8 @@ def mesh_roles(cfg) -> list[str]:
         ca, cb = comp[a], comp[b]
         side = lambda c, group: any(comp[s] == c for s in group)  # noqa: E731
         if ca != cb:
-            on_path = (side(ca, motors) and side(cb, loads)) or (side(cb, motors) and side(ca, loads))
+            on_path = ((side(ca, motors) and side(cb, loads))
+                       or (side(cb, motors) and side(ca, loads)))
         else:                      # on a loop: loaded when the loop joins a motor and a load
             on_path = side(ca, motors) and side(ca, loads)
         roles.append("loaded" if on_path else "idle")
@@ -220,7 +222,8 @@ def nominal_torques(cfg, arms, produced: dict | None = None):
         if motor is not None and motor in produced:
             known[motor] = produced[motor]
             notes.append(f"the couplings give twists: the nominal input torque is the "
-                         f"{abs(produced[motor]):.6g} N m the twist of {cfg.couplings[motor].name!r} "
+                         f"{abs(produced[motor]):.6g} N m the twist of "
+                         f"{cfg.couplings[motor].name!r} "
                          "produces in the static state")
     A_mesh = np.zeros((nb, nm))
     for j, m in enumerate(cfg.meshes):
