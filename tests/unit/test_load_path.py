@@ -171,14 +171,17 @@ def test_torques_that_disagree_with_the_ratio_exit_2_naming_both(tmp_path, capsy
     assert "disagree with the gear ratios" in capsys.readouterr().err
 
 
-def test_torque_load_met_in_the_static_state(tmp_path):
-    """gear_pair with torque loads that agree with the ratio (62.5 N m -> 125 N m): the
-    couplings carry them within 0.1 % (the twists alone, 62.5 / 2500 and 125 / 1e4 rad, carry
-    only part: the shafts' and mesh's own twist relaxes them)."""
+@pytest.mark.parametrize("motor_load", [{"torque": 62.5},
+                                        {"power": 62.5 * 3000 * 2 * math.pi / 60 / 1e3,
+                                         "rpm": 3000.0}])
+def test_torque_load_met_in_the_static_state(motor_load):
+    """gear_pair with loads that agree with the ratio (62.5 N m, or its power at 3000 rpm,
+    -> 125 N m): the couplings carry them within 0.1 % (the twists alone, 62.5 / 2500 and
+    125 / 1e4 rad, carry only part: the shafts' and mesh's own twist relaxes them)."""
     data = read_toml_file("configs/gear_pair.toml", Scene)
-    for c, t in zip(data["gearbox"]["couplings"], (62.5, 125.0)):
+    for c, load in zip(data["gearbox"]["couplings"], (motor_load, {"torque": 125.0})):
         c.pop("twist")
-        c["torque"] = t
+        c.update(load)
     lp = static_load(scene_from_dict(data)).load_path
     T = _torques(lp)
     assert T["motor"] == pytest.approx(62.5, rel=TOL)
@@ -241,3 +244,12 @@ def test_run_writes_the_load_path_to_summary_and_report(tmp_path):
     assert {b["name"] for b in lp["bearings"]} == {b.name for b in cfg.bearings}
     html = (out / "report.html").read_text()
     assert "The static load path" in html and "radial reaction [N]" in html
+
+
+def test_check_prints_the_load_path_of_a_housing_scene(capsys):
+    """two_stage has a [housing]: check takes it rigid (no FE model) and says so; the free
+    gear's mesh is idle."""
+    assert main(["check", "configs/two_stage.toml"]) == 0
+    out = capsys.readouterr().out
+    assert "mesh 'G2' (idle)" in out and "mesh 'G1' (loaded)" in out
+    assert "the housing rigid in `check`" in out

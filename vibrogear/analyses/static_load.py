@@ -31,7 +31,7 @@ from ..models.gearbox.synthesis import PhysicalVector, modal_vector
 from ..solvers.static import static_equilibrium, static_forces
 
 __all__ = ["StaticLoad", "meet_loads", "static_load", "reference_rpm", "rigid_body_check",
-           "UNDERLOAD_LIMIT"]
+           "rigid_housing", "UNDERLOAD_LIMIT"]
 
 #: a loaded mesh carrying less than this fraction of its nominal tooth force is an error
 UNDERLOAD_LIMIT = 0.5
@@ -197,6 +197,27 @@ def rigid_body_check(gm, cfg) -> None:
     raise ConfigError(f"gearbox.shafts[{k}]", f"shaft {sh!r} is free {direction}: {cause} "
                       f"(bearings on it: {blist}), and the static load (the couplings' torque "
                       f"through the meshes) moves it that way; {fix}")
+
+
+def rigid_housing(scene):
+    """``scene`` with its housing rigid (what `check` uses: it builds no housing FE model):
+    every shaft's axis at its bore's, every bearing to ground with its bore's rolling
+    elements where it gives none.  The torque path, the tooth forces and the bearings' total
+    reactions are the housing scene's; the share between the bearings may differ."""
+    from dataclasses import replace
+
+    from ..config.layout import shaft_bore
+
+    if scene.housing is None:
+        return scene
+    cfg = scene.gearbox
+    bores = {sh.name: shaft_bore(scene.housing, sh.bore) for sh in cfg.shafts}
+    shafts = tuple(replace(sh, bore="", x=bores[sh.name].x, z=bores[sh.name].z)
+                   for sh in cfg.shafts)
+    bearings = tuple(b if b.outer_shaft or b.elements is not None or b.type == "spring"
+                     else replace(b, elements=bores[b.shaft].rolling_elements)
+                     for b in cfg.bearings)
+    return replace(scene, housing=None, gearbox=replace(cfg, shafts=shafts, bearings=bearings))
 
 
 def _scene_assumed(source) -> tuple[dict, ...]:
