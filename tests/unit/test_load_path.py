@@ -271,3 +271,46 @@ def test_fva_time_response_carries_the_nominal_tooth_force(fva, tmp_path):
         f = d["force"][names.index(m.name)]
         nominal = torque[m.name] / _arm(cfg, m.gear_a, m)
         assert f[f.size // 2:].mean() == pytest.approx(nominal, rel=1e-3)
+
+
+_SECOND_MESH = """
+[[gearbox.gears]]
+name = "z1b"
+shaft = "driving"
+position = 0.16
+teeth = 40
+module = 0.002
+width = 0.025
+inner_diameter = 0.045
+
+[[gearbox.gears]]
+name = "z2b"
+shaft = "driven"
+position = 0.16
+teeth = 80
+module = 0.002
+width = 0.025
+inner_diameter = 0.050
+
+[[gearbox.meshes]]
+name = "G2"
+gear_a = "z1b"
+gear_b = "z2b"
+pressure_angle = 20.0
+stiffness = 3.5e4
+backlash = 1.0e-4
+"""
+
+
+def test_a_mesh_the_load_bypasses_exits_2(tmp_path, capsys):
+    """gear_pair with a second pair of the same gears beside the first (a loop: the nominal
+    balance shares the torque equally) whose mesh stiffness is 1e-4 of the first's: it
+    carries about 1e-4 of the torque, less than half its nominal tooth force."""
+    bad = tmp_path / "bypass.toml"
+    bad.write_text(open("configs/gear_pair.toml").read() + _SECOND_MESH)
+    sc = load_scene(bad)
+    assert mesh_roles(sc.gearbox) == ["loaded", "loaded"]
+    assert main(["check", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "gearbox.meshes[1]: mesh 'G2' carries" in err and "of its nominal tooth force" in err
+    assert "the load bypasses it" in err
