@@ -275,6 +275,7 @@ def _check_path(cfg, lp: LoadPath) -> None:
             raise ConfigError(f"gearbox.meshes[{j}]", f"mesh {m.name!r} carries "
                               f"{m.normal_force_N:.4g} N of its nominal tooth force "
                               f"{m.nominal_normal_force_N:.4g} N (less than "
-                              f"{UNDERLOAD_LIMIT:.0%}): the load bypasses it; check the bearings "
-                              f"of shafts {', '.join(repr(s) for s in sorted(shafts))} (a support "
-                              "that gives way lets the gears separate) and the mesh's backlash")
+                              f"{UNDERLOAD_LIMIT:.0%}): the load bypasses it; check its stiffness "
+                              "against any mesh in parallel with it, the bearings of shafts "
+                              f"{', '.join(repr(s) for s in sorted(shafts))} (a support that "
+                              "gives way lets the gears separate) and its backlash")
