@@ -185,7 +185,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
         # what the finished results say about the speeds (also after a failure: finished
         # points are never lost)
         from .analyses.findings import run_findings
-        findings = run_findings(scene, summary["results"])
+        findings = run_findings(scene, summary["results"], summary.get("load_path"))
         if findings is not None:
             summary["findings"] = findings
         failure = _write_overview(scene, ctx.out, findings, failure)

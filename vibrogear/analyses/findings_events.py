@@ -92,10 +92,44 @@ def erp_findings(arrays: dict, rules, *, direction: str) -> tuple[list[Band], li
     return bands, events
 
 
+def _state_impact_bands(arrays, grid, step, rules, roles, per) -> list[Band]:
+    """Per mesh, the speeds whose states hit the teeth (``attractor_impacts_<mesh>`` > 0):
+    a loaded mesh "avoid" where every state found at the speed impacts (min over them),
+    "caution" where some do (max); an idle mesh's rattle "caution" where any state
+    impacts, with its impact energy."""
+    ap = np.asarray(arrays["attractor_param"], float)
+    out = []
+    for key in sorted(k for k in arrays if k.startswith("attractor_impacts_")):
+        m = key[len("attractor_impacts_"):]
+        imp = np.asarray(arrays[key], float)
+        rat = np.asarray(arrays.get(f"attractor_rattle_{m}", np.zeros(ap.size)), float)
+        lo = np.array([imp[ap == p].min() for p in grid])
+        hi = np.array([imp[ap == p].max() for p in grid])
+        idle = (roles or {}).get(m) == "idle"
+        tests = [("max", hi > 0, rules.idle_rattle, "rattle in a state")] if idle else \
+            [("min", lo > 0, rules.contact_loss, "impacts in a state"),
+             ("max", (hi > 0) & ~(lo > 0), "caution", "impacts in a state")]
+        for how, mask, severity, quantity in tests:
+            for i0, i1 in segments(mask):
+                sel = (ap >= grid[i0]) & (ap <= grid[i1]) & (imp > 0)
+                text = (f"{m}: {'every' if how == 'min' else 'a'} state found hits the teeth, "
+                        f"{fmt(float(imp[sel].min()), 2)}–{fmt(float(imp[sel].max()), 2)} "
+                        f"contact onsets {per}, impact energy up to "
+                        f"{fmt(float(rat[sel].max()) * 1e3, 2)} mJ {per}")
+                out.append(Band(quantity, m, "both", float(grid[i0]), float(grid[i1]),
+                                severity, key, ">", 0.0, text, source="states.npz",
+                                edge_err=step, points=int(i1 - i0 + 1),
+                                extra={"compare": f"{how} over the states at each speed",
+                                       "margin": float(imp[sel].max()),
+                                       "margin_unit": "relative"}))
+    return out
+
+
 def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float,
-                    length_unit: str) -> tuple[list[Band], list[dict]]:
+                    length_unit: str, roles=None) -> tuple[list[Band], list[dict]]:
     """Speeds where more than one attractor was found (band on ``n_attractors`` of
-    ``states.npz``, per speed) and one event per attractor that coexists with another."""
+    ``states.npz``, per speed), one event per attractor that coexists with another, and
+    per mesh the speeds whose states hit the teeth (:func:`_state_impact_bands`)."""
     ap = np.asarray(arrays["attractor_param"], float)
     grid = np.unique(ap)
     count = np.array([np.sum(ap == p) for p in grid])
@@ -114,6 +148,9 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
                           "starts", source="states.npz", edge_err=step,
                           points=int(i1 - i0 + 1),
                           extra={"compare": "count of attractor_param equal to the speed"}))
+    bands += _state_impact_bands(arrays, grid, step, rules, roles,
+                                 "per mesh period" if param_unit == "rpm" else
+                                 "per excitation period")
     period = np.asarray(arrays.get("attractor_period_n", np.zeros(ap.size, int)))
     seen = np.asarray(arrays.get("attractor_seen_by_sweep", np.full(ap.size, -1)))
     meshes = sorted(k[len("attractor_impacts_"):] for k in arrays

@@ -26,11 +26,12 @@ __all__ = ["FindingsConfig", "SEVERITIES", "PRIORITY", "base_quantity", "rank"]
 #: from least to most severe
 SEVERITIES = ("fine", "caution", "avoid")
 #: the kinds of band, most telling first (the console and the verdict keep this order)
-PRIORITY = ("contact loss", "dynamic factor", "impacts in a state", "rattle",
-            "double-sided impacts", "ISO 6336 main resonance", "coexisting states",
+PRIORITY = ("contact loss", "rattle above the limit", "dynamic factor", "impacts in a state",
+            "rattle", "rattle in a state", "double-sided impacts", "ISO 6336 main resonance",
+            "coexisting states",
             "chaotic motion", "subharmonic motion", "quasi-periodic motion",
             "motion not settled", "aperiodic motion", "hysteresis (up and down differ)",
-            "bearing unloading", "radiated power")
+            "bearing unloading", "radiated power", "quietest rattle")
 _RUNS = (" in the run-up", " in the run-down")
 
 
