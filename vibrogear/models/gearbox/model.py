@@ -80,6 +80,10 @@ class GearboxModel:
     #: per torque order of a coupling: coupling, order, amplitude_Nm, phase_deg and its
     #: frequency over the mesh frequency (the reduced model's harmonic slot)
     torque_orders: tuple = ()
+    #: per coupling: its disc angle [rad, signed on its DOF], stiffness x angle its static
+    #: torque on the rigid train (the twist, or the one that meets a torque / power load:
+    #: :mod:`vibrogear.models.gearbox.load_path`)
+    coupling_angles: tuple = ()
 
     @property
     def time_unit_s(self) -> float:
@@ -206,6 +210,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     contacts += bc
     links += bl
     cl, forces = external_couplings(cfg, rotors, shaft_p)
+    angles = tuple(float(f[2][0]) / c.stiffness for f, c in zip(forces, cfg.couplings))
     teeth = cfg.gears[cfg.gear_index(cfg.meshes[0].gear_a, "")].teeth if cfg.meshes else 1
     orders = torque_order_forcing(cfg, rotors, shaft_p)
     forces += gravity_load(cfg.gravity, rotors)
@@ -248,7 +253,8 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
                                              "housing_s": t_housing - t_shafts,
                                              "synthesis_s": t_end - t_housing - t_modes},
                         blocks=tuple(blocks), mesh_stiffness=tuple(records),
-                        rigid_inertia=inertia, torque_orders=tuple(o[3] for o in orders))
+                        rigid_inertia=inertia, torque_orders=tuple(o[3] for o in orders),
+                        coupling_angles=angles)
 
 
 def _rigid_inertia(cfg, subsystems, rotors, shaft_p, gear_p, free_dof) -> np.ndarray:
