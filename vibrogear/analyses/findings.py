@@ -80,6 +80,12 @@ def run_findings(scene, results: dict, load_path: dict | None = None) -> dict | 
         return None
     gearbox = parameter.name == "rpm"
     resonance = None
+    if load_path is None and gearbox and getattr(scene, "gearbox", None) is not None:
+        # no load path in the summary (an older run): the roles from the structure alone
+        from ..models.gearbox.load_path import mesh_roles as structural_roles
+        load_path = {"meshes": [{"name": m.name, "role": r, "static_force_N": None}
+                                for m, r in zip(scene.gearbox.meshes,
+                                                structural_roles(scene.gearbox))]}
     if gearbox and getattr(scene, "gearbox", None) is not None:
         try:
             from .iso_resonance import iso_resonances
@@ -247,21 +253,27 @@ def windows(bands: list[dict], grid) -> list[dict]:
              "margin": 0.0} for a, b in segments(~flagged)]
     if fine:
         return fine
+    # no fine speed: the runs without an avoid band, split where the caution bands that
+    # hold change, least severe (fewest limits, then smallest margin) first
+    def label(x):
+        return x["quantity"] if x["where"] in ("gearbox", "system") else \
+            f"{x['where']} {x['quantity']}"
+    caution = [x for x in bands if x["severity"] == "caution"]
+    sets = [tuple(sorted({label(x) for x in caution if x["from"] <= p <= x["to"]}))
+            for p in grid]
     out = []
     for a, b in segments(~covered(("avoid",))):
-        lo, hi = grid[a], grid[b]
-        here = [x for x in bands if x["severity"] == "caution" and x["to"] >= lo
-                and x["from"] <= hi]
-        limits = []
-        for x in here:
-            label = f"{x['where']} {x['quantity']}" if x["where"] not in ("gearbox", "system") \
-                else x["quantity"]
-            if label not in limits:
-                limits.append(label)
-        out.append({"from": float(lo), "to": float(hi), "status": "caution",
-                    "limits": limits,
-                    "margin": max((float(x.get("margin", 0.0)) for x in here), default=0.0)})
-    out.sort(key=lambda w: (w["margin"], len(w["limits"]), -(w["to"] - w["from"])))
+        k = a
+        for i in range(a, b + 2):
+            if i == b + 1 or sets[i] != sets[k]:
+                lo, hi = grid[k], grid[i - 1]
+                here = [x for x in caution if x["to"] >= lo and x["from"] <= hi]
+                out.append({"from": float(lo), "to": float(hi), "status": "caution",
+                            "limits": list(sets[k]),
+                            "margin": max((float(x.get("margin", 0.0)) for x in here
+                                           if label(x) in sets[k]), default=0.0)})
+                k = i
+    out.sort(key=lambda w: (len(w["limits"]), w["margin"], -(w["to"] - w["from"])))
     return out
 
 

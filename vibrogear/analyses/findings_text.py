@@ -98,7 +98,9 @@ def where_to_run(windows: list[dict], bands: list[dict], span, unit: str) -> str
         for w in best:
             here = [b for b in bands if b["severity"] == "caution" and b["to"] >= w["from"]
                     and b["from"] <= w["to"]]
-            worst = max(here, key=lambda b: float(b.get("margin", 0.0)), default=None)
+            here = [b for b in here if _label(b) in w["limits"]]
+            worst = max((b for b in here if float(b.get("margin", 0.0)) > 0),
+                        key=lambda b: float(b.get("margin", 0.0)), default=None)
             limit = f" (limited by {_and(w['limits'])}" + (
                 f"; worst: {_label(worst)} {_margin_text(worst)})" if worst else ")")
             parts.append(range_text(w["from"], w["to"], "") + u + limit)
@@ -117,7 +119,9 @@ def _quiet(bands: list[dict], unit: str) -> str:
     out = []
     for w in sorted({b["where"] for b in bands if b["quantity"] == "quietest rattle"}):
         these = [b for b in bands if b["quantity"] == "quietest rattle" and b["where"] == w]
-        out.append(f"{w} rattles least at {ranges_text(these, unit)}.")
+        lo = min(float(b["threshold"]) for b in these) - 3.0
+        out.append(f"{w} rattles least at {ranges_text(these, unit)} (within 3 dB of its "
+                   f"quietest, {fmt(lo, 3)} dB re 1 pW).")
     return (" " + " ".join(out)) if out else ""
 
 
