@@ -141,12 +141,12 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
         checked += c
     grid = sources.get("map.npz")
     if grid is not None and np.asarray(grid.get("rpm", [])).size:
-        b, c = map_bands(grid, rules, param_unit=param_unit)
+        b, c = map_bands(grid, rules, param_unit=param_unit, roles=roles)
         bands += b
         checked += c
     runup = sources.get("runup.npz")
     if runup is not None:
-        bands += runup_findings(runup, rules, param_unit=param_unit)
+        bands += runup_findings(runup, rules, param_unit=param_unit, roles=roles)
         checked.append("run-up / run-down: contact losses over the instantaneous speed")
     branch = sources.get("branch.npz")
     if branch is not None and np.asarray(branch.get("param", [])).size:

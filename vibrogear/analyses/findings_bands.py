@@ -325,7 +325,8 @@ def _points(n: int) -> str:
     return f"{n} point" + ("" if n == 1 else "s")
 
 
-def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list[str]]:
+def map_bands(arrays: dict, rules, *, param_unit: str, roles=None
+              ) -> tuple[list[Band], list[str]]:
     """Contact-loss, rattle, double-sided and bearing bands of a ``map.npz`` at each load:
     the map's (directions, loads, speeds) grids are read one load at a time as a sweep;
     each band names its load (``load_index`` into ``torque``, the array's middle axis)."""
@@ -341,7 +342,10 @@ def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list
                     "ok": np.asarray(arrays["ok"], bool)[:, j, :].ravel()}
         for k in keys:
             as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
-        for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit):
+        for k in [k for k in arrays if k.startswith(("kv_", "rattle_db_", "max_force_",
+                                                      "rattle_power_", "static_force_"))]:
+            as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
+        for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit, roles):
             bands.append(Band(**{**b.__dict__, "where": f"{b.where} at {t:.3g} N m",
                                  "source": "map.npz",
                                  "extra": {**b.extra, "load_index": j, "torque": float(t)}}))

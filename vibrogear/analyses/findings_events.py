@@ -171,11 +171,12 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
     return bands, events
 
 
-def runup_findings(arrays: dict, rules, *, param_unit: str) -> list[Band]:
+def runup_findings(arrays: dict, rules, *, param_unit: str, roles=None) -> list[Band]:
     """Contact loss during a run-up / run-down: per run ``<d>`` and mesh, the speeds
     (``<d>_rpm``, the mean speed of each mesh period) of the periods with contact losses
     (``<d>_losses_<mesh>`` > 0), periods closer than :data:`RUNUP_MERGE_PERIODS` joined into
-    one band; ``edge_err``: the largest speed change over one mesh period in the band."""
+    one band; ``edge_err``: the largest speed change over one mesh period in the band.
+    Idle meshes (``roles``) are left out: a free gear leaves its drive flank at any speed."""
     runs = [str(r) for r in np.asarray(arrays.get("runs", arrays.get("directions", [])))]
     meshes = [str(m) for m in np.asarray(arrays.get("meshes", []))]
     bands = []
@@ -183,6 +184,8 @@ def runup_findings(arrays: dict, rules, *, param_unit: str) -> list[Band]:
         rpm = np.asarray(arrays.get(f"{run}_rpm", []), float)
         direction = "down" if run.startswith("down") else "up"
         for m in meshes:
+            if (roles or {}).get(m) == "idle":     # an idle gear leaves its flank: not judged
+                continue
             key = f"{run}_losses_{m}"
             if key not in arrays or rpm.size == 0:
                 continue
