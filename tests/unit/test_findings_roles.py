@@ -127,13 +127,17 @@ def test_states_alone_reports_the_impacts_of_its_states():
               "attractor_class": np.array([1, 1, 1, 1]),
               "attractor_period_n": np.array([1, 1, 1, 1]),
               "attractor_impacts_G1": np.array([2.0, 0.0, 1.0, 0.0]),
-              "attractor_rattle_G1": np.array([2.0, 0.0, 0.5, 0.0])}
+              "attractor_rattle_G1": np.array([2.0, 0.0, 0.5, 0.0]),
+              "attractor_kv_G1": np.array([2.6, 1.1, 1.8, 1.2])}
     f = derive_findings({"states.npz": arrays}, {}, FindingsConfig(),
                         load_path={"meshes": [{"name": "G1", "role": "loaded"}]})
     hits = [(b["quantity"], b["from"], b["to"], b["severity"]) for b in f["bands"]
             if b["quantity"] == "impacts in a state"]
     assert hits == [("impacts in a state", 5000.0, 5000.0, "avoid"),
                     ("impacts in a state", 5500.0, 5500.0, "caution")]
+    kv = [(b["from"], b["to"], b["severity"]) for b in f["bands"]
+          if b["quantity"] == "dynamic factor in a state"]
+    assert kv == [(5000.0, 5500.0, "caution")]                 # max over the states > 1.3
     assert "No speed to avoid or watch" not in f["verdict"]
     assert f["verdict"].startswith("Run at 6000 rpm")
     assert "2000 mJ" in [b for b in f["bands"] if b["from"] == 5000.0][0]["evidence"]

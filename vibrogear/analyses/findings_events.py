@@ -106,6 +106,20 @@ def _state_impact_bands(arrays, grid, step, rules, roles, per) -> list[Band]:
         lo = np.array([imp[ap == p].min() for p in grid])
         hi = np.array([imp[ap == p].max() for p in grid])
         idle = (roles or {}).get(m) == "idle"
+        if not idle and f"attractor_kv_{m}" in arrays:      # the states' dynamic factor
+            kv = np.asarray(arrays[f"attractor_kv_{m}"], float)
+            top = np.array([kv[ap == p].max() for p in grid])
+            for i0, i1 in segments(top > rules.kv_caution):
+                sel = (ap >= grid[i0]) & (ap <= grid[i1])
+                out.append(Band("dynamic factor in a state", m, "both", float(grid[i0]),
+                                float(grid[i1]), rules.dynamic_factor, f"attractor_kv_{m}",
+                                ">", float(rules.kv_caution),
+                                f"{m}: dynamic factor kv up to {fmt(float(kv[sel].max()), 3)} "
+                                "in the states found", source="states.npz", edge_err=step,
+                                points=int(i1 - i0 + 1),
+                                extra={"compare": "max over the states at each speed",
+                                       "margin": float(top[i0:i1 + 1].max())
+                                       / rules.kv_caution - 1, "margin_unit": "relative"}))
         tests = [("max", hi > 0, rules.idle_rattle, "rattle in a state")] if idle else \
             [("min", lo > 0, rules.contact_loss, "impacts in a state"),
              ("max", (hi > 0) & ~(lo > 0), "caution", "impacts in a state")]

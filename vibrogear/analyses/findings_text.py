@@ -26,6 +26,8 @@ PHRASES = {"contact loss": ("{w} loses contact", "{w} lose contact"),
            "rattle above the limit": ("{w} rattles above the limit",
                                       "{w} rattle above the limit"),
            "impacts in a state": ("a state of {w} hits the teeth", "states of {w} hit the teeth"),
+           "dynamic factor in a state": ("a state of {w} exceeds the dynamic-factor limit",
+                                         "states of {w} exceed the dynamic-factor limit"),
            "rattle in a state": ("a state of {w} rattles", "states of {w} rattle"),
            "ISO 6336 main resonance": ("{w} is in its ISO 6336 main resonance range",
                                        "{w} are in their ISO 6336 main resonance ranges")}

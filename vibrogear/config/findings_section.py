@@ -27,6 +27,7 @@ __all__ = ["FindingsConfig", "SEVERITIES", "PRIORITY", "base_quantity", "rank"]
 SEVERITIES = ("fine", "caution", "avoid")
 #: the kinds of band, most telling first (the console and the verdict keep this order)
 PRIORITY = ("contact loss", "rattle above the limit", "dynamic factor", "impacts in a state",
+            "dynamic factor in a state",
             "rattle", "rattle in a state", "double-sided impacts", "ISO 6336 main resonance",
             "coexisting states",
             "chaotic motion", "subharmonic motion", "quasi-periodic motion",

@@ -12,7 +12,9 @@
   orbit, -1 not shot), ``attractor_max_multiplier``, ``attractor_refined`` (extrema of the
   shot orbit), ``attractor_seen_by_sweep`` (1 / 0, -1: no sweep), per mesh
   ``attractor_impacts_<mesh>`` (contact onsets per excitation period) and
-  ``attractor_rattle_<mesh>`` (impact energy per period);
+  ``attractor_rattle_<mesh>`` (impact energy per period), ``attractor_max_force_<mesh>``
+  [N] (largest mesh force), ``attractor_kv_<mesh>`` (its dynamic factor: over the static
+  mesh force ``static_force_<mesh>`` [N]);
 * per grid value: ``param``, ``n_starts`` (settled), ``n_failed``;
 * branches continued from attractors: ``branch_param``, ``branch_qmin``, ``branch_qmax``,
   ``branch_stable``, ``branch_label`` (points of all branches, concatenated),
@@ -80,6 +82,7 @@ def states_arrays(res) -> dict:
                                               for a in atts])
         out[f"attractor_rattle_{g}"] = _fin([a.metrics.get(g, {}).get("rattle", math.nan)
                                              for a in atts])
+    out.update(_dynamic_factors(res, atts, meshes))
     brs = res.branches
     pts = [p for b in brs for p in b.points]
     out["branch_start"] = np.concatenate([[0], np.cumsum([len(b.points) for b in brs])]).astype(int)
@@ -99,6 +102,29 @@ def states_arrays(res) -> dict:
         ok = np.isfinite(out["sweep_qmin"]) & np.isfinite(out["sweep_qmax"])
         for k in ("param", "qmin", "qmax"):
             out[f"sweep_{k}"] = out[f"sweep_{k}"][ok]
+    return out
+
+
+def _dynamic_factors(res, atts, meshes) -> dict:
+    """``attractor_max_force_<mesh>`` [N] (largest over the state's records),
+    ``static_force_<mesh>`` [N] and ``attractor_kv_<mesh>`` = their ratio
+    (:mod:`vibrogear.analyses.mesh_loads`; 0 where not formed)."""
+    peaks = {g: [a.metrics.get(g, {}).get("max_force", math.nan) for a in atts] for g in meshes}
+    if not atts or not any(np.any(np.isfinite(v)) for v in peaks.values()):
+        return {}
+    from ..analyses.mesh_loads import mesh_judgement_arrays, static_mesh_forces
+    from ..solvers.sequential.motion import contact_groups
+    model = res.study.model
+    static = static_mesh_forces(model, res.study.start(float(atts[0].param)),
+                                contact_groups(model))
+    arrays = mesh_judgement_arrays({f"max_force_{g}": np.asarray(v, float)
+                                    for g, v in peaks.items()}, static)
+    out = {}
+    for g in meshes:
+        out[f"attractor_max_force_{g}"] = _fin(peaks[g])
+        if f"kv_{g}" in arrays:
+            out[f"attractor_kv_{g}"] = _fin(arrays[f"kv_{g}"])
+            out[f"static_force_{g}"] = np.float64(static[g])
     return out
 
 
