@@ -204,6 +204,8 @@ def mesh_summary(meshes: list[dict], sweep, iso) -> list[dict]:
             ok = np.asarray(sweep.get("ok", np.ones(np.asarray(sweep["param"]).size, bool)),
                             bool)
             p = np.asarray(sweep["param"], float)[ok]
+            if row.get("static_force_N") is None and f"static_force_{k}" in sweep:
+                row["static_force_N"] = float(np.asarray(sweep[f"static_force_{k}"]).ravel()[0])
             kv = sweep.get(f"kv_{k}")
             if m["role"] == "loaded" and kv is not None and p.size:
                 v = np.asarray(kv, float)[ok]
