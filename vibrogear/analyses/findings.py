@@ -183,7 +183,7 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
     events.sort(key=lambda e: (e["kind"], e["at"]))
     out_bands = [b.as_dict() for b in bands]
     grid = _grid(sources)
-    win = windows(out_bands, grid)
+    win = windows(out_bands, grid, sources)
     return {"verdict": verdict_text(out_bands, checked, span, partial, param_unit, win),
             "windows": win, "meshes": mesh_summary(meshes, sweep, iso),
             "bands": out_bands, "events": events, "rules": rules.rules(),
@@ -233,11 +233,32 @@ def _grid(sources) -> np.ndarray:
     return np.zeros(0)
 
 
-def windows(bands: list[dict], grid) -> list[dict]:
+def _margin_within(band: dict, lo: float, hi: float, sources) -> float:
+    """``band``'s margin over its file's points in [lo, hi] (its own margin where the file
+    or the metric is not at hand)."""
+    from .findings_bands import margin_of
+    arrays = (sources or {}).get(band.get("source", ""))
+    if arrays is None or band["metric"] not in arrays or "param" not in arrays \
+            or band["op"] in ("==", "in") or band.get("compare"):
+        return float(band.get("margin", 0.0))
+    p = np.asarray(arrays["param"], float)
+    sel = (p >= max(lo, band["from"])) & (p <= min(hi, band["to"])) & \
+        np.asarray(arrays.get("ok", np.ones(p.size, bool)), bool)
+    if band["direction"] in ("up", "down") and "direction" in arrays:
+        sel &= np.asarray(arrays["direction"], str) == band["direction"]
+    if not np.any(sel):
+        return float(band.get("margin", 0.0))
+    return margin_of(np.asarray(arrays[band["metric"]], float)[sel], band["op"],
+                     float(band["threshold"]),
+                     "dB" if band.get("margin_unit") == "dB" else "relative")
+
+
+def windows(bands: list[dict], grid, sources=None) -> list[dict]:
     """``findings.windows``: runs of neighbouring grid speeds where no avoid or caution
     band holds (``status`` "fine"); where there are none, the runs without an avoid band
     (``status`` "caution", ``limits``: the caution bands there, ``margin`` the largest of
-    their margins), least severe first.  Each: from, to (grid speeds), status, limits."""
+    their margins over the window's own points, ``worst``: that band), least severe first.
+    Each: from, to (grid speeds), status, limits, margin."""
     grid = np.asarray(grid, float)
     if grid.size == 0:
         return []
@@ -269,11 +290,15 @@ def windows(bands: list[dict], grid) -> list[dict]:
         for i in range(a, b + 2):
             if i == b + 1 or sets[i] != sets[k]:
                 lo, hi = grid[k], grid[i - 1]
-                here = [x for x in caution if x["to"] >= lo and x["from"] <= hi]
+                here = [(x, _margin_within(x, lo, hi, sources)) for x in caution
+                        if x["to"] >= lo and x["from"] <= hi and label(x) in sets[k]]
+                worst = max(here, key=lambda xm: xm[1], default=None)
                 out.append({"from": float(lo), "to": float(hi), "status": "caution",
                             "limits": list(sets[k]),
-                            "margin": max((float(x.get("margin", 0.0)) for x in here
-                                           if label(x) in sets[k]), default=0.0)})
+                            "margin": worst[1] if worst else 0.0,
+                            "worst": None if worst is None or worst[1] <= 0 else
+                            {"what": label(worst[0]), "margin": worst[1],
+                             "margin_unit": worst[0].get("margin_unit", "relative")}})
                 k = i
     out.sort(key=lambda w: (len(w["limits"]), w["margin"], -(w["to"] - w["from"])))
     return out

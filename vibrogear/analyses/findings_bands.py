@@ -143,14 +143,15 @@ def _bands(arrays, rule: dict, evidence, *, param_unit: str) -> list[Band]:
     for direction, mask in _split_directions(masks).items():
         for i0, i1 in segments(mask):
             idx = _select(arrays, grid, direction, i0, i1)
-            margin = margin_of(np.asarray(arrays[rule["metric"]], float)[idx], rule["op"],
-                               float(rule["threshold"]), kind)
+            # a class or a period has no distance past its threshold: no margin
+            extra = {} if rule["metric"].startswith(("period_n", "motion_class")) else {
+                "margin": margin_of(np.asarray(arrays[rule["metric"]], float)[idx],
+                                    rule["op"], float(rule["threshold"]), kind),
+                "margin_unit": "dB" if kind == "dB" else "relative"}
             out.append(Band(rule["quantity"], rule["where"], direction, float(grid[i0]),
                             float(grid[i1]), rule["severity"], rule["metric"], rule["op"],
                             float(rule["threshold"]), evidence(idx), edge_err=step,
-                            points=int(i1 - i0 + 1),
-                            extra={"margin": margin, "margin_unit": "dB" if kind == "dB"
-                                   else "relative", **rule.get("extra", {})}))
+                            points=int(i1 - i0 + 1), extra={**extra, **rule.get("extra", {})}))
     return out
 
 

@@ -99,13 +99,9 @@ def where_to_run(windows: list[dict], bands: list[dict], span, unit: str) -> str
         best = windows[:3]
         parts = []
         for w in best:
-            here = [b for b in bands if b["severity"] == "caution" and b["to"] >= w["from"]
-                    and b["from"] <= w["to"]]
-            here = [b for b in here if _label(b) in w["limits"]]
-            worst = max((b for b in here if float(b.get("margin", 0.0)) > 0),
-                        key=lambda b: float(b.get("margin", 0.0)), default=None)
+            worst = w.get("worst")
             limit = f" (limited by {_and(w['limits'])}" + (
-                f"; worst: {_label(worst)} {_margin_text(worst)})" if worst else ")")
+                f"; worst: {worst['what']} {_margin_text(worst)})" if worst else ")")
             parts.append(range_text(w["from"], w["to"], "") + u + limit)
         return ("No speed is free of findings; least severe: " + "; ".join(parts) + ".")
     where = f" {range_text(span[0], span[1], unit)}" if span else ""
