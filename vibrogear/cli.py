@@ -171,6 +171,18 @@ def _main(argv: list[str] | None) -> int:
         from .models.scene_notes import derived_lines
         for line in derived_lines(scene):
             print(f"  {line}")
+        if scene.gearbox is not None and scene.gearbox.couplings:
+            from .analyses.static_load import rigid_housing, static_load
+            try:      # check builds no housing FE model: the housing rigid here
+                lp = static_load(rigid_housing(scene), source=str(args.scene)).load_path
+            except ConfigError as exc:
+                _error("invalid input", exc)
+                return EXIT_INPUT
+            for line in lp.table_lines():
+                print(f"  {line}")
+            if scene.housing is not None:
+                print("  (the housing rigid in `check`; `run` reports the load path with its "
+                      "modes)")
         print(f"{args.scene}: ok ({scene.model_kind}; analyses: {', '.join(scene.scene.analyses)};"
               f" output folder {out}/)")
         return EXIT_OK

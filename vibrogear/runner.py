@@ -113,14 +113,20 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan) -> dict:
     t_all = time.perf_counter()
     failure = None
     study = None
+    if scene.gearbox is not None and scene.gearbox.couplings and \
+            not any(entry.study for _, entry in plan):
+        from .analyses.static_load import static_load     # the load path of every gearbox run
+        summary["load_path"] = static_load(scene, source=source).load_path.as_dict()
     previous: dict[str, AnalysisOutcome] = {}
     for name, entry in plan:
         t0 = time.perf_counter()
         try:
             if entry.study and study is None:
                 from .analyses.study import build_study
-                study = build_study(scene)
+                study = build_study(scene, source)
                 summary["reduced_model"] = study.title       # "name: m = 146 (21+25+100)"
+                if study.load_path is not None:
+                    summary["load_path"] = study.load_path.as_dict()
                 summary["wall_time_s"]["model"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
             # analyses that read earlier outcomes take them as ``previous`` (read-only), with

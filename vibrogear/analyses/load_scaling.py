@@ -93,8 +93,14 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
                           "scene's twists: the motor coupling needs twist > 0 and stiffness > "
                           f"0, got twist = {first.static_twist:g} rad, stiffness = {first.stiffness:g}")
     gm = gearbox_model
-    _, forces = external_couplings(gearbox_cfg, gm.rotors, gm.shaft_ratios)
-    f0_c = modal_vector(PhysicalVector.of(*forces), gm.subsystems) / gm.omega_ref ** 2
+    if len(getattr(gm, "coupling_angles", ())) == len(gearbox_cfg.couplings):
+        # the couplings' own parts of the static force (their disc angles as solved so
+        # that a torque / power load is carried: vibrogear.analyses.static_load)
+        couplings = PhysicalVector(gm.static_force.parts[:len(gearbox_cfg.couplings)])
+    else:
+        couplings = PhysicalVector.of(*external_couplings(gearbox_cfg, gm.rotors,
+                                                          gm.shaft_ratios)[1])
+    f0_c = modal_vector(couplings, gm.subsystems) / gm.omega_ref ** 2
     f0 = np.asarray(gm.reduced.forcing.F0, dtype=float)
     return LoadScaling(f0_rest=f0 - f0_c, f0_couplings=f0_c, torque_nominal=torque,
                        twist_nominal=float(first.static_twist), motor=first.name)

@@ -303,8 +303,12 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
     levels = list(zip(cfg.shaft_counts, cfg.housing_counts))
     if scene.housing is None:
         levels = [(s, 0) for s, _ in levels]
-    models = [build_gearbox(scene, master_counts=(s,) * len(scene.gearbox.shafts),
-                            housing_count=h or None) for s, h in levels]
+    from .static_load import meet_loads        # each level carries the scene's torque
+
+    def loaded(gm):
+        return meet_loads(gm, scene.gearbox)[0]
+    models = [loaded(build_gearbox(scene, master_counts=(s,) * len(scene.gearbox.shafts),
+                                   housing_count=h or None)) for s, h in levels]
     full = f_full = v_full = None
     if cfg.full_model:
         gm = models[-1]
@@ -323,8 +327,8 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
     if getattr(cfg, "frequency_level", False):
         h = levels[-1][1]
         for corr, name in ((True, "frequency"), (False, "frequency_no_static")):
-            gm = build_gearbox(scene, housing_count=h or None, master_level="frequency",
-                               static_correction=corr)
+            gm = loaded(build_gearbox(scene, housing_count=h or None, master_level="frequency",
+                                      static_correction=corr))
             row, delta = _level_row(gm, scene, cfg, f_full, v_full, {
                 "level": name, "housing_modes": h,
                 "shaft_modes": "+".join(str(sub.n_modes) for sub in gm.subsystems

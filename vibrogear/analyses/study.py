@@ -58,6 +58,8 @@ class Study:
     balance_arclength: bool = False      # scale the parameter by range/|u| in the arclength
     strict_start: bool = True            # no static equilibrium is a failure (else start at 0)
     gearbox: object = None               # GearboxModel of a gearbox study
+    #: LoadPath of a gearbox study (:mod:`vibrogear.analyses.static_load`): summary "load_path"
+    load_path: object = None
     #: what the run changed and why (tightened tolerances): summary.json "notes"
     notes: list = field(default_factory=list, compare=False)
     #: (param, requested rtol) -> RtolLimit, measured once per study (:func:`within_limit`)
@@ -230,12 +232,13 @@ def within_limit(study: "Study", scene, opts: IntegrationOptions) -> Integration
     return dataclasses.replace(opts, rtol=limit.rtol, atol=opts.atol * limit.rtol / opts.rtol)
 
 
-def build_study(scene) -> Study:
-    """The study of a scene's reduced model (impact pair or gearbox)."""
+def build_study(scene, source: str | None = None) -> Study:
+    """The study of a scene's reduced model (impact pair or gearbox); ``source``: the scene
+    file (its mapping report's assumptions go with the load path)."""
     if scene.impact_pair is not None:
         return _impact_pair_study(scene)
     if scene.gearbox is not None:
-        return _gearbox_study(scene)
+        return _gearbox_study(scene, source)
     raise NotImplementedError(f"no reduced model for a {scene.model_kind} scene")
 
 
@@ -251,10 +254,12 @@ def _impact_pair_study(scene) -> Study:
                  contact_groups={"clearance": np.array([0])})
 
 
-def _gearbox_study(scene) -> Study:
-    from ..models.gearbox.model import build_gearbox
+def _gearbox_study(scene, source=None) -> Study:
+    from .static_load import static_load
 
-    gm = build_gearbox(scene)
+    # the load carried checked and met before any dynamics (ConfigError: exit 2)
+    loaded = static_load(scene, source=source)
+    gm = loaded.model
     r = gm.reduced
     mesh = gm.contact_indices("mesh")
     groups = {"mesh": mesh}
@@ -272,4 +277,4 @@ def _gearbox_study(scene) -> Study:
                  length_unit=r.length_unit, time_unit_s=r.time_unit_s,
                  force_unit_n=r.force_unit_n,
                  rate_unit=gm.omega_ref, contact_groups=groups, balance_arclength=True,
-                 strict_start=True, gearbox=gm)
+                 strict_start=True, gearbox=gm, load_path=loaded.load_path)

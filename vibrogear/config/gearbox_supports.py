@@ -208,7 +208,8 @@ class ExternalCouplingConfig:
     twist: float | None = spec(None, ge=0.0, lt=1.0, doc="static twist angle [rad] (the "
                                "static load); or give torque, or power with rpm")
     torque: float | None = spec(None, ge=0.0, le=1e8, doc="static torque [N m] the coupling "
-                                "transmits: twist = torque / stiffness")
+                                "transmits in the static state of the elastic model (the load "
+                                "path solves its twist)")
     power: float | None = spec(None, ge=0.0, le=1e6, doc="power [kW] the coupling transmits "
                                "at rpm: torque = power / (2 pi rpm / 60)")
     rpm: float | None = spec(None, gt=0.0, le=1e6, doc="speed of this coupling's shaft [rpm] "

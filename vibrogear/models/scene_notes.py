@@ -19,11 +19,13 @@ def derived_lines(scene) -> list[str]:
     for i, c in enumerate(cfg.couplings):
         if c.load_given == "torque":
             out.append(f"gearbox.couplings[{i}] {c.name!r}: torque {c.torque:g} N m / stiffness "
-                       f"{c.stiffness:g} N m/rad -> twist {c.static_twist:.6g} rad")
+                       f"{c.stiffness:g} N m/rad -> twist {c.static_twist:.6g} rad on a rigid "
+                       "train (the load path solves the twist the elastic train needs)")
         elif c.load_given == "power":
             out.append(f"gearbox.couplings[{i}] {c.name!r}: power {c.power:g} kW at {c.rpm:g} "
                        f"rpm -> torque {c.static_torque:.6g} N m -> twist "
-                       f"{c.static_twist:.6g} rad")
+                       f"{c.static_twist:.6g} rad on a rigid train (the load path solves the "
+                       "twist the elastic train needs)")
     out += _order_lines(cfg)
     for i, b in enumerate(cfg.bearings):
         es = b.element_set(f"gearbox.bearings[{i}]")

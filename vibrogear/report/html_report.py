@@ -26,6 +26,7 @@ from .html_parts import link as _link, list_text as _list_text
 from .html_parts import record_files as _record_files, records_table as _records_table
 from .html_parts import size as _size, status_badge as _status_badge, table as _table
 from .html_parts import url as _url
+from .load_path_html import load_path_html
 
 __all__ = ["REPORT_NAME", "write_html_report", "render_html_report"]
 
@@ -120,6 +121,7 @@ def render_html_report(out, summary: dict) -> str:
     if "gearbox.png" in folder:
         parts.append('<h2 id="gearbox">The gearbox</h2>')
         parts.append(_figure("gearbox.png", key=True))
+    parts += load_path_html(summary.get("load_path"))
 
     for name in names:
         record = results.get(name)

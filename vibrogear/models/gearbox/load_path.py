@@ -28,9 +28,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ...config.base import ConfigError
 from ..contact_law import evaluate_set
 from .synthesis import PhysicalVector, modal_vector
+from .torque_balance import coupling_signs, mesh_arms, mesh_roles, nominal_torques
 
 __all__ = ["MeshLoad", "LoadPath", "compute_load_path", "mesh_roles", "mesh_arms",
            "nominal_torques", "coupling_signs", "coupling_dofs", "with_coupling_angles",
@@ -96,7 +96,8 @@ class LoadPath:
 
     def table_lines(self) -> list[str]:
         """The short table `vibrogear check` prints."""
-        out = [f"load path (static state{'' if self.reference_rpm is None else f', powers at {self.reference_rpm:.6g} rpm'}):"]
+        at = "" if self.reference_rpm is None else f", powers at {self.reference_rpm:.6g} rpm"
+        out = [f"load path (static state{at}):"]
         for c in self.couplings:
             out.append(f"  coupling {c['name']!r} ({c['role']}, {c['given']}): "
                        f"{c['torque_Nm']:.6g} N m, nominal {c['nominal_torque_Nm']:.6g} N m "
@@ -130,150 +131,6 @@ def _pct(value, nominal) -> str:
     return f"{100.0 * (value - nominal) / nominal:+.3g} %"
 
 
-# ------------------------------------------------------------------ structure (no FE model)
-
-def _body_of_gear(cfg) -> list[int]:
-    """Torsional body of each gear: its shaft's index, or len(shafts) + k for free gear k."""
-    out, nfree = [], 0
-    for g in cfg.gears:
-        if g.free:
-            out.append(len(cfg.shafts) + nfree)
-            nfree += 1
-        else:
-            out.append(cfg.shaft_index(g.shaft, ""))
-    return out
-
-
-def _n_bodies(cfg) -> int:
-    return len(cfg.shafts) + sum(1 for g in cfg.gears if g.free)
-
-
-def _components(n: int, edges) -> list[int]:
-    comp = list(range(n))
-
-    def find(a):
-        while comp[a] != a:
-            comp[a] = comp[comp[a]]
-            a = comp[a]
-        return a
-    for a, b in edges:
-        comp[find(a)] = find(b)
-    return [find(a) for a in range(n)]
-
-
-def mesh_roles(cfg) -> list[str]:
-    """``"loaded"`` or ``"idle"`` per mesh (module docstring: on a torque path between a
-    motor and a load coupling, or not)."""
-    body = _body_of_gear(cfg)
-    n = _n_bodies(cfg)
-    edges = [(body[cfg.gear_index(m.gear_a, "")], body[cfg.gear_index(m.gear_b, "")])
-             for m in cfg.meshes]
-    motors = {cfg.shaft_index(c.shaft, "") for c in cfg.couplings if c.role == "motor"}
-    loads = {cfg.shaft_index(c.shaft, "") for c in cfg.couplings if c.role == "load"}
-    roles = []
-    for j, (a, b) in enumerate(edges):
-        comp = _components(n, [e for i, e in enumerate(edges) if i != j])
-        ca, cb = comp[a], comp[b]
-        side = lambda c, group: any(comp[s] == c for s in group)  # noqa: E731
-        if ca != cb:
-            on_path = (side(ca, motors) and side(cb, loads)) or (side(cb, motors) and side(ca, loads))
-        else:                      # on a loop: loaded when the loop joins a motor and a load
-            on_path = side(ca, motors) and side(ca, loads)
-        roles.append("loaded" if on_path else "idle")
-    return roles
-
-
-def coupling_signs(cfg) -> list[float]:
-    """Sign of each coupling's static torque on its shaft's torsional DOF (a motor drives
-    in the sense of rotation, a load brakes)."""
-    shaft_p, _ = cfg.speed_ratios()
-    return [(1.0 if shaft_p[cfg.shaft_index(c.shaft, "")] > 0 else -1.0)
-            * (1.0 if c.role == "motor" else -1.0) for c in cfg.couplings]
-
-
-def mesh_arms(gm) -> list[tuple[float, float, int, int]]:
-    """Per mesh contact (in the scene's mesh order): (arm on gear_a, arm on gear_b, subsystem
-    of a, subsystem of b), the arms the torsional entries of the contact vector [m]."""
-    out = []
-    for c in gm.contacts:
-        if c.kind != "mesh":
-            continue
-        (sa, _, va), (sb, _, vb) = c.vector.parts[:2]
-        out.append((float(va[5]), float(vb[5]), int(sa), int(sb)))
-    return out
-
-
-def nominal_torques(cfg, arms, produced: dict | None = None):
-    """The nominal torque balance (module docstring): (mesh normal forces F_j [N, signed as
-    the contact force], coupling torques [N m, signed on their DOF], notes).  ``arms``
-    per mesh (arm_a, arm_b) [m]; ``produced``: {coupling index: static signed torque} for the
-    couplings given by twist.  ConfigError where the given torques disagree with the ratios."""
-    produced = produced or {}
-    body = _body_of_gear(cfg)
-    nb, nm, nc = _n_bodies(cfg), len(cfg.meshes), len(cfg.couplings)
-    sign = coupling_signs(cfg)
-    known = {i: sign[i] * c.static_torque for i, c in enumerate(cfg.couplings)
-             if c.load_given in ("torque", "power")}
-    notes = []
-    if not known:
-        motor = next((i for i, c in enumerate(cfg.couplings) if c.role == "motor"), None)
-        if motor is not None and motor in produced:
-            known[motor] = produced[motor]
-            notes.append(f"the couplings give twists: the nominal input torque is the "
-                         f"{abs(produced[motor]):.6g} N m the twist of {cfg.couplings[motor].name!r} "
-                         "produces in the static state")
-    A_mesh = np.zeros((nb, nm))
-    for j, m in enumerate(cfg.meshes):
-        A_mesh[body[cfg.gear_index(m.gear_a, "")], j] -= arms[j][0]
-        A_mesh[body[cfg.gear_index(m.gear_b, "")], j] -= arms[j][1]
-    C = np.zeros((nb, nc))
-    for i, c in enumerate(cfg.couplings):
-        C[cfg.shaft_index(c.shaft, ""), i] = 1.0
-    unknown = [i for i in range(nc) if i not in known]
-    while True:
-        A = np.hstack([A_mesh, C[:, unknown]])
-        rhs = -C[:, list(known)] @ np.array(list(known.values())) if known else np.zeros(nb)
-        sol, *_ = np.linalg.lstsq(A, rhs, rcond=None)
-        rank = np.linalg.matrix_rank(A) if A.size else 0
-        twist_unknown = [i for i in unknown if i in produced]
-        if rank >= A.shape[1] or not twist_unknown:
-            break
-        i = twist_unknown[-1]              # undetermined split: the twist's own torque
-        known[i] = produced[i]
-        unknown.remove(i)
-    scale = max([abs(v) for v in known.values()] + [1e-30])
-    resid = A @ sol - rhs
-    if known and np.max(np.abs(resid)) > 1e-3 * scale:
-        given = [i for i in known if cfg.couplings[i].load_given in ("torque", "power")]
-        motors = [i for i in given if cfg.couplings[i].role == "motor"] or given[:1]
-        loads = [i for i in given if i not in motors]
-        shaft_p, _ = cfg.speed_ratios()
-        ratio = {i: abs(shaft_p[cfg.shaft_index(cfg.couplings[motors[0]].shaft, "")]
-                        / shaft_p[cfg.shaft_index(cfg.couplings[i].shaft, "")]) for i in loads}
-        desc = "; ".join(f"load {cfg.couplings[i].name!r} {cfg.couplings[i].static_torque:.6g} "
-                         f"N m (the ratio {ratio[i]:.6g} makes it "
-                         f"{cfg.couplings[motors[0]].static_torque * ratio[i]:.6g} N m)"
-                         for i in loads) if len(loads) == 1 else ", ".join(
-                             f"{cfg.couplings[i].name!r} {cfg.couplings[i].static_torque:.6g} N m"
-                             for i in loads)
-        i0 = loads[0] if loads else motors[0]
-        raise ConfigError(f"gearbox.couplings[{i0}].{cfg.couplings[i0].load_given}",
-                          f"motor {cfg.couplings[motors[0]].name!r} "
-                          f"{cfg.couplings[motors[0]].static_torque:.6g} N m and {desc} "
-                          "disagree with the gear ratios (lossless torque balance); give the "
-                          "load's torque as the motor's times the ratio, or one of them as a "
-                          "twist")
-    F = sol[:nm]
-    T = np.zeros(nc)
-    for i, v in known.items():
-        T[i] = v
-    for k, i in enumerate(unknown):
-        T[i] = sol[nm + k]
-    roles = mesh_roles(cfg)
-    F = np.where(np.array(roles) == "idle", 0.0, F)
-    return F, T, notes
-
-
 # ------------------------------------------------------------------ the static state
 
 def coupling_dofs(cfg, gm) -> list[tuple[int, int]]:
@@ -297,8 +154,10 @@ def with_coupling_angles(gm, cfg, angles):
     dynamics are unchanged."""
     angles = np.asarray(angles, dtype=float)
     parts = list(gm.static_force.parts)
-    for i, c in enumerate(cfg.couplings):
+    for i, (c, (sc, dof)) in enumerate(zip(cfg.couplings, coupling_dofs(cfg, gm))):
         s, idx, _ = parts[i]
+        if s != sc or list(idx) != [dof]:       # build_gearbox puts the couplings first
+            raise RuntimeError(f"static force part {i} is not coupling {c.name!r}")
         parts[i] = (s, idx, np.array([c.stiffness * angles[i]]))
     sf = PhysicalVector(tuple(parts))
     r = gm.reduced
@@ -335,8 +194,7 @@ def contact_forces(gm, x) -> np.ndarray:
 def _bearing_reactions(gm, cfg, x, fc) -> list[dict]:
     """Per bearing: the force of its contacts, links and blocks on the journal [N]."""
     out = []
-    names = [b.name for b in cfg.bearings]
-    for i, b in enumerate(cfg.bearings):
+    for b in cfg.bearings:
         s = cfg.shaft_index(b.shaft, "")
         rotor = gm.rotors[s]
         jd = rotor.node_dofs(rotor.node_at(b.position))[:3]
@@ -364,9 +222,9 @@ def _bearing_reactions(gm, cfg, x, fc) -> list[dict]:
                 q = np.array([modal_vector(v, gm.subsystems) @ x for v in blk.vectors])
                 for v, fr in zip(blk.vectors, np.asarray(blk.stiffness) @ q):
                     add(v, fr)
+        f[np.abs(f) < 1e-6] = 0.0               # round-off of an unloaded direction [N]
         out.append({"name": b.name, "shaft": b.shaft, "radial_N": float(math.hypot(f[0], f[1])),
                     "axial_N": float(abs(f[2]))})
-    assert len(out) == len(names)
     return out
 
 

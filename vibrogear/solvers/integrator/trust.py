@@ -27,7 +27,11 @@ loop returns, cheapest first:
    run overstates the error by the run's length (a 400-period run at a tolerance that is
    accurate over 20 periods would otherwise fail).
 
-Each failure message names the tolerance in use and says to tighten it; the loosest rtol
+Each failure message names the tolerance in use and says to tighten it, to a value strictly
+tighter and never the built-in default (:func:`advised_rtol`: a scene that writes the default
+reads as one that writes none, and its sweep would run at the accuracy rule's looser rtol
+again); a divergence of a free or unloaded model (:func:`free_body`) says so and advises no
+tolerance.  The loosest rtol
 the model can use is found by :func:`vibrogear.solvers.integrator.rtol_limit.loosest_rtol`.
 """
 from __future__ import annotations
@@ -43,7 +47,8 @@ from ...models.contact_law import evaluate_set
 from ...models.reduced import Forcing, ReducedModel
 from ...status import Status
 
-__all__ = ["assess", "deformation_scale", "mechanical_energy", "is_undriven"]
+__all__ = ["assess", "deformation_scale", "mechanical_energy", "is_undriven", "advised_rtol",
+           "free_body", "DEFAULT_RTOL"]
 
 _SCALE: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 _UNDRIVEN: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -161,9 +166,54 @@ def mechanical_energy(model: ReducedModel, u: np.ndarray) -> float:
     return float(e)
 
 
+#: the built-in [integration] rtol: a scene that writes exactly this value cannot be told
+#: from one that writes none (the accuracy rule of a sweep or time response then applies),
+#: so advice never names it
+DEFAULT_RTOL = IntegrationOptions.__dataclass_fields__["rtol"].default
+
+
+def advised_rtol(rtol: float) -> float:
+    """The rtol to advise after a failure at ``rtol``: two decades tighter, never the
+    built-in default (it would read as "not given" and bring back the rule's looser rtol:
+    the advice would loop), so always strictly tighter than the one in use."""
+    advice = float(f"{rtol / 100:.1g}")
+    if math.isclose(advice, DEFAULT_RTOL, rel_tol=1e-9):
+        advice = DEFAULT_RTOL / 10
+    return advice
+
+
 def _tighten(options: IntegrationOptions) -> str:
     return (f"rtol {options.rtol:.3g}: tighten [integration] rtol (the section's own rtol "
-            f"where it has one), e.g. to {options.rtol / 100:.1g}")
+            f"where it has one), e.g. to {advised_rtol(options.rtol):.1g} (an [integration] "
+            f"rtol equal to the default {DEFAULT_RTOL:g} counts as not given)")
+
+
+def free_body(model: ReducedModel) -> str:
+    """Why the model's motion has no bound whatever the tolerance ("" when none is found):
+    no static equilibrium under the mean load (a free body the load moves), or a mean load
+    that no contact carries (an unloaded model)."""
+    from ..static import static_equilibrium     # local: static imports this layer's status
+
+    F0 = model.forcing.F0
+    if not np.any(F0):
+        return ""
+    st = static_equilibrium(model, 0.0)
+    if not st.converged:
+        return ("the model has no static equilibrium under its mean load: the load moves a "
+                "body that nothing holds (a shaft free along the load's direction)")
+    ct = model.contacts
+    if ct.count:
+        law = evaluate_set(ct, ct.directions @ st.x)
+        if not np.any(law.force):
+            return ("no contact carries the mean load in the static state: the model is "
+                    "unloaded (a shaft that slides or turns off its load)")
+    return ""
+
+
+def _free_message(reason: str) -> str:
+    return (f"{Status.DIVERGED.message}: {reason}; no integration tolerance changes this: "
+            "run `vibrogear check` on the scene, which names the shaft, the direction and "
+            "the bearing to fix")
 
 
 def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
@@ -188,6 +238,9 @@ def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
             worst[model.monitor] = max(worst[model.monitor], max(abs(lo), abs(hi)) - te)
         over = np.flatnonzero((worst > bound) & (bound > 0.0))      # inf bound: none
         if over.size:
+            reason = free_body(model)
+            if reason:
+                return Status.DIVERGED, _free_message(reason), rel
             j = int(over[np.argmax(worst[over] / bound[over])])
             name = ct.names[j] if j < len(ct.names) else f"contact {j}"
             return (Status.DIVERGED,
@@ -200,6 +253,9 @@ def assess(model: ReducedModel, param: float, u0: np.ndarray, u_end: np.ndarray,
         e0, e1 = mechanical_energy(model, u0), mechanical_energy(model, u_end)
         slack = 1e-6 * max(abs(e0), abs(e1)) + 10.0 * error_estimate * (size + 1e-300)
         if e1 > e0 + slack and abs(e1 - e0) > 1e-3 * abs(e0):
+            reason = free_body(model)
+            if reason:
+                return Status.DIVERGED, _free_message(reason), rel
             return (Status.DIVERGED,
                     f"{Status.DIVERGED.message}: the energy of an undriven, damped system "
                     f"grew from {e0:.6g} to {e1:.6g}; {_tighten(options)}", rel)
