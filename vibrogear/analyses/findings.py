@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..config.numbers import fmt, fmt_param
 from ..pipeline.files import listed_paths
 
 from .findings_bands import Band, map_bands, sweep_bands
@@ -184,8 +185,14 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
     out_bands = [b.as_dict() for b in bands]
     grid = _grid(sources)
     win = windows(out_bands, grid, sources)
+    judged = mesh_summary(meshes, sweep, iso)
+    for b in out_bands:          # the standard's resonance beside the simulated kv peak
+        m = next((m for m in judged if m["name"] == b["where"]), None)
+        if b["source"] == "iso6336" and m is not None and "kv_peak" in m:
+            b["evidence"] += (f"; the simulated dynamic factor peaks at kv = "
+                              f"{fmt(m['kv_peak'], 3)} at {fmt_param(m['kv_peak_at'])} rpm")
     return {"verdict": verdict_text(out_bands, checked, span, partial, param_unit, win),
-            "windows": win, "meshes": mesh_summary(meshes, sweep, iso),
+            "windows": win, "meshes": judged,
             "bands": out_bands, "events": events, "rules": rules.rules(),
             "checked": checked, "partial": partial,
             "range": None if span is None else [span[0], span[1]], "param_unit": param_unit}
