@@ -230,7 +230,8 @@ def _idle_bands(arrays, m, rules, kw, per) -> list[Band]:
         if f"rattle_power_{m}" in arrays:
             text += f" ({_stat(arrays, f'rattle_power_{m}', idx, 2, 1e3, 'mW')})"
         if f"impact_velocity_rms_{m}" in arrays:
-            text += f", rms impact velocity {_stat(arrays, f'impact_velocity_rms_{m}', idx, 2, 1e3, 'mm/s')}"
+            rms = _stat(arrays, f"impact_velocity_rms_{m}", idx, 2, 1e3, "mm/s")
+            text += f", rms impact velocity {rms}"
         if f"impacts_back_{m}" in arrays:
             text += f", {_stat(arrays, f'impacts_back_{m}', idx)} back-flank impacts {per}"
         return text + f"; loudest over the run {fmt(loudest, 3)} dB"
