@@ -55,6 +55,11 @@ def _parser() -> argparse.ArgumentParser:
     imp.add_argument("--load-case", default=None, type=int, metavar="N",
                      help="the load case of the file's load spectrum to take as the operating "
                      "point (1-based; default: the one with the largest duration share)")
+    cmp = sub.add_parser("compare", help="two runs' findings side by side (bands added, "
+                         "removed, moved; kv peaks; rattle levels; verdicts) and compare.html")
+    cmp.add_argument("run_a", help="the first run's output folder (its summary.json)")
+    cmp.add_argument("run_b", help="the second run's output folder")
+    cmp.add_argument("--out", default=None, help="folder for compare.html (default RUN_B)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
     return p
@@ -78,6 +83,21 @@ def _cache(action: str) -> int:
     except ConfigError as exc:
         _error("invalid input", exc)
         return EXIT_INPUT
+    return EXIT_OK
+
+
+def _compare(run_a: str, run_b: str, out: str | None) -> int:
+    """``vibrogear compare``: both runs' findings on the console and in compare.html."""
+    from .analyses.compare import compare_findings, read_findings
+    from .report.compare_report import COMPARE_HTML, compare_lines, write_compare_html
+    try:
+        a, b = read_findings(run_a), read_findings(run_b)
+    except ValueError as exc:
+        _error("invalid input", exc)
+        return EXIT_INPUT
+    c = compare_findings(a, b)
+    path = write_compare_html(c, __import__("pathlib").Path(out or run_b) / COMPARE_HTML)
+    print("\n".join(compare_lines(c) + [f"open {path}"]))
     return EXIT_OK
 
 
@@ -125,6 +145,8 @@ def _main(argv: list[str] | None) -> int:
     args = _parser().parse_args(argv)
     if args.command == "cache":
         return _cache(args.action)
+    if args.command == "compare":
+        return _compare(args.run_a, args.run_b, args.out)
     if args.command == "import":
         from .cli_import import import_command
         return import_command(args.model, args.output, argv, housing=args.housing,

@@ -203,7 +203,8 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan, outcomes=None) -
         # points are never lost)
         from .analyses.findings import run_findings
         findings = run_findings(scene, summary["results"],
-                                _in_memory_sources(scene, previous) if ctx.out is None else None)
+                                _in_memory_sources(scene, previous) if ctx.out is None else None,
+                                summary.get("load_path"))
         if findings is not None:
             summary["findings"] = findings
         if ctx.out is not None:

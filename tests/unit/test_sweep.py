@@ -363,6 +363,7 @@ def test_contact_groups_and_window_metrics_by_hand():
     assert g["impact_velocity_rms_G1"] == pytest.approx(math.sqrt(10.0))
     assert g["contact_fraction_G1"] == pytest.approx((0.25 + 0.75 + 0.25) / 2)
     assert g["rattle_G1"] == pytest.approx((0.5 * 4 + 0.5 * 16) / 2)    # m_eff = 1
+    assert g["rattle_power_G1"] == pytest.approx((0.5 * 4 + 0.5 * 16) / 2.0)  # per second
     assert g["impacts_drive_G_2"] == 0 and g["contact_fraction_G_2"] == 0
     assert g["unloaded_bearing_B1"] == pytest.approx(1.5 / 2)
     # halves: [0, 1] one drive impact, [1, 2] one back impact

@@ -118,38 +118,59 @@ def _stat(arrays, key, idx, digits=2, scale=1.0, unit="") -> str:
     return f"{txt}{u}{e}"
 
 
+def margin_of(values, op: str, threshold: float, kind: str = "relative") -> float:
+    """How far the worst of ``values`` lies past ``threshold``: relative to the threshold
+    (``(worst - t) / |t|`` for > and >=, ``(t - worst) / |t|`` for < and <=), or the plain
+    difference for ``kind = "dB"`` (and a zero threshold); 0 for ==."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    if v.size == 0 or op == "==":
+        return 0.0
+    d = float(np.max(v)) - threshold if op in (">", ">=") else threshold - float(np.min(v))
+    return d if kind == "dB" or threshold == 0 else d / abs(threshold)
+
+
 def _bands(arrays, rule: dict, evidence, *, param_unit: str) -> list[Band]:
     """The bands of one rule: ``rule`` has quantity, where, metric, op, threshold,
-    severity; ``evidence(idx) -> str`` describes the file's points ``idx`` of a band."""
+    severity (and optionally ``margin``: "relative" or "dB"); ``evidence(idx) -> str``
+    describes the file's points ``idx`` of a band.  Each band carries its ``margin``
+    (:func:`margin_of`) over its points."""
     if rule["metric"] not in arrays:
         return []
     grid, masks = grid_masks(arrays, rule["metric"], rule["op"], rule["threshold"])
     step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
+    kind = rule.get("margin", "relative")
     out = []
     for direction, mask in _split_directions(masks).items():
         for i0, i1 in segments(mask):
             idx = _select(arrays, grid, direction, i0, i1)
+            # a class or a period has no distance past its threshold: no margin
+            extra = {} if rule["metric"].startswith(("period_n", "motion_class")) else {
+                "margin": margin_of(np.asarray(arrays[rule["metric"]], float)[idx],
+                                    rule["op"], float(rule["threshold"]), kind),
+                "margin_unit": "dB" if kind == "dB" else "relative"}
             out.append(Band(rule["quantity"], rule["where"], direction, float(grid[i0]),
                             float(grid[i1]), rule["severity"], rule["metric"], rule["op"],
                             float(rule["threshold"]), evidence(idx), edge_err=step,
-                            points=int(i1 - i0 + 1)))
+                            points=int(i1 - i0 + 1), extra={**extra, **rule.get("extra", {})}))
     return out
 
 
 def sweep_bands(arrays: dict, rules, *, param_unit: str, length_scale: float,
-                length_unit: str, monitored: str = "monitored contact"
+                length_unit: str, monitored: str = "monitored contact", roles=None
                 ) -> tuple[list[Band], list[dict], list[str]]:
     """Bands and jump events of a ``sweep.npz`` and what was checked; ``monitored``: the
-    contact whose deformation ``qmin``/``qmax`` are (a gearbox: the first mesh)."""
+    contact whose deformation ``qmin``/``qmax`` are (a gearbox: the first mesh);
+    ``roles``: {mesh key: "loaded" | "idle"} (None: every mesh loaded)."""
     meshes, bearings = mesh_and_bearing_names(arrays)
-    bands = _contact_bands(arrays, meshes, bearings, rules, param_unit)
+    bands = _contact_bands(arrays, meshes, bearings, rules, param_unit, roles)
     bands += _motion_bands(arrays, rules, dict(param_unit=param_unit))
     hyst, events = _hysteresis(arrays, rules, param_unit, length_scale, length_unit,
                                monitored)
     bands += hyst
     checked = [f"sweep ({', '.join(sorted(set(np.asarray(arrays.get('direction', ['up']), str).tolist())))}"
-               f", {np.unique(np.asarray(arrays['param'])).size} speeds): contact loss and rattle "
-               f"of {', '.join(meshes) or 'the contacts'}"
+               f", {np.unique(np.asarray(arrays['param'])).size} speeds): "
+               + _roles_checked(meshes, roles)
                + (f", unloading of {', '.join(bearings)}" if bearings else "")
                + ", motion class, jumps and hysteresis"]
     return bands, events, checked
@@ -160,13 +181,92 @@ def _span_text(v) -> str:
     return fmt(lo) if fmt(lo) == fmt(hi) else f"{fmt(lo)}–{fmt(hi)}"
 
 
-def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
-    """Contact loss, rattle and double-sided impacts per mesh, unloading per bearing."""
+def _roles_checked(meshes, roles) -> str:
+    loaded = [m for m in meshes if (roles or {}).get(m, "loaded") == "loaded"]
+    idle = [m for m in meshes if (roles or {}).get(m) == "idle"]
+    parts = []
+    if loaded:
+        parts.append(f"contact loss, back-flank impacts and dynamic factor of the loaded "
+                     f"{'mesh' if len(loaded) == 1 else 'meshes'} {', '.join(loaded)}")
+    if idle:
+        parts.append(f"rattle level of the idle {'mesh' if len(idle) == 1 else 'meshes'} "
+                     f"{', '.join(idle)}")
+    return "; ".join(parts) or "contact loss and rattle of the contacts"
+
+
+def _kv_bands(arrays, m, rules, kw) -> list[Band]:
+    """The dynamic-factor band of a loaded mesh: kv_<m> > kv_caution."""
+    kv = f"kv_{m}"
+    if kv not in arrays or not np.any(np.asarray(arrays[kv], float) > 0):
+        return []
+
+    def ev(idx):
+        f0 = float(np.asarray(arrays.get(f"static_force_{m}", [np.nan]), float).ravel()[0])
+        text = f"{m} dynamic factor kv {_stat(arrays, kv, idx, 3)}"
+        if f"max_force_{m}" in arrays and np.isfinite(f0):
+            text += f" (largest mesh force {_stat(arrays, f'max_force_{m}', idx, 3, 1e-3, 'kN')}" \
+                    f" over the static {fmt(f0 * 1e-3, 3)} kN)"
+        return text
+
+    return _bands(arrays, dict(quantity="dynamic factor", where=m, metric=kv, op=">",
+                               threshold=rules.kv_caution, severity=rules.dynamic_factor),
+                  ev, **kw)
+
+
+def _idle_bands(arrays, m, rules, kw, per) -> list[Band]:
+    """The rattle of an idle mesh by its level rattle_db_<m> [dB re 1 pW]: caution within
+    rattle_caution_db of the loudest, avoid above rattle_limit_db (only where set), the
+    quietest speeds (within 3 dB of the quietest) as a fine band."""
+    key = f"rattle_db_{m}"
+    if key not in arrays:
+        return []
+    ok = np.asarray(arrays.get("ok", np.ones(np.asarray(arrays["param"]).size, bool)), bool)
+    db = np.asarray(arrays[key], float)[ok]
+    if db.size == 0 or not np.any(db > 0):
+        return []
+    loudest, quietest = float(db.max()), float(db.min())
+
+    def ev(idx):
+        text = f"{m} rattle {_stat(arrays, key, idx, 3, unit='dB')} re 1 pW"
+        if f"rattle_power_{m}" in arrays:
+            text += f" ({_stat(arrays, f'rattle_power_{m}', idx, 2, 1e3, 'mW')})"
+        if f"impact_velocity_rms_{m}" in arrays:
+            rms = _stat(arrays, f"impact_velocity_rms_{m}", idx, 2, 1e3, "mm/s")
+            text += f", rms impact velocity {rms}"
+        if f"impacts_back_{m}" in arrays:
+            text += f", {_stat(arrays, f'impacts_back_{m}', idx)} back-flank impacts {per}"
+        return text + f"; loudest over the run {fmt(loudest, 3)} dB"
+
+    out = []
+    if rules.rattle_limit_db is not None:
+        out += _bands(arrays, dict(quantity="rattle above the limit", where=m, metric=key,
+                                   op=">", threshold=float(rules.rattle_limit_db),
+                                   severity="avoid", margin="dB"), ev, **kw)
+    out += _bands(arrays, dict(quantity="rattle", where=m, metric=key, op=">",
+                               threshold=loudest - rules.rattle_caution_db,
+                               severity=rules.idle_rattle, margin="dB"), ev, **kw)
+    out += _bands(arrays, dict(quantity="quietest rattle", where=m, metric=key, op="<=",
+                               threshold=quietest + QUIET_DB, severity="fine", margin="dB"),
+                  ev, **kw)
+    return out
+
+
+#: the quietest rattle band: within this many dB of the run's quietest level
+QUIET_DB = 3.0
+
+
+def _contact_bands(arrays, meshes, bearings, rules, param_unit, roles=None) -> list[Band]:
+    """Per loaded mesh: contact loss, dynamic factor, back-flank and double-sided impacts;
+    per idle mesh: its rattle level; per bearing: unloading."""
     bands: list[Band] = []
     per = "per mesh period" if param_unit == "rpm" else "per excitation period"
     kw = dict(param_unit=param_unit)
     for m in meshes:
         cf, back, drive = f"contact_fraction_{m}", f"impacts_back_{m}", f"impacts_drive_{m}"
+        if (roles or {}).get(m) == "idle":
+            bands += _idle_bands(arrays, m, rules, kw, per)
+            continue
+        bands += _kv_bands(arrays, m, rules, kw)
 
         def loss(idx, m=m, cf=cf, drive=drive):
             out = {"out": 1.0 - np.asarray(arrays[cf], float)}
@@ -183,7 +283,7 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit) -> list[Band]:
             return text
 
         bands += _bands(arrays, dict(quantity="contact loss", where=m, metric=cf, op="<",
-                                     threshold=rules.contact_fraction_below,
+                                     threshold=1.0 - rules.loss_share_avoid,
                                      severity=rules.contact_loss), loss, **kw)
         bands += _bands(arrays, dict(quantity="rattle", where=m, metric=back, op=">",
                                      threshold=rules.back_impacts_above,
@@ -228,7 +328,8 @@ def _points(n: int) -> str:
     return f"{n} point" + ("" if n == 1 else "s")
 
 
-def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list[str]]:
+def map_bands(arrays: dict, rules, *, param_unit: str, roles=None
+              ) -> tuple[list[Band], list[str]]:
     """Contact-loss, rattle, double-sided and bearing bands of a ``map.npz`` at each load:
     the map's (directions, loads, speeds) grids are read one load at a time as a sweep;
     each band names its load (``load_index`` into ``torque``, the array's middle axis)."""
@@ -244,7 +345,10 @@ def map_bands(arrays: dict, rules, *, param_unit: str) -> tuple[list[Band], list
                     "ok": np.asarray(arrays["ok"], bool)[:, j, :].ravel()}
         for k in keys:
             as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
-        for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit):
+        for k in [k for k in arrays if k.startswith(("kv_", "rattle_db_", "max_force_",
+                                                      "rattle_power_", "static_force_"))]:
+            as_sweep[k] = np.asarray(arrays[k], float)[:, j, :].ravel()
+        for b in _contact_bands(as_sweep, meshes, bearings, rules, param_unit, roles):
             bands.append(Band(**{**b.__dict__, "where": f"{b.where} at {t:.3g} N m",
                                  "source": "map.npz",
                                  "extra": {**b.extra, "load_index": j, "torque": float(t)}}))

@@ -92,10 +92,58 @@ def erp_findings(arrays: dict, rules, *, direction: str) -> tuple[list[Band], li
     return bands, events
 
 
+def _state_impact_bands(arrays, grid, step, rules, roles, per) -> list[Band]:
+    """Per mesh, the speeds whose states hit the teeth (``attractor_impacts_<mesh>`` > 0):
+    a loaded mesh "avoid" where every state found at the speed impacts (min over them),
+    "caution" where some do (max); an idle mesh's rattle "caution" where any state
+    impacts, with its impact energy."""
+    ap = np.asarray(arrays["attractor_param"], float)
+    out = []
+    for key in sorted(k for k in arrays if k.startswith("attractor_impacts_")):
+        m = key[len("attractor_impacts_"):]
+        imp = np.asarray(arrays[key], float)
+        rat = np.asarray(arrays.get(f"attractor_rattle_{m}", np.zeros(ap.size)), float)
+        lo = np.array([imp[ap == p].min() for p in grid])
+        hi = np.array([imp[ap == p].max() for p in grid])
+        idle = (roles or {}).get(m) == "idle"
+        if not idle and f"attractor_kv_{m}" in arrays:      # the states' dynamic factor
+            kv = np.asarray(arrays[f"attractor_kv_{m}"], float)
+            top = np.array([kv[ap == p].max() for p in grid])
+            for i0, i1 in segments(top > rules.kv_caution):
+                sel = (ap >= grid[i0]) & (ap <= grid[i1])
+                out.append(Band("dynamic factor in a state", m, "both", float(grid[i0]),
+                                float(grid[i1]), rules.dynamic_factor, f"attractor_kv_{m}",
+                                ">", float(rules.kv_caution),
+                                f"{m}: dynamic factor kv up to {fmt(float(kv[sel].max()), 3)} "
+                                "in the states found", source="states.npz", edge_err=step,
+                                points=int(i1 - i0 + 1),
+                                extra={"compare": "max over the states at each speed",
+                                       "margin": float(top[i0:i1 + 1].max())
+                                       / rules.kv_caution - 1, "margin_unit": "relative"}))
+        tests = [("max", hi > 0, rules.idle_rattle, "rattle in a state")] if idle else \
+            [("min", lo > 0, rules.contact_loss, "impacts in a state"),
+             ("max", (hi > 0) & ~(lo > 0), "caution", "impacts in a state")]
+        for how, mask, severity, quantity in tests:
+            for i0, i1 in segments(mask):
+                sel = (ap >= grid[i0]) & (ap <= grid[i1]) & (imp > 0)
+                text = (f"{m}: {'every' if how == 'min' else 'a'} state found hits the teeth, "
+                        f"{fmt(float(imp[sel].min()), 2)}–{fmt(float(imp[sel].max()), 2)} "
+                        f"contact onsets {per}, impact energy up to "
+                        f"{fmt(float(rat[sel].max()) * 1e3, 2)} mJ {per}")
+                out.append(Band(quantity, m, "both", float(grid[i0]), float(grid[i1]),
+                                severity, key, ">", 0.0, text, source="states.npz",
+                                edge_err=step, points=int(i1 - i0 + 1),
+                                extra={"compare": f"{how} over the states at each speed",
+                                       "margin": float(imp[sel].max()),
+                                       "margin_unit": "relative"}))
+    return out
+
+
 def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float,
-                    length_unit: str) -> tuple[list[Band], list[dict]]:
+                    length_unit: str, roles=None) -> tuple[list[Band], list[dict]]:
     """Speeds where more than one attractor was found (band on ``n_attractors`` of
-    ``states.npz``, per speed) and one event per attractor that coexists with another."""
+    ``states.npz``, per speed), one event per attractor that coexists with another, and
+    per mesh the speeds whose states hit the teeth (:func:`_state_impact_bands`)."""
     ap = np.asarray(arrays["attractor_param"], float)
     grid = np.unique(ap)
     count = np.array([np.sum(ap == p) for p in grid])
@@ -114,6 +162,9 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
                           "starts", source="states.npz", edge_err=step,
                           points=int(i1 - i0 + 1),
                           extra={"compare": "count of attractor_param equal to the speed"}))
+    bands += _state_impact_bands(arrays, grid, step, rules, roles,
+                                 "per mesh period" if param_unit == "rpm" else
+                                 "per excitation period")
     period = np.asarray(arrays.get("attractor_period_n", np.zeros(ap.size, int)))
     seen = np.asarray(arrays.get("attractor_seen_by_sweep", np.full(ap.size, -1)))
     meshes = sorted(k[len("attractor_impacts_"):] for k in arrays
@@ -134,11 +185,12 @@ def states_findings(arrays: dict, rules, *, param_unit: str, length_scale: float
     return bands, events
 
 
-def runup_findings(arrays: dict, rules, *, param_unit: str) -> list[Band]:
+def runup_findings(arrays: dict, rules, *, param_unit: str, roles=None) -> list[Band]:
     """Contact loss during a run-up / run-down: per run ``<d>`` and mesh, the speeds
     (``<d>_rpm``, the mean speed of each mesh period) of the periods with contact losses
     (``<d>_losses_<mesh>`` > 0), periods closer than :data:`RUNUP_MERGE_PERIODS` joined into
-    one band; ``edge_err``: the largest speed change over one mesh period in the band."""
+    one band; ``edge_err``: the largest speed change over one mesh period in the band.
+    Idle meshes (``roles``) are left out: a free gear leaves its drive flank at any speed."""
     runs = [str(r) for r in np.asarray(arrays.get("runs", arrays.get("directions", [])))]
     meshes = [str(m) for m in np.asarray(arrays.get("meshes", []))]
     bands = []
@@ -146,6 +198,8 @@ def runup_findings(arrays: dict, rules, *, param_unit: str) -> list[Band]:
         rpm = np.asarray(arrays.get(f"{run}_rpm", []), float)
         direction = "down" if run.startswith("down") else "up"
         for m in meshes:
+            if (roles or {}).get(m) == "idle":     # an idle gear leaves its flank: not judged
+                continue
             key = f"{run}_losses_{m}"
             if key not in arrays or rpm.size == 0:
                 continue

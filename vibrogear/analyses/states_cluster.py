@@ -330,7 +330,10 @@ def cluster_point(records, point: int, param: float, *, n_modes: int, cluster_to
             st = [stats[r.index][g] for r in members]
             imp = np.array([s[0][0] for s in st])
             rat = np.array([s[1][0] for s in st])
+            peaks = [r.metrics.get(f"max_force_{g}", math.nan) for r in members]
             att.metrics[g] = {"impacts": float(np.mean(imp)), "rattle": float(np.mean(rat)),
+                              "max_force": float(np.nanmax(peaks)) if np.any(
+                                  np.isfinite(peaks)) else math.nan,
                               "impacts_err": float(max(max(s[0][1] for s in st),
                                                        imp.std(ddof=1) / math.sqrt(k)
                                                        if k > 1 else 0.0))}

@@ -16,6 +16,8 @@ import math
 import numpy as np
 
 from ..status import Status
+from .mesh_loads import mesh_judgement_arrays, static_mesh_forces
+from ..solvers.sequential.motion import contact_groups
 
 __all__ = ["states_summary", "coexisting_points", "states_arrays"]
 
@@ -122,6 +124,7 @@ def states_arrays(res) -> dict:
                                               for a in atts])
         out[f"attractor_rattle_{g}"] = _fin([a.metrics.get(g, {}).get("rattle", math.nan)
                                              for a in atts])
+    out.update(_dynamic_factors(res, atts, meshes))
     brs = res.branches
     pts = [p for b in brs for p in b.points]
     out["branch_start"] = np.concatenate([[0], np.cumsum([len(b.points) for b in brs])]).astype(int)
@@ -142,3 +145,25 @@ def states_arrays(res) -> dict:
         for k in ("param", "qmin", "qmax"):
             out[f"sweep_{k}"] = out[f"sweep_{k}"][ok]
     return out
+
+
+def _dynamic_factors(res, atts, meshes) -> dict:
+    """``attractor_max_force_<mesh>`` [N] (largest over the state's records),
+    ``static_force_<mesh>`` [N] and ``attractor_kv_<mesh>`` = their ratio
+    (:mod:`vibrogear.analyses.mesh_loads`; 0 where not formed)."""
+    peaks = {g: [a.metrics.get(g, {}).get("max_force", math.nan) for a in atts] for g in meshes}
+    if not atts or not any(np.any(np.isfinite(v)) for v in peaks.values()):
+        return {}
+    model = res.study.model
+    static = static_mesh_forces(model, res.study.start(float(atts[0].param)),
+                                contact_groups(model))
+    arrays = mesh_judgement_arrays({f"max_force_{g}": np.asarray(v, float)
+                                    for g, v in peaks.items()}, static)
+    out = {}
+    for g in meshes:
+        out[f"attractor_max_force_{g}"] = _fin(peaks[g])
+        if f"kv_{g}" in arrays:
+            out[f"attractor_kv_{g}"] = _fin(arrays[f"kv_{g}"])
+            out[f"static_force_{g}"] = np.float64(static[g])
+    return out
+

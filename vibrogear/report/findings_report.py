@@ -31,8 +31,26 @@ def _group(bands: list[dict], severities=("avoid", "caution")) -> list[tuple[str
             groups.setdefault(key, []).append(b)
     order = {s: i for i, s in enumerate(("avoid", "caution", "fine"))}
     return [(s, w, q, bs) for (s, w, q), bs in
-            sorted(groups.items(), key=lambda kv: (order[kv[0][0]], rank(kv[0][2]),
-                                                   kv[0][1]))]
+            sorted(groups.items(), key=lambda kv: (order[kv[0][0]], -_worst(kv[1]),
+                                                   rank(kv[0][2]), kv[0][1]))]
+
+
+def _worst(bands: list[dict]) -> float:
+    """The largest margin of ``bands`` (0 for bands without one)."""
+    return max((float(b.get("margin", 0.0)) for b in bands), default=0.0)
+
+
+def margin_text(bands: list[dict]) -> str:
+    """'up to 57 % past 1.3' / 'up to 4.2 dB past 118 dB' of the worst of ``bands``; "" where
+    the bands carry no margin (motion classes, coexistence, the ISO range)."""
+    have = [b for b in bands if "margin_unit" in b and b.get("op") not in ("==", "in")
+            and float(b.get("margin", 0.0)) > 0]
+    if not have:
+        return ""
+    b = max(have, key=lambda x: float(x["margin"]))
+    if b["margin_unit"] == "dB":
+        return f"up to {fmt(b['margin'], 2)} dB past {fmt(b['threshold'], 4)} dB"
+    return f"up to {fmt(100 * b['margin'], 2)} % past {_num(b['threshold'])}"
 
 
 def _label(where: str, quantity: str) -> str:
@@ -80,7 +98,9 @@ def console_lines(findings: dict, report_path: str | None = None, *, quiet: bool
     lines = [f"findings: {findings['verdict']}"]
     groups = _group(findings.get("bands", []))
     for severity, where, quantity, bands in groups[:_MAX_CONSOLE_BANDS]:
-        lines.append(f"  {severity:<7s} {_label(where, quantity)}: {_runs_text(bands, unit)}")
+        past = margin_text(bands)
+        lines.append(f"  {severity:<7s} {_label(where, quantity)}: {_runs_text(bands, unit)}"
+                     + (f" ({past})" if past else ""))
     if len(groups) > _MAX_CONSOLE_BANDS:
         lines.append(f"  ... {len(groups) - _MAX_CONSOLE_BANDS} more kinds of band in the report")
     if report_path:
@@ -114,6 +134,10 @@ def plot_band_chart(findings: dict, path) -> Path | None:
         ax.barh(y, width, left=left, height=0.62, color=COLOURS[b["severity"]],
                 hatch="///" if _one_way(b) else None, edgecolor="white",
                 linewidth=0.3)
+        past = margin_text([b])
+        if past:                       # the margin: how far past the threshold
+            ax.text(left + 0.5 * width, y, past.replace("up to ", "+").split(" past")[0],
+                    ha="center", va="center", fontsize=7, color="black", clip_on=True)
     marker_handles = []
     if events:
         y = len(rows)
@@ -190,16 +214,26 @@ def findings_html(findings: dict, chart: str | None) -> list[str]:
     """The findings section of ``report.html`` (its first section)."""
     unit = findings.get("param_unit", "rpm")
     verdict = findings["verdict"]
-    css = "avoid" if verdict.startswith("Avoid") else "caution" if "Caution" in verdict \
-        else "fine"
+    css = "avoid" if verdict.startswith(("Avoid", "No speed to run")) else "caution" \
+        if "Caution" in verdict or verdict.startswith("No speed is free") else "fine"
     parts = ['<h2 id="findings">Findings</h2>',
              f'<p class="verdict verdict-{css}">{_esc(verdict)}</p>']
+    wins = findings.get("windows") or []
+    if wins:
+        parts.append("<p>Where to run" + (" (no speed is free of findings: the least "
+                     "severe first)" if wins[0]["status"] != "fine" else "") + ": "
+                     + _esc("; ".join(f"{range_text(w['from'], w['to'], unit)}"
+                                      + (f" (limited by {', '.join(w['limits'])})"
+                                         if w["limits"] else "") for w in wins[:6]))
+                     + "</p>")
     if chart:
         parts.append(f'<figure class="wide"><img src="{_esc(chart)}" alt="speed bands">'
                      "<figcaption>Each row is one contact or one kind of motion; a bar marks "
                      "the speeds where its rule holds (red: avoid, amber: caution; hatched: "
                      "seen in one sweep direction only). Bars extend half a grid step each "
-                     "side: the true edge lies within one step.</figcaption></figure>")
+                     "side: the true edge lies within one step. The label on a bar: how far its "
+                     "worst point lies past the rule's threshold (the band's margin)."
+                     "</figcaption></figure>")
     groups = _group(findings.get("bands", []))
     if groups:
         rows = []
@@ -207,8 +241,10 @@ def findings_html(findings: dict, chart: str | None) -> list[str]:
             steady = [b for b in bands if b["source"] != "runup.npz"] or bands
             worst = max(steady, key=lambda b: b["points"])
             rule = f"{worst['metric']} {worst['op']} {_num(worst['threshold'])}"
+            past = margin_text(bands)
             rows.append(f'<tr><td class="nw"><span class="sev sev-{severity}">{severity}</span>'
-                        f"</td><td>{_esc(_label(where, quantity))}</td>"
+                        f"</td><td>{_esc(_label(where, quantity))}"
+                        + (f"<br><small>{_esc(past)}</small>" if past else "") + "</td>"
                         f"<td>{_esc(_runs_text(bands, unit))} (edges ± "
                         f"{_esc(fmt(worst['edge_err'], 2))})</td>"
                         f"<td>{_esc(worst['evidence'])}"

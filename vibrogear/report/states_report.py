@@ -12,7 +12,9 @@
   orbit, -1 not shot), ``attractor_max_multiplier``, ``attractor_refined`` (extrema of the
   shot orbit), ``attractor_seen_by_sweep`` (1 / 0, -1: no sweep), per mesh
   ``attractor_impacts_<mesh>`` (contact onsets per excitation period) and
-  ``attractor_rattle_<mesh>`` (impact energy per period);
+  ``attractor_rattle_<mesh>`` (impact energy per period), ``attractor_max_force_<mesh>``
+  [N] (largest mesh force), ``attractor_kv_<mesh>`` (its dynamic factor: over the static
+  mesh force ``static_force_<mesh>`` [N]);
 * per grid value: ``param``, ``n_starts`` (settled), ``n_failed``;
 * branches continued from attractors: ``branch_param``, ``branch_qmin``, ``branch_qmax``,
   ``branch_stable``, ``branch_label`` (points of all branches, concatenated),

@@ -194,7 +194,9 @@ def window_metrics(model: ReducedModel, groups: dict, mode0, events, onset_speed
                 else empty
             out[f"impact_velocity_max_{key}"] = float(np.max(v)) if v.size else empty
             out[f"contact_fraction_{key}"] = float(on[c])
-            out[f"rattle_{key}"] = float(np.sum(0.5 * speed[onset] ** 2 / c2[c]) * joule / P)
+            energy = float(np.sum(0.5 * speed[onset] ** 2 / c2[c]) * joule)
+            out[f"rattle_{key}"] = energy / P
+            out[f"rattle_power_{key}"] = energy / ((t1 - t0) * model.time_unit_s)
         else:
             out[f"unloaded_{key}"] = float(np.sum(1.0 - np.array([on[int(c)] for c in idx])))
     return out

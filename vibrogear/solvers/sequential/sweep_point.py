@@ -42,8 +42,9 @@ periods T, so its end state is again at phase 0.
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
 * **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
   (the switching function's rate where the integrator located the onset),
-  contact fractions, rattle energy, unloaded rolling elements, each with a batch-means
-  error over blocks of the record window.
+  contact fractions, rattle energy and power, unloaded rolling elements, each with a
+  batch-means error over blocks of the record window; the largest force of each mesh
+  (``max_force_<mesh>`` [N], from the record's dense samples) without one.
 * **Second tolerance** (``second_tolerance``): the record window again at rtol / 10 (atol /
   10) from the same settled state; the change of the extrema and of each metric is its
   tolerance error (``<name>_tol_err`` in the metrics).  On a periodic or quasi-periodic
@@ -168,8 +169,12 @@ def _metrics(model, param, u_rec, rec: RecordWindow, groups, R, T, n) -> dict:
     """The contact metrics of a record with their batch-means errors."""
     mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
                   model.contacts.gap_hi, model.contacts.gap_lo)
-    return metrics_with_errors(model, groups, mode0, rec.events, rec.speeds, 0.0, R * T, T,
-                               period_n=n)
+    out = metrics_with_errors(model, groups, mode0, rec.events, rec.speeds, 0.0, R * T, T,
+                              period_n=n)
+    for key, (kind, idx) in groups.items():     # the largest mesh force [N] (record_window)
+        if kind == "mesh" and rec.peak_force and int(idx[0]) in rec.peak_force:
+            out[f"max_force_{key}"] = rec.peak_force[int(idx[0])] * model.force_unit_n
+    return out
 
 
 def _group_periods(model, param, T, strob, groups, max_period, period_tol,
