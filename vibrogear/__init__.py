@@ -8,7 +8,7 @@ cheap: no numba, dolfinx or matplotlib until a run needs them)::
     run = vg.run(scene.replace({"sweep.n_points": 6}), ["sweep"])   # in memory, writes nothing
     run.results["sweep"].arrays(); run.results["sweep"].plot(); run.findings
 
-``load``, ``replace`` (a method of the scene), ``check``, ``run``, ``import_rexs`` and the
+``load``, ``replace`` (a method of the scene), ``check``, ``run``, ``import_rexs``, ``compare`` and the
 ``Run`` they return are documented in :mod:`vibrogear.api` and docs/python.md.
 """
 import os as _os
@@ -24,7 +24,8 @@ _os.environ.setdefault("OMP_NUM_THREADS", "1")
 from .version import __version__  # noqa: E402
 
 #: the public API, re-exported from vibrogear.api on first access
-_API = ("load", "run", "check", "import_rexs", "Run", "ConfigError", "NumericalFailure")
+_API = ("load", "run", "check", "import_rexs", "compare", "Run", "ConfigError",
+        "NumericalFailure")
 __all__ = ["__version__", *_API]
 
 

@@ -26,7 +26,8 @@ from typing import Any, Mapping, Sequence
 from .config import ConfigError, Scene
 from .pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
 
-__all__ = ["load", "run", "import_rexs", "check", "Run", "ConfigError", "NumericalFailure"]
+__all__ = ["load", "run", "import_rexs", "check", "compare", "Run", "ConfigError",
+           "NumericalFailure"]
 
 
 def load(path: str | Path, overrides: Mapping[str, Any] | Sequence[str] | None = None) -> Scene:
@@ -162,3 +163,20 @@ def run(scene: Scene, analyses: Sequence[str] | str | None = None, out: str | Pa
                for name, o in outcomes.items()}
     return Run(scene=scene, results=MappingProxyType(results), summary=summary, out=folder,
                outcomes=MappingProxyType(outcomes))
+
+
+def compare(run_a: "Run | str | Path", run_b: "Run | str | Path") -> dict:
+    """Two runs' findings side by side (what ``vibrogear compare`` prints): bands added,
+    removed and moved, kv peaks, rattle levels, verdicts and windows.  Each run is a
+    :class:`Run` (in memory or written) or a run folder holding ``summary.json``;
+    ValueError where one has no findings."""
+    from .analyses.compare import compare_findings, read_findings
+
+    def findings(r):
+        if isinstance(r, Run):
+            if not r.findings:
+                raise ValueError(f"{r!r}: no findings (run a sweep, map, run-up or states)")
+            return {**r.findings, "scene": r.scene.scene.name,
+                    "folder": str(r.out) if r.out is not None else "(in memory)"}
+        return read_findings(r)
+    return compare_findings(findings(run_a), findings(run_b))

@@ -276,3 +276,26 @@ def test_map_and_runup_in_memory_judge_as_their_files_do(tmp_path):
             for k in z.files:
                 if k != "wall_time":                  # the one entry that is a clock
                     np.testing.assert_array_equal(a[k], z[k], err_msg=k)
+
+
+def test_compare_of_a_run_with_itself_and_with_a_band_taken_away(in_memory):
+    """vg.compare on the same run twice: nothing added, removed or moved, every band kept;
+    on a copy of its findings without its first band (through a run folder written here):
+    exactly that band is reported removed."""
+    import copy
+    import json
+    import tempfile
+    _scene, run, _fig, _cwd, _cache = in_memory
+    bands = [b for b in run.findings["bands"] if b["severity"] != "fine"]
+    assert bands, "the short gear_pair sweep has bands to compare"
+    same = vg.compare(run, run)
+    assert not same["bands"]["added"] and not same["bands"]["removed"]
+    assert not same["bands"]["moved"] and len(same["bands"]["kept"]) == len(bands)
+    fewer = copy.deepcopy(run.summary)
+    gone = bands[0]
+    fewer["findings"]["bands"] = [b for b in fewer["findings"]["bands"] if b is not None
+                                  and b != gone]
+    with tempfile.TemporaryDirectory() as d:
+        (Path(d) / "summary.json").write_text(json.dumps(fewer, default=str))
+        diff = vg.compare(run, d)
+    assert diff["bands"]["removed"] == [gone] and not diff["bands"]["added"]
