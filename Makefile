@@ -8,7 +8,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 export XDG_CACHE_HOME ?= $(HOME)/.cache
 
 # gearbox scenes and their studies
-.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
+.PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair fva three-stage gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: nnm nnm-impact-pair
 .PHONY: states states-impact-pair bench-states bench-parallel
 .PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
@@ -70,6 +70,14 @@ single-stage: $(STAMP)
 
 gear-pair: $(STAMP)
 	$(VG) run configs/gear_pair.toml --out $(OUT)/gear_pair
+
+## real gearboxes nobody tuned for: the FVA two-stage industrial gearbox (imported from REXS)
+## and a three-stage reducer built by hand
+fva: $(STAMP)
+	$(VG) run configs/fva_two_stage.toml --out $(OUT)/fva_two_stage
+
+three-stage: $(STAMP)
+	$(VG) run configs/three_stage.toml --out $(OUT)/three_stage
 
 gearboxes: two-stage two-stage-helical single-stage gear-pair
 
