@@ -20,8 +20,8 @@ import numpy as np  # noqa: E402
 
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.models.impact_pair import impact_pair_from_config  # noqa: E402
-from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
-                                            continuation)
+from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,
+    continuation)
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate  # noqa: E402
 
 TARGET_S = 2.0

@@ -34,8 +34,8 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from vibrogear.analyses.load_scaling import load_scaling  # noqa: E402
-from vibrogear.analyses.operating_map import compute_map  # noqa: E402
+from vibrogear.analyses.map.load_scaling import load_scaling  # noqa: E402
+from vibrogear.analyses.map.map import compute_map  # noqa: E402
 from vibrogear.analyses.study import integration_options  # noqa: E402
 from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402

@@ -39,8 +39,8 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path[:0] = [str(ROOT), str(HERE)]
 
-from vibrogear.solvers.integrator.kernels import (FAST, contact_modes, project_coupling,  # noqa: E402
-                                       row_axpy, rows_project, scatter_coupling)
+from vibrogear.solvers.integrator.kernels import (FAST, contact_modes, project_coupling, row_axpy,
+    rows_project, scatter_coupling)
 
 
 @njit(cache=True, fastmath=FAST)

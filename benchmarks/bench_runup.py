@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from vibrogear.analyses import runup  # noqa: E402
+from vibrogear.analyses.runup import runup  # noqa: E402
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
 from vibrogear.pipeline.outcome import RunContext  # noqa: E402

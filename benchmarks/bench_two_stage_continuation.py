@@ -28,8 +28,8 @@ import numpy as np  # noqa: E402
 from vibrogear.solvers.periodic.starting_orbit import starting_orbit  # noqa: E402
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config.scene import load_scene  # noqa: E402
-from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,  # noqa: E402
-                                            continuation)
+from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,
+    continuation)
 
 TARGET_S = 120.0
 N_RATIO = 40

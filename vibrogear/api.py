@@ -170,7 +170,7 @@ def compare(run_a: "Run | str | Path", run_b: "Run | str | Path") -> dict:
     removed and moved, kv peaks, rattle levels, verdicts and windows.  Each run is a
     :class:`Run` (in memory or written) or a run folder holding ``summary.json``;
     ValueError where one has no findings."""
-    from .analyses.compare import compare_findings, read_findings
+    from .analyses.findings.compare import compare_findings, read_findings
 
     def findings(r):
         if isinstance(r, Run):

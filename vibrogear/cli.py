@@ -88,7 +88,7 @@ def _cache(action: str) -> int:
 
 def _compare(run_a: str, run_b: str, out: str | None) -> int:
     """``vibrogear compare``: both runs' findings on the console and in compare.html."""
-    from .analyses.compare import compare_findings, read_findings
+    from .analyses.findings.compare import compare_findings, read_findings
     from .report.compare_report import COMPARE_HTML, compare_lines, write_compare_html
     try:
         a, b = read_findings(run_a), read_findings(run_b)

@@ -201,7 +201,7 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan, outcomes=None) -
     if ctx.root:
         # what the finished results say about the speeds (also after a failure: finished
         # points are never lost)
-        from .analyses.findings import run_findings
+        from .analyses.findings.findings import run_findings
         findings = run_findings(scene, summary["results"],
                                 _in_memory_sources(scene, previous) if ctx.out is None else None,
                                 summary.get("load_path"))
@@ -224,7 +224,7 @@ def _in_memory_sources(scene: Scene, outcomes: dict) -> dict:
     rpm, erp_w, erp_db."""
     import numpy as np
 
-    from .analyses.findings import SOURCE_FILES
+    from .analyses.findings.findings import SOURCE_FILES
     found = {}
     for name, outcome in outcomes.items():
         run, result = VERBS[name].runs.get(scene.model_kind), outcome.result

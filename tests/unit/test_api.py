@@ -153,7 +153,7 @@ def test_modes_in_memory_equal_the_modes_csv(tmp_path):
 @pytest.mark.parametrize("cls, entries", [
     ("vibrogear.analyses.time_response:TimeResponseResult",
      ["delta", "(nc, n) [m]", "t_s", "[s]", "force", "[N]", "period"]),
-    ("vibrogear.analyses.sweep:SweepStudyResult",
+    ("vibrogear.analyses.sweep.sweep:SweepStudyResult",
      ["qmin", "[m", "poincare", "(N, R)", "impacts", "[1/period]", "arrays", "plot"]),
     ("vibrogear.solvers.sequential.sweep:SweepResult",
      ["param", "(N,)", "qmax", "[model length, m]", "lyapunov", "[1/model time]", "wall_time"]),
@@ -163,7 +163,7 @@ def test_modes_in_memory_equal_the_modes_csv(tmp_path):
      ["param", "(M,)", "period", "[model time units]", "u0", "(M, n)", "residual"]),
     ("vibrogear.analyses.gearbox_modes:GearboxModesResult",
      ["f_hz", "(K,) [Hz]", "zeta", "(K,) [1]", "mesh", "(M, K) [1]", "rpm_lo", "[rpm]"]),
-    ("vibrogear.analyses.states:StatesResult",
+    ("vibrogear.analyses.states.states:StatesResult",
      ["params", "(P,) [rpm or Omega]", "attractors", "fraction", "basin_fraction", "[m"]),
 ])
 def test_help_lists_the_fields_with_units_and_shapes(cls, entries):

@@ -4,7 +4,7 @@ bearings by designation (ISO 15 / ISO 355 boundary dimensions typed here: 6210 5
 count, not the housing bore's coupling-point count."""
 import pytest
 
-from vibrogear.analyses.line_sources import bearing_geometry
+from vibrogear.analyses.nvh.line_sources import bearing_geometry
 from vibrogear.config import load_scene
 
 FVA = "tests/data/rexs/FVA-Industriegetriebe_2stufig_1-4.rexs"

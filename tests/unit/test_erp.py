@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.housing_surface import (SurfaceMap, erp_db, erp_spectrum, erp_watts,
-                                                rms_velocity_field)
+from vibrogear.analyses.nvh.housing_surface import (SurfaceMap, erp_db, erp_spectrum, erp_watts,
+    rms_velocity_field)
 from vibrogear.config import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -183,7 +183,7 @@ def test_surface_map_takes_the_housing_coordinates(small_modes):
     its time unit 1/omega_ref: a housing modal rate of 1 model unit is omega_ref 1/s."""
     from types import SimpleNamespace
 
-    from vibrogear.analyses.housing_surface import surface_map
+    from vibrogear.analyses.nvh.housing_surface import surface_map
     from vibrogear.models.gearbox.synthesis import Subsystem
 
     _, hm = small_modes

@@ -16,7 +16,7 @@ import pytest
 
 from cli_cases import cases, cli_args, read_outputs
 
-from vibrogear.analyses import operating_map
+from vibrogear.analyses.map import map as operating_map
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config import load_scene

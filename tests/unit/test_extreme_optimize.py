@@ -18,7 +18,7 @@ import pytest
 
 from cli_cases import cli_args
 
-from vibrogear.analyses.optimize import F_CAP, penalised
+from vibrogear.analyses.optimize.optimize import F_CAP, penalised
 from vibrogear.cli import main
 from vibrogear.config import load_scene
 

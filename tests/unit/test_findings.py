@@ -8,7 +8,7 @@ import operator
 import numpy as np
 import pytest
 
-from vibrogear.analyses.findings import derive_findings
+from vibrogear.analyses.findings.findings import derive_findings
 from vibrogear.config import ConfigError
 from vibrogear.config.base import build
 from vibrogear.config.findings_section import FindingsConfig
@@ -328,10 +328,10 @@ def test_chaotic_evidence_in_physical_units_and_multi_frequency_band():
 
 
 def test_summary_jumps_honour_resolution_and_errors():
-    """summary.json's jumps_up / jumps_down (analyses/sweep.py) follow the same rule as the
+    """summary.json's jumps_up / jumps_down (analyses/sweep/sweep.py) follow the same rule as the
     findings' jump events: 5 nm steps on a 5 nm span are jumps only above the resolution
     and the batch-means errors."""
-    from vibrogear.analyses.sweep import jumps
+    from vibrogear.analyses.sweep.sweep import jumps
 
     p = np.arange(5) * 100.0
     q = np.array([1.49, 1.49, 1.495, 1.495, 1.49]) * 1e-6

@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from vibrogear.analyses.compare import compare_findings, read_findings
-from vibrogear.analyses.findings import derive_findings, windows
-from vibrogear.analyses.iso_resonance import iso_resonances
+from vibrogear.analyses.findings.compare import compare_findings, read_findings
+from vibrogear.analyses.findings.findings import derive_findings, windows
+from vibrogear.analyses.findings.iso_resonance import iso_resonances
 from vibrogear.analyses.mesh_loads import level_db, mesh_judgement_arrays
 from vibrogear.config.base import build
 from vibrogear.config.findings_section import FindingsConfig

@@ -245,8 +245,8 @@ def test_mode_figure_and_animation_are_written(surface, tmp_path):
 
 
 def test_operating_shape_recovers_the_harmonic():
-    from vibrogear.analyses.housing_surface import erp_spectrum
-    from vibrogear.analyses.nvh import operating_shape
+    from vibrogear.analyses.nvh.housing_surface import erp_spectrum
+    from vibrogear.analyses.nvh.nvh import operating_shape
 
     n, k = 64, 5
     t = np.arange(n) / n
@@ -352,7 +352,7 @@ def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
 def test_ods_faces_the_moving_side_and_is_written(surface, tmp_path):
     """One 'mode' whose normal displacement is 1 on the x = L face only: the drawing moves
     only that face's vertices (along +x), the camera looks at it, the files are written."""
-    from vibrogear.analyses.housing_surface import SurfaceMap
+    from vibrogear.analyses.nvh.housing_surface import SurfaceMap
     from vibrogear.report.housing_surface_plots import face_normals, ods_drawing, view_angles
     from vibrogear.report.nvh_report import write_ods
 

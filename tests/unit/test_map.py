@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.load_scaling import input_torque, load_scaling
-from vibrogear.analyses.operating_map import PARTIAL_NAME, compute_map
+from vibrogear.analyses.map.load_scaling import input_torque, load_scaling
+from vibrogear.analyses.map.map import PARTIAL_NAME, compute_map
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
@@ -82,7 +82,7 @@ def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
     assert np.array_equal(row.motion_class[per], ref.motion_class[per])
     # the largest mesh force, sampled 32 times per period: from below, within 2 %, of the
     # same period sampled 1024 times (the orbit is periodic: one period is all of it)
-    from vibrogear.analyses.operating_map import _max_mesh_force
+    from vibrogear.analyses.map.map import _max_mesh_force
     from vibrogear.solvers.sequential.motion import contact_groups
     model = ls.model_at(study.model, s)
     mesh = {"G1": contact_groups(model)["G1"][1]}

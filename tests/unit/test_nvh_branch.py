@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vibrogear.analyses import continuation, nvh
+from vibrogear.analyses import continuation
+from vibrogear.analyses.nvh import nvh
 from vibrogear.analyses.invoke import with_needs
 from vibrogear.analyses.study import build_study, integration_options
 from vibrogear.config import load_scene

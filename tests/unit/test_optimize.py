@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from vibrogear import cli
-from vibrogear.analyses.optimize_eval import reduce_values
+from vibrogear.analyses.optimize.evaluate import reduce_values
 
 ROOT = Path(__file__).resolve().parents[2]
 

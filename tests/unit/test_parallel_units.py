@@ -84,7 +84,7 @@ def _ip_scene(**states):
 
 
 def _states(tmp_path, workers):
-    from vibrogear.analyses import states
+    from vibrogear.analyses.states import states
     from vibrogear.analyses.study import build_study
     from vibrogear.pipeline.outcome import RunContext
     scene = _ip_scene(workers=workers)
@@ -130,7 +130,7 @@ def test_states_census_orbits_and_branches_are_the_same_on_one_and_four_workers(
 
 
 def test_the_sweep_reports_its_walks_and_serial_part(tmp_path):
-    from vibrogear.analyses import sweep
+    from vibrogear.analyses.sweep import sweep
     from vibrogear.analyses.study import build_study
     from vibrogear.config import scene_from_dict
     from vibrogear.pipeline.outcome import RunContext
@@ -195,8 +195,8 @@ def test_mpirun_two_ranks_share_the_orbits_and_branches_and_match_one_worker(tmp
 
 CURVES_MPI = r"""
 import json, sys
-from vibrogear.analyses.bifurcation_curves import locate_bifurcations
-from vibrogear.analyses.load_scaling import load_scaling
+from vibrogear.analyses.map.curves import locate_bifurcations
+from vibrogear.analyses.map.load_scaling import load_scaling
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.pipeline.wall_split import WallSplit
@@ -226,8 +226,8 @@ def test_mpirun_map_curves_run_their_windows_on_every_rank_and_match_one_process
     import subprocess
     import sys
     from pathlib import Path
-    from vibrogear.analyses.bifurcation_curves import locate_bifurcations
-    from vibrogear.analyses.load_scaling import load_scaling
+    from vibrogear.analyses.map.curves import locate_bifurcations
+    from vibrogear.analyses.map.load_scaling import load_scaling
     from vibrogear.analyses.study import build_study
     from vibrogear.config import load_scene
     root = Path(__file__).resolve().parents[2]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vibrogear.analyses.order_tracking import order_tracks, waterfall
+from vibrogear.analyses.runup.order_tracking import order_tracks, waterfall
 from vibrogear.cli import main
 from vibrogear.config import ConfigError
 from vibrogear.config.base import build

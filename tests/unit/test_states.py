@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from vibrogear import runner
-from vibrogear.analyses.states_cluster import cluster_point, wilson
-from vibrogear.analyses.states_starts import draw_start, start_scales
+from vibrogear.analyses.states.cluster import cluster_point, wilson
+from vibrogear.analyses.states.starts import draw_start, start_scales
 from vibrogear.cli import main
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.contact_eval import contact_kinematics
@@ -182,7 +182,7 @@ def _ip_scene(**states):
 
 
 def test_resume_reuses_settled_starts_and_more_starts_add_to_them(tmp_path):
-    from vibrogear.analyses import states
+    from vibrogear.analyses.states import states
     from vibrogear.analyses.study import build_study
     from vibrogear.pipeline.outcome import RunContext
 
@@ -201,7 +201,7 @@ def test_resume_reuses_settled_starts_and_more_starts_add_to_them(tmp_path):
 
 
 def test_the_census_does_not_depend_on_workers_or_batch(tmp_path):
-    from vibrogear.analyses import states
+    from vibrogear.analyses.states import states
     from vibrogear.analyses.study import build_study
     from vibrogear.pipeline.outcome import RunContext
 
@@ -239,7 +239,7 @@ def test_basin_tol_stops_a_speed_once_every_interval_is_narrow_enough(tmp_path):
     """One sure attractor (a clearance never reached): the Wilson interval after N starts is
     [N / (N + z^2), 1], width z^2 / (N + z^2) = 0.49, 0.32, 0.24 at N = 4, 8, 12: with
     basin_tol = 0.3 and rounds of 4 the census stops at 12 of the 40 starts."""
-    from vibrogear.analyses import states
+    from vibrogear.analyses.states import states
     from vibrogear.analyses.study import build_study
     from vibrogear.config import scene_from_dict
 

@@ -17,8 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from vibrogear.analyses.states_cluster import cluster_point, group_class
-from vibrogear.analyses.states_gaps import gap_ratio, gap_threshold, split_by_extrema
+from vibrogear.analyses.states.cluster import cluster_point, group_class
+from vibrogear.analyses.states.gaps import gap_ratio, gap_threshold, split_by_extrema
 from vibrogear.solvers.sequential.motion import (CHAOTIC, NOT_SETTLED, QUASI_PERIODIC,
                                                  batch_blocks)
 from vibrogear.solvers.sequential.sweep_point import PointRecord

@@ -12,7 +12,7 @@ from scipy.integrate import solve_ivp
 
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
-from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
+from vibrogear.analyses.sweep.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import csv_header, read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions

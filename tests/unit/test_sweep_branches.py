@@ -1,4 +1,4 @@
-"""Windows of a sweep that branches start from (analyses/sweep_branches.py), on arrays
+"""Windows of a sweep that branches start from (analyses/sweep/branches.py), on arrays
 built by hand: runs of equal period per direction, the up and down sweep on one orbit
 merged, coexisting orbits of the same period kept apart, failed points ending a run; a
 branch's value at a parameter by linear interpolation, through a fold too."""
@@ -8,7 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from vibrogear.analyses.sweep_branches import branch_value_at, on_branch, period_windows
+from vibrogear.analyses.sweep.branches import branch_value_at, on_branch, period_windows
 
 
 def _data():

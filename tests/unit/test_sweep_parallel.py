@@ -18,7 +18,7 @@ import pytest
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ReducedModel
 from vibrogear.pipeline.executors import UnitError, backend_for, run_units
-from vibrogear.analyses.sweep import PARTIAL_NAME, resumable_sweep
+from vibrogear.analyses.sweep.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
 from vibrogear.report.sweep_io import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
@@ -187,7 +187,7 @@ KILLED = """
 import sys, time
 import numpy as np
 import test_sweep_parallel as t
-from vibrogear.analyses.sweep import resumable_sweep
+from vibrogear.analyses.sweep.sweep import resumable_sweep
 seen = []
 def stall(rec):
     seen.append(rec)
@@ -241,7 +241,7 @@ MPI_SCRIPT = """
 import sys
 import numpy as np
 import test_sweep_parallel as t
-from vibrogear.analyses.sweep import resumable_sweep
+from vibrogear.analyses.sweep.sweep import resumable_sweep
 from vibrogear.report.sweep_io import write_sweep
 model = t.boom_model() if sys.argv[2] == "boom" else t.MODEL
 res, store, _ = resumable_sweep(model, t.GRID, sys.argv[1], settings=t.SETTINGS, u0=t.U0, options=t.OPTS)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from finite_differences import fd_shooting_jacobian
 
-from vibrogear.analyses.sweep import jumps
+from vibrogear.analyses.sweep.sweep import jumps
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitProblem,
                                             PseudoArclength, continuation)

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.bifurcation_curves import join_curves, locate_bifurcations
-from vibrogear.analyses.load_scaling import load_scaling
+from vibrogear.analyses.map.curves import join_curves, locate_bifurcations
+from vibrogear.analyses.map.load_scaling import load_scaling
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config import load_scene

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.runup import shaft_orders
+from vibrogear.analyses.runup.runup import shaft_orders
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate

@@ -36,7 +36,7 @@ def test_the_cusp_reference_bracket_is_a_fold_change(tmp_path):
     """The reference itself, at the example's continuation settings: folds just below the
     bracket, none just above (two continuations)."""
     from vibrogear.config import load_scene
-    from vibrogear.analyses.optimize_eval import Evaluation, evaluate
+    from vibrogear.analyses.optimize.evaluate import Evaluation, evaluate
     from vibrogear.config.optimize_section import evaluation_data
 
     scene = load_scene(ROOT / "configs" / "optimize_impact_damping.toml")

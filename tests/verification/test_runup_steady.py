@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vibrogear.analyses.runup import jump_speed, period_table
+from vibrogear.analyses.runup.runup import jump_speed, period_table
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions

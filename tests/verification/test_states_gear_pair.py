@@ -36,7 +36,7 @@ STARTS_5220 = 128
 
 
 def _census(scene_sets, out):
-    from vibrogear.analyses.states import run as states_run
+    from vibrogear.analyses.states.states import run as states_run
     from vibrogear.analyses.study import build_study
 
     scene = load_scene(ROOT / "configs" / "gear_pair.toml", scene_sets)

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from vibrogear.analyses import states
+from vibrogear.analyses.states import states
 from vibrogear.analyses.study import build_study
 from vibrogear.config import scene_from_dict
 from vibrogear.pipeline.outcome import RunContext

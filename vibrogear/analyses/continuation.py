@@ -230,7 +230,7 @@ def _from_sweep(study, sweep, res: ContinuationResult, method, options, cfg):
     windows: where each started and how each half ended)."""
     import dataclasses
 
-    from .sweep_branches import on_branch, period_windows
+    from .sweep.branches import on_branch, period_windows
 
     if sweep is None or sweep.result is None:
         return res, {"windows": [], "note": "no sweep in this run or in the output folder"}

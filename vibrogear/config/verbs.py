@@ -79,7 +79,7 @@ _VERBS = (
          command="nnm"),
     Verb("report", "work-precision study: integrator tolerance and shooting residual against run "
          "time", "report",
-         {"impact_pair": Run("impact_report:run_report", "precision_report:write",
+         {"impact_pair": Run("precision:run_report", "precision_report:write",
                              ("work_precision.csv", "work_precision.png", "shooting_precision.csv",
                               "shooting_precision.png"))}, command="report"),
     Verb("critical_damping", "bisection in zeta for the damping where the primary-resonance folds "
@@ -114,7 +114,7 @@ _VERBS = (
          {"gearbox": Run("nvh:run", "nvh_report:write", ("spectra.npz", "erp.csv", "erp.png"),
                          study=True)}, command="nvh", needs=("modes",)),
     Verb("map", "speed x load operating map (sweeps over speed at each load) with LP/PD curves", "map",
-         {"gearbox": Run("operating_map:run", "map_report:write",
+         {"gearbox": Run("map:run", "map_report:write",
                          ("map.npz", "map.csv", "map_curves.csv", "map_class.png"), study=True)},
          command="map"),
     Verb("runup", "run-up / run-down transient: envelopes, contact losses, order tracks, waterfall",

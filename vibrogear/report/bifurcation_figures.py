@@ -38,7 +38,7 @@ def draw_bifurcation(data: dict, study, path, branches: dict | None = None, *,
 
 
 def sweep_figure(result, branches=None, *, per_contact_rows: bool = False):
-    """The bifurcation diagram of a sweep (:class:`~vibrogear.analyses.sweep.SweepStudyResult`)
+    """The bifurcation diagram of a sweep (:class:`~vibrogear.analyses.sweep.sweep.SweepStudyResult`)
     as a Figure, the report's ``bifurcation.png``; ``branches``: a continuation's result to
     overlay (``bifurcation_branches.png``)."""
     study = result.study

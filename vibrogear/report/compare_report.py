@@ -1,5 +1,5 @@
 """``vibrogear compare``: the console lines and ``compare.html`` of two runs' findings
-(:func:`vibrogear.analyses.compare.compare_findings`)."""
+(:func:`vibrogear.analyses.findings.compare.compare_findings`)."""
 from __future__ import annotations
 
 import html

@@ -1,7 +1,7 @@
 """The findings as the engineer meets them: the console's last lines, the speed-band chart
 (``findings.png``) and the first section of ``report.html``.
 
-The findings themselves are derived in :mod:`vibrogear.analyses.findings`; this module only
+The findings themselves are derived in :mod:`vibrogear.analyses.findings.findings`; this module only
 writes them.
 """
 from __future__ import annotations

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analyses.operating_map import METRICS_PER_MESH, map_arrays
+from ..analyses.map.map import METRICS_PER_MESH, map_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .map_plots import write_map_figures
 

@@ -10,7 +10,7 @@ peak) and ``nvh_housing_modes.png`` (:func:`write_ods`).
 ``mesh_hz`` (P, meshes) and ``shaft_hz`` (P, shafts) for order lines; with a housing
 ``erp_w_per_bin`` (P, K), the ERP of each bin [W] (its sum over bins: ``erp_w``).
 
-The named lines (:mod:`vibrogear.analyses.line_sources`), one row per line of each point's
+The named lines (:mod:`vibrogear.analyses.nvh.line_sources`), one row per line of each point's
 spectrum (RSS over the channels) of each quantity: ``line_point`` (index into ``rpm``),
 ``line_rpm``, ``line_quantity``, ``line_freq_hz``, ``line_amp`` (leakage corrected, the
 quantity's unit), ``line_source`` (e.g. "G1 mesh 2x", "z4 relative 1x", "A front BPFO",

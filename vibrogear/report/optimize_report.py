@@ -1,4 +1,4 @@
-"""Files of ``vibrogear optimize`` (:mod:`vibrogear.analyses.optimize`).
+"""Files of ``vibrogear optimize`` (:mod:`vibrogear.analyses.optimize.optimize`).
 
 * ``optimize.csv``: every evaluation in the order the method asked for it: its number, the
   variables, the objective, each constraint's value, whether it is feasible, the penalised

@@ -1,5 +1,5 @@
 """Files and figures of the impact pair's ``report`` analysis (work-precision against the
-exact solution, :mod:`vibrogear.analyses.impact_report`).
+exact solution, :mod:`vibrogear.analyses.precision`).
 
 * ``work_precision.csv``, ``work_precision.png/.svg``: integrator error against rtol and
   work;

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analyses.runup import runup_arrays
+from ..analyses.runup.runup import runup_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .branch_io import branch_arrays
 from .figure import save_figure

@@ -35,7 +35,7 @@ import io
 import math
 from pathlib import Path
 
-from ..analyses.states_summary import states_arrays
+from ..analyses.states.summary import states_arrays
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 from .figure import save_figure
 from .states_plots import plot_danger_map
@@ -104,7 +104,7 @@ def write(scene, outcome, out, previous=None) -> dict:
 
 
 def figure(res, arrays: dict | None = None):
-    """The danger map of a census (:class:`~vibrogear.analyses.states.StatesResult`) as a
+    """The danger map of a census (:class:`~vibrogear.analyses.states.states.StatesResult`) as a
     Figure, the report's ``states.png``; ``arrays``: its :func:`states_arrays` when at hand."""
     st = res.study
     return plot_danger_map(states_arrays(res) if arrays is None else arrays,

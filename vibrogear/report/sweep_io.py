@@ -42,7 +42,7 @@
   brackets is a count, a code, a ratio or nondimensional (the impact pair's deformations).
 
 The partial file that makes a sweep resumable is the pipeline's
-(:mod:`vibrogear.pipeline.resume`, :func:`vibrogear.analyses.sweep.resumable_sweep`).
+(:mod:`vibrogear.pipeline.resume`, :func:`vibrogear.analyses.sweep.sweep.resumable_sweep`).
 
 All final files are written atomically (temporary file in the same folder + rename).
 """

@@ -27,11 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config.base import ConfigError
-from ..config.optimize_section import data_with
-from ..config.verbs import VERBS
-from ..pipeline.outcome import AnalysisOutcome, RunContext
-from .invoke import invoke, load, with_needs
+from ...config.base import ConfigError
+from ...config.optimize_section import data_with
+from ...config.verbs import VERBS
+from ...pipeline.outcome import AnalysisOutcome, RunContext
+from ..invoke import invoke, load, with_needs
 
 __all__ = ["Evaluation", "MetricError", "metric_values", "reduce_values", "scene_with", "evaluate"]
 
@@ -51,7 +51,7 @@ class Evaluation:
 
 def scene_with(base: dict, config, values: dict):
     """The scene built from ``base`` with each variable key set to ``values[key]``."""
-    from ..config.scene import scene_from_dict
+    from ...config.scene import scene_from_dict
 
     return scene_from_dict(data_with(base, {v.key: values[v.key] for v in config.variables}))
 
@@ -63,7 +63,7 @@ def _run_analyses(scene, ctx: RunContext) -> dict[str, AnalysisOutcome]:
     for name in scene.scene.analyses:
         run = VERBS[name].runs[kind]
         if run.study and study is None:
-            from .study import build_study
+            from ..study import build_study
             study = build_study(scene)
         outcomes[name] = invoke(load(f"vibrogear.analyses.{run.analysis}"),
                                 study if run.study else None, scene, ctx,
@@ -201,7 +201,7 @@ def evaluate(task: Evaluation, index: int, values: dict) -> dict:
     scratch = None if task.scratch is None else Path(task.scratch) / f"eval-{index}"
     try:
         scene = scene_with(task.base, cfg, values)
-        from ..models.validate import validate_scene
+        from ...models.validate import validate_scene
         validate_scene(scene)
         if scratch is not None:
             scratch.mkdir(parents=True, exist_ok=True)

@@ -1,5 +1,5 @@
 """Speed bands of a sweep: contact loss, rattle, double-sided impacts, bearing unloading,
-motion classes, hysteresis (:mod:`vibrogear.analyses.findings` explains the band).
+motion classes, hysteresis (:mod:`vibrogear.analyses.findings.findings` explains the band).
 
 The test of a band is evaluated per grid point and per direction on the arrays of
 ``sweep.npz`` exactly as the band states it (:func:`test_mask`); failed points
@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config.numbers import fmt, fmt_param, range_text
-from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MULTI_FREQUENCY, NOT_SETTLED,
-                                        QUASI_PERIODIC)
+from ...config.numbers import fmt, fmt_param, range_text
+from ...solvers.sequential.motion import (APERIODIC, CHAOTIC, MULTI_FREQUENCY, NOT_SETTLED,
+    QUASI_PERIODIC)
 
 __all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands", "map_bands",
            "mesh_and_bearing_names", "PARAM_UNITS"]

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..config.base import ConfigError
+from ...config.base import ConfigError
 
 __all__ = ["LoadScaling", "load_scaling", "input_torque", "motor_couplings"]
 
@@ -79,8 +79,8 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
     """The decomposition of the scene's F0 (module docstring).  ConfigError (naming
     ``gearbox.couplings``) where the scene has no motor coupling, or its twist or stiffness
     is 0 so that no load can be scaled from it."""
-    from ..models.gearbox.model import external_couplings
-    from ..models.gearbox.synthesis import PhysicalVector, modal_vector
+    from ...models.gearbox.model import external_couplings
+    from ...models.gearbox.synthesis import PhysicalVector, modal_vector
 
     motors = motor_couplings(gearbox_cfg)
     if not motors:

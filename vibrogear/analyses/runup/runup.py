@@ -7,7 +7,7 @@ speed.  Against the instantaneous speed the analysis returns, per direction:
 * per mesh period, for each mesh: the envelope (min / max of the deformation) and the
   contact losses (monitored mesh: the integrator's located events, which see between the
   samples; the other meshes: from the samples);
-* order tracks (:mod:`vibrogear.analyses.order_tracking`) of each mesh deformation: the
+* order tracks (:mod:`vibrogear.analyses.runup.order_tracking`) of each mesh deformation: the
   mesh orders (``mesh_orders`` x each mesh frequency) and 1x of every shaft, in orders of
   the driving shaft;
 * the waterfall (spectrogram) of the monitored mesh deformation.
@@ -28,13 +28,13 @@ from functools import partial
 
 import numpy as np
 
-from ..config.runup_section import MAX_RUNUP_BYTES, gearbox_orders
-from ..models.contact_law import flank
-from ..pipeline.executors import run_units
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.sequential.ramp import RampResult, SpeedProfile, ramp
+from ...config.runup_section import MAX_RUNUP_BYTES, gearbox_orders
+from ...models.contact_law import flank
+from ...pipeline.executors import run_units
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ...solvers.sequential.ramp import RampResult, SpeedProfile, ramp
 from .order_tracking import Waterfall, order_tracks, waterfall
-from .study import Study, integration_options
+from ..study import Study, integration_options
 
 __all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed",
            "run_key", "inertia_effect", "MAX_RUNUP_BYTES", "runup_arrays"]
@@ -83,7 +83,7 @@ class RunupResult:
     def plot(self):
         """The deformation envelopes of every mesh against the speed
         (``runup_envelope.png``, without the steady state overlaid) as a matplotlib Figure."""
-        from ..report.runup_plots import plot_envelopes
+        from ...report.runup_plots import plot_envelopes
         return plot_envelopes(self)
 
 

@@ -30,14 +30,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config.base import ConfigError
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..solvers.integrator.contact_eval import contact_history
-from ..solvers.integrator.integrate import integrate
-from ..solvers.sequential.spectrum import amplitude_spectrum
+from ...config.base import ConfigError
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ...solvers.integrator.contact_eval import contact_history
+from ...solvers.integrator.integrate import integrate
+from ...solvers.sequential.spectrum import amplitude_spectrum
 from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
 from .line_sources import label_points, natural_frequencies, point_summary, sweep_classes
-from .study import Study, integration_options
+from ..study import Study, integration_options
 
 __all__ = ["NvhResult", "BranchSpectra", "run", "steady_points", "order_lines",
            "branch_spectra", "operating_shape"]
@@ -63,7 +63,7 @@ class NvhResult:
     velocity_fields: dict = field(default_factory=dict)    # rpm -> (nf,) RMS v_n [m/s]
     study: Study | None = None
     branch: BranchSpectra | None = None    # spectra of the continuation's branch points
-    #: quantity -> [Lines per point]: the named spectral lines (analyses/line_sources.py)
+    #: quantity -> [Lines per point]: the named spectral lines (analyses/nvh/line_sources.py)
     lines: dict = field(default_factory=dict)
     #: evidence name -> (P,): the DTE spectrum's torus base pair and broadband measures
     evidence: dict = field(default_factory=dict)
@@ -105,8 +105,8 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
         raise ConfigError("nvh.rpm_min", "no steady points: list 'sweep' before 'nvh' in "
                           "scene.analyses (with nvh.use_sweep = true), or give the [nvh] "
                           "speed grid rpm_min / rpm_max")
-    from ..config.options import SweepOptions
-    from ..solvers.sequential.sweep import sweep
+    from ...config.options import SweepOptions
+    from ...solvers.sequential.sweep import sweep
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)
     kw = dict(settings=SweepOptions(directions=("up",), transient_periods=cfg.transient_periods,

@@ -28,13 +28,13 @@ from functools import partial
 
 import numpy as np
 
-from ..config.options import ContinuationOptions, ShootingOptions
-from ..pipeline.executors import broadcast, effective_workers, run_units
-from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
-from ..solvers.periodic.shooting import shoot
-from .states_cluster import RANGE_OVERLAP, shared_range
-from .study import integration_options
-from .sweep_branches import on_branch
+from ...config.options import ContinuationOptions, ShootingOptions
+from ...pipeline.executors import broadcast, effective_workers, run_units
+from ...solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
+from ...solvers.periodic.shooting import shoot
+from .cluster import RANGE_OVERLAP, shared_range
+from ..study import integration_options
+from ..sweep.branches import on_branch
 
 __all__ = ["refine_orbits", "continue_branches", "compare_with_sweep", "SWEEP_MATCH"]
 

@@ -27,14 +27,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.numbers import fmt, fmt_param
-from ..pipeline.files import listed_paths
+from ...config.numbers import fmt, fmt_param
+from ...pipeline.files import listed_paths
 
-from .findings_bands import Band, map_bands, sweep_bands
+from .bands import Band, map_bands, sweep_bands
 from .iso_resonance import iso_bands
-from .findings_events import (branch_events, erp_findings, resonance_events, runup_findings,
-                              states_findings)
-from .findings_text import verdict_text
+from .events import branch_events, erp_findings, resonance_events, runup_findings, states_findings
+from .text import verdict_text
 
 __all__ = ["derive_findings", "run_findings", "read_sources", "SOURCE_FILES", "Band",
            "mesh_roles", "windows", "mesh_summary"]
@@ -86,7 +85,7 @@ def run_findings(scene, results: dict, sources: dict | None = None,
     resonance = None
     if load_path is None and gearbox and getattr(scene, "gearbox", None) is not None:
         # no load path in the summary (an older run): the roles from the structure alone
-        from ..models.gearbox.load_path import mesh_roles as structural_roles
+        from ...models.gearbox.load_path import mesh_roles as structural_roles
         load_path = {"meshes": [{"name": m.name, "role": r, "static_force_N": None}
                                 for m, r in zip(scene.gearbox.meshes,
                                                 structural_roles(scene.gearbox))]}
@@ -247,7 +246,7 @@ def _grid(sources) -> np.ndarray:
 def _margin_within(band: dict, lo: float, hi: float, sources) -> float:
     """``band``'s margin over its file's points in [lo, hi] (its own margin where the file
     or the metric is not at hand)."""
-    from .findings_bands import margin_of
+    from .bands import margin_of
     arrays = (sources or {}).get(band.get("source", ""))
     if arrays is None or band["metric"] not in arrays or "param" not in arrays \
             or band["op"] in ("==", "in") or band.get("compare"):
@@ -281,7 +280,7 @@ def windows(bands: list[dict], grid, sources=None) -> list[dict]:
                 m |= (grid >= b["from"]) & (grid <= b["to"])
         return m
 
-    from .findings_bands import segments
+    from .bands import segments
     flagged = covered(("avoid", "caution"))
     fine = [{"from": float(grid[a]), "to": float(grid[b]), "status": "fine", "limits": [],
              "margin": 0.0} for a, b in segments(~flagged)]

@@ -65,7 +65,7 @@ def surface_map(gearbox) -> tuple[SurfaceMap | None, str]:
     if not hm.has_surface:
         return None, ("the housing modes carry no outer-surface data (modes read from another "
                       "program): ERP and the surface velocity are left out")
-    from ..models.gearbox.synthesis import subsystem_offsets
+    from ...models.gearbox.synthesis import subsystem_offsets
 
     subs = gearbox.subsystems
     k = next(i for i, s in enumerate(subs) if s.kind == "housing")

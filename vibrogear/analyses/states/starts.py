@@ -29,9 +29,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..models.contact_law import evaluate_set
-from ..solvers.integrator.contact_eval import contact_kinematics
-from ..solvers.linear import tangent_matrices
+from ...models.contact_law import evaluate_set
+from ...solvers.integrator.contact_eval import contact_kinematics
+from ...solvers.linear import tangent_matrices
 
 __all__ = ["StartScales", "start_scales", "draw_start", "forced_velocity"]
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 
-from ..config.numbers import fmt
+from ...config.numbers import fmt
 
 __all__ = ["iso_resonances", "iso_bands", "N_S", "N_MAIN_HI", "N_SUPER"]
 
@@ -47,7 +47,7 @@ def iso_resonances(cfg) -> dict:
     """{"meshes": [{name, z1, pinion, n_E1_pinion_rpm, n_E1_rpm (driving speed),
     main_range_rpm [lo, hi], m_red_kg, c_gamma_alpha_b_N_per_m}], "N_S": ...} of a
     :class:`~vibrogear.config.gearbox.GearboxConfig`."""
-    from ..models.gearbox.mesh_law import iso_mesh_stiffness
+    from ...models.gearbox.mesh_law import iso_mesh_stiffness
     _, gear_p = cfg.speed_ratios()
     out = []
     for i, m in enumerate(cfg.meshes):
@@ -80,7 +80,7 @@ def iso_bands(iso: dict, roles, rules, span) -> tuple[list, list[str]]:
     """A caution band per loaded mesh where the run's speed range meets its main resonance
     range (N_S < n / n_E1 <= 1.15; ``metric`` "N", source "iso6336": recompute as
     ``N_S < param / n_E1_rpm <= 1.15``), and what was checked."""
-    from .findings_bands import Band
+    from .bands import Band
     bands, names = [], []
     lo, hi = float(span[0]), float(span[1])
     for m in iso.get("meshes", []):

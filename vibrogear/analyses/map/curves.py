@@ -29,12 +29,12 @@ from functools import partial
 
 import numpy as np
 
-from ..config.options import ContinuationOptions
-from ..pipeline.executors import run_units, under_mpi
-from ..solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
-from ..solvers.periodic.starting_orbit import starting_orbit
+from ...config.options import ContinuationOptions
+from ...pipeline.executors import run_units, under_mpi
+from ...solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
+from ...solvers.periodic.starting_orbit import starting_orbit
 from .load_scaling import LoadScaling
-from .study import Study, integration_options, start_state
+from ..study import Study, integration_options, start_state
 
 __all__ = ["Curve", "LoadBifurcations", "BifurcationCurves", "locate_bifurcations",
            "join_curves", "curves_for_map", "windows_around", "LABELS"]

@@ -31,20 +31,20 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.executors import broadcast, run_units, under_mpi
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..pipeline.resume import PartialStore, fingerprint
-from ..pipeline.wall_split import WallSplit
-from ..solvers.integrator.contact_eval import contact_history
-from ..solvers.integrator.integrate import integrate
-from ..solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
-from ..status import Outcome, Status
-from ..solvers.sequential.sweep import assemble_result, sweep_units
-from ..solvers.sequential.sweep_point import run_point
+from ...pipeline.executors import broadcast, run_units, under_mpi
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ...pipeline.resume import PartialStore, fingerprint
+from ...pipeline.wall_split import WallSplit
+from ...solvers.integrator.contact_eval import contact_history
+from ...solvers.integrator.integrate import integrate
+from ...solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
+from ...status import Outcome, Status
+from ...solvers.sequential.sweep import assemble_result, sweep_units
+from ...solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
-from ..config.options import SweepOptions
-from .study import Study, integration_options, start_state
-from ..solvers.sequential.record_json import record_from_json, record_to_json
+from ...config.options import SweepOptions
+from ..study import Study, integration_options, start_state
+from ...solvers.sequential.record_json import record_from_json, record_to_json
 
 __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME",
            "grid_array", "map_arrays", "METRICS_PER_MESH"]
@@ -93,7 +93,7 @@ class OperatingMap:
     def plot(self):
         """The motion class of every point over speed and load (``map_class.png``) as a
         matplotlib Figure."""
-        from ..report.map_plots import plot_class_map
+        from ...report.map_plots import plot_class_map
         return plot_class_map(self.arrays(), title=self.study.title if self.study else "")
 
     @property
@@ -292,7 +292,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                f"{res.rows[0].message[0]}")
     curves = None
     if cfg.curves:              # collective under MPI: every rank computes windows
-        from .bifurcation_curves import curves_for_map
+        from .curves import curves_for_map
         curves = curves_for_map(study, scene, scaling, scales, split=split)
         res = dataclasses.replace(res, curves=curves)
     res = dataclasses.replace(res, load_kind=cfg.load_kind)

@@ -31,17 +31,17 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config.options import SweepOptions
-from ..pipeline.executors import broadcast, effective_workers, run_units, unit_size
-from ..pipeline.wall_split import WallSplit
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..pipeline.resume import PartialStore
-from ..solvers.sequential.motion import MOTION_LEGEND
-from ..solvers.sequential.sweep_point import PHASES, run_point
-from .states_cluster import cluster_point, interval_widths
-from .states_starts import draw_start, start_scales
-from .study import Study, integration_options
-from ..solvers.sequential.record_json import record_from_json, record_to_json
+from ...config.options import SweepOptions
+from ...pipeline.executors import broadcast, effective_workers, run_units, unit_size
+from ...pipeline.wall_split import WallSplit
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ...pipeline.resume import PartialStore
+from ...solvers.sequential.motion import MOTION_LEGEND
+from ...solvers.sequential.sweep_point import PHASES, run_point
+from .cluster import cluster_point, interval_widths
+from .starts import draw_start, start_scales
+from ..study import Study, integration_options
+from ...solvers.sequential.record_json import record_from_json, record_to_json
 
 __all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
 
@@ -94,13 +94,13 @@ class StatesResult:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays of ``states.npz``, by the same names (see the class docstring)."""
-        from .states_summary import states_arrays
+        from .summary import states_arrays
         return states_arrays(self)
 
     def plot(self):
         """The danger map (``states.png``) as a matplotlib Figure: every attractor by speed,
         marker area its basin, the sweep's path and the branches."""
-        from ..report.states_report import figure
+        from ...report.states_report import figure
         return figure(self)
 
 
@@ -229,8 +229,8 @@ SERIAL_PART = ("not shared among the workers: the start states and the resume fi
 
 
 def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
-    from .states_branches import compare_with_sweep, continue_branches, refine_orbits
-    from .states_summary import states_summary
+    from .branches import compare_with_sweep, continue_branches, refine_orbits
+    from .summary import states_summary
 
     cfg = scene.states
     model = study.model

@@ -33,10 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..solvers.sequential.spectral_lines import (CHANCE_MAX, THRESHOLD as THRESHOLD_REL,
-                                                   Source, base_pair, bearing_frequencies,
-                                                   broadband_fraction, coverage, find_lines,
-                                                   identify, spectral_flatness)
+from ...solvers.sequential.spectral_lines import (CHANCE_MAX, THRESHOLD as THRESHOLD_REL, Source,
+    base_pair, bearing_frequencies, broadband_fraction, coverage, find_lines, identify,
+    spectral_flatness)
 
 __all__ = ["gearbox_sources", "bearing_geometry", "natural_frequencies", "point_lines",
            "sweep_classes", "label_points", "sources_coverage",
@@ -186,7 +185,7 @@ def label_points(scene, rpm, f1_hz, freq_hz, amplitudes: dict, n_samples: int, c
     spectra (RSS over the channels), {evidence name: (P,) array} of the DTE spectrum, a
     summary).  ``classes``: the sweep's class per point (2 = quasi-periodic: its base pair
     is named), ``f1_hz`` (P,) the excitation, ``freq_hz`` (P, K), ``amplitudes``: quantity -> (P, channels, K)."""
-    from ..solvers.sequential.motion import QUASI_PERIODIC
+    from ...solvers.sequential.motion import QUASI_PERIODIC
 
     geom = bearing_geometry(scene)
     lines = {q: [] for q, a in amplitudes.items() if a.ndim == 3 and a.shape[1]}
@@ -226,7 +225,7 @@ def label_points(scene, rpm, f1_hz, freq_hz, amplitudes: dict, n_samples: int, c
 def point_summary(rpm, classes, evidence: dict, lines, top: int = 5) -> list[dict]:
     """Per steady point: speed, the sweep's class, the evidence and its ``top`` strongest
     DTE lines [frequency Hz, amplitude m, source] (the summary's ``points_evidence``)."""
-    from ..solvers.sequential.motion import MOTION_LEGEND
+    from ...solvers.sequential.motion import MOTION_LEGEND
 
     out = []
     for i, p in enumerate(np.atleast_1d(rpm)):

@@ -30,13 +30,13 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config.base import as_data
-from ..config.optimize_section import evaluation_data
-from ..pipeline.executors import broadcast, run_units
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
-from ..pipeline.resume import PartialStore, fingerprint
-from .optimize_eval import Evaluation, evaluate
-from .optimize_methods import BudgetSpent, Space, choose_method, search
+from ...config.base import as_data
+from ...config.optimize_section import evaluation_data
+from ...pipeline.executors import broadcast, run_units
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ...pipeline.resume import PartialStore, fingerprint
+from .evaluate import Evaluation, evaluate
+from .methods import BudgetSpent, Space, choose_method, search
 
 __all__ = ["OptimizeResult", "run", "PARTIAL_NAME", "penalised", "violation"]
 

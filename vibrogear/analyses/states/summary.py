@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from ..status import Status
-from .mesh_loads import mesh_judgement_arrays, static_mesh_forces
-from ..solvers.sequential.motion import contact_groups
+from ...status import Status
+from ..mesh_loads import mesh_judgement_arrays, static_mesh_forces
+from ...solvers.sequential.motion import contact_groups
 
 __all__ = ["states_summary", "coexisting_points", "states_arrays"]
 
@@ -94,7 +94,7 @@ def _fin(a) -> np.ndarray:
 
 
 def states_arrays(res) -> dict:
-    """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.StatesResult`
+    """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.states.StatesResult`
     (the names and units: :mod:`vibrogear.report.states_report`)."""
     atts = res.attractors
     meshes = sorted({g for a in atts for g in a.metrics})

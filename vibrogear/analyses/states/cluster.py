@@ -33,9 +33,9 @@ import numpy as np
 from scipy.stats import binomtest, ks_2samp, norm
 from scipy.stats import t as student_t
 
-from ..solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
-                                         QUASI_PERIODIC, batch_blocks)
-from .states_gaps import split_by_extrema
+from ...solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
+    QUASI_PERIODIC, batch_blocks)
+from .gaps import split_by_extrema
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",
            "non_periodic_score", "shared_range", "group_class"]

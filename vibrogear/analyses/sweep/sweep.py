@@ -16,15 +16,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
-from ..pipeline.resume import PartialStore, fingerprint
-from ..pipeline.wall_split import WallSplit
-from ..solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
-from ..status import Status
-from ..solvers.sequential.record_json import json_number as _num, record_from_json, record_to_json
-from ..solvers.sequential.sweep import SweepResult, sweep
-from ..config.options import SweepOptions
-from .study import Study, integration_options
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext, is_root_process
+from ...pipeline.resume import PartialStore, fingerprint
+from ...pipeline.wall_split import WallSplit
+from ...solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
+from ...status import Status
+from ...solvers.sequential.record_json import json_number as _num, record_from_json, record_to_json
+from ...solvers.sequential.sweep import SweepResult, sweep
+from ...config.options import SweepOptions
+from ..study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME", "motion_summary"]
 
@@ -66,7 +66,7 @@ class SweepStudyResult:
         impacts and rattle per mesh; ``branches``: a continuation's result
         (``run.results["continuation"]``) to overlay; ``per_contact_rows``: a class row per
         contact group (the scene's ``[figures] motion_rows_per_contact``)."""
-        from ..report.bifurcation_figures import sweep_figure
+        from ...report.bifurcation_figures import sweep_figure
         return sweep_figure(self, branches, per_contact_rows=per_contact_rows)
 
 
@@ -130,8 +130,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             settings=SweepOptions.of(cfg), options=opts, u0=study.start(params[0]))
     failed = int(np.sum(res.status != 0))
     if res.motion_class is not None and study.model.contacts.count:   # kv_, rattle_db_
-        from .mesh_loads import mesh_judgement_arrays, static_mesh_forces
-        from ..solvers.sequential.motion import contact_groups
+        from ..mesh_loads import mesh_judgement_arrays, static_mesh_forces
+        from ...solvers.sequential.motion import contact_groups
         res.metrics.update(mesh_judgement_arrays(res.metrics, static_mesh_forces(
             study.model, study.start(params[0]), contact_groups(study.model))))
     if failed == res.param.size:

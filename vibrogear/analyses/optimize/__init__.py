@@ -1,0 +1,26 @@
+"""The ``optimize`` wing: design optimisation over any ``--set`` key.
+
+Its public names are those of :mod:`.optimize`, imported on first use (so that importing a
+helper of the wing does not load the whole wing).  Its modules:
+
+- ``optimize``: ``vibrogear optimize SCENE``: design optimisation over the scene's ``--set``
+  keys ([optimize], :mod:`vibrogear.config.optimize_section`).
+- ``evaluate``: One evaluation of ``vibrogear optimize``: the scene with the variables set, its
+  analyses run as the runner runs them (from the verb registry, :mod:`vibrogear.config.verbs`),
+  and the objective and constraint metrics read from the returned outcomes.
+- ``methods``: The search methods of ``vibrogear optimize``, all on the unit cube u in [0, 1]^n
+  (each variable's range, or log range, mapped to [0, 1]; :class:`Space`).
+"""
+
+__all__ = ["OptimizeResult", "run", "PARTIAL_NAME", "penalised", "violation"]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        from . import optimize
+        return getattr(optimize, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -1,0 +1,30 @@
+"""The ``states`` wing: every operating state at every speed (``vibrogear states``).
+
+Its public names are those of :mod:`.states`, imported on first use (so that importing a
+helper of the wing does not load the whole wing).  Its modules:
+
+- ``states``: ``vibrogear states``: every operating state at every speed (section ``[states]``).
+- ``branches``: Orbits and branches of the census's attractors, and what the sweep saw of them.
+- ``cluster``: The settled motions of one parameter value grouped into attractors, with their
+  basins (the rule, its reasons and the evidence behind it: docs/states.md).
+- ``gaps``: A non-periodic group of census records split where its extrema fall into two clumps:
+  distinct tori whose other statistics agree within their errors still differ in where their
+  deformation turns (docs/states.md, "Grouping non-periodic motions").
+- ``starts``: The random starts of ``vibrogear states``: their scales and their reproducible
+  draw.
+- ``summary``: The ``states`` entry of ``summary.json``: what the census found, per grid value,
+  in plain records the findings engine reads.
+"""
+
+__all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
+
+
+def __getattr__(name: str):
+    if name in __all__:
+        from . import states
+        return getattr(states, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
