@@ -11,7 +11,7 @@ error stays 0.3-0.7 at every rtol), so no tolerance rule applies to them; single
 (the housing scene) stands in as the second model.  Fits log10(err) = a + p log10(rtol) over all points (least squares) and
 prints the fit, the worst ratio err / (10^a rtol^p) and the rtol the rule picks; writes
 benchmarks/results/calibrate_tolerance.json and the work-precision view of the rule,
-calibrate_tolerance.png (vibrogear.report.precision_plots.plot_accuracy_rule).
+calibrate_tolerance.png (vibrogear.report.plots.precision.plot_accuracy_rule).
 """
 from __future__ import annotations
 
@@ -102,7 +102,7 @@ def main(argv=None) -> dict:
     for acc in (1e-2, 1e-3, 1e-4, 1e-5):
         print(f"  accuracy {acc:g} -> rtol, atol = {tolerances_for(acc)}")
     from vibrogear.report.figure import save_figure
-    from vibrogear.report.precision_plots import plot_accuracy_rule
+    from vibrogear.report.plots.precision import plot_accuracy_rule
 
     pts = [{"label": f"{r['case']} {r['rpm']:.0f} rpm", "rtols": RTOLS, "errors": r["errors"],
             "steps_per_period": r["steps_per_period"]} for r in use]

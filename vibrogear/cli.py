@@ -89,7 +89,7 @@ def _cache(action: str) -> int:
 def _compare(run_a: str, run_b: str, out: str | None) -> int:
     """``vibrogear compare``: both runs' findings on the console and in compare.html."""
     from .analyses.findings.compare import compare_findings, read_findings
-    from .report.compare_report import COMPARE_HTML, compare_lines, write_compare_html
+    from .report.writers.compare import COMPARE_HTML, compare_lines, write_compare_html
     try:
         a, b = read_findings(run_a), read_findings(run_b)
     except ValueError as exc:
@@ -231,7 +231,7 @@ def _print_end(summary: dict, out: Path, quiet: bool) -> None:
         if "best" in summary["results"].get("optimize", {}):
             print(_optimize_line(summary["results"]["optimize"]))
     if findings is not None and is_root_process() and (findings["checked"] or quiet):
-        from .report.findings_report import console_lines
+        from .report.writers.findings import console_lines
         for line in console_lines(findings, f"{out}/report.html", quiet=quiet):
             print(line)
     elif not quiet:                  # nothing over speed to judge (modes, optimize, ...)

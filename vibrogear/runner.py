@@ -25,7 +25,7 @@ from .models.scene_notes import derived_lines
 from .pipeline.files import atomic_write_text, finite_json
 from .pipeline.outcome import (AnalysisOutcome, NumericalFailure, RunContext, Terminated,
                                WriteFailure, is_root_process)
-from .report.html_report import write_html_report
+from .report.page.html_report import write_html_report
 
 __all__ = ["RunContext", "ANALYSIS_TABLE", "Entry", "run_scene", "resolve", "NumericalFailure",
            "is_interrupt"]
@@ -257,13 +257,13 @@ def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
 def _write_overview(scene: Scene, out: Path, findings, failure):
     """The figures the report opens on: the speed-band chart of the findings and the
     drawing of the gearbox."""
-    from .report.findings_report import BAND_CHART, plot_band_chart
+    from .report.writers.findings import BAND_CHART, plot_band_chart
     try:
         chart = Path(out) / BAND_CHART
         if findings is None or plot_band_chart(findings, chart) is None:
             chart.unlink(missing_ok=True)        # never an old run's chart
         if scene.gearbox is not None:
-            from .report.gearbox_drawing import draw_gearbox
+            from .report.plots.gearbox_drawing import draw_gearbox
             draw_gearbox(scene, Path(out) / "gearbox.png")
     except OSError as exc:
         if failure is None:

@@ -146,7 +146,7 @@ def test_single_mode_erp_closed_form(small_modes):
 
 def test_surface_velocity_xdmf_reads_back(small_modes, tmp_path):
     import meshio
-    from vibrogear.report.nvh_report import write_surface_velocity
+    from vibrogear.report.writers.nvh import write_surface_velocity
 
     _, hm = small_modes
     rates = _harmonic_rates(hm.n_modes, 1, 1e-4, 2 * np.pi * 500.0)

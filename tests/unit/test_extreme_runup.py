@@ -17,7 +17,7 @@ from cli_cases import cases, cli_args, read_outputs
 
 from vibrogear.cli import main
 from vibrogear.config.scene import read_toml
-from vibrogear.report.optimize_report import toml_text
+from vibrogear.report.writers.optimize import toml_text
 
 GEAR_PAIR = str(Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml")
 

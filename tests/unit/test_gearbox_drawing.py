@@ -1,4 +1,4 @@
-"""The gearbox drawing (report/gearbox_drawing.py) against the scene files it draws.
+"""The gearbox drawing (report/plots/gearbox_drawing.py) against the scene files it draws.
 
 The expected sizes are read from the TOML files with tomllib, not from the config objects
 the drawing reads, and checked twice: in the layout's numbers and in the patches of the
@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from vibrogear.config.scene import load_scene
-from vibrogear.report.gearbox_drawing import draw_gearbox, figure_of, gearbox_layout
+from vibrogear.report.plots.gearbox_drawing import draw_gearbox, figure_of, gearbox_layout
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 SCENES = ("two_stage", "gear_pair", "single_stage")

@@ -1,5 +1,5 @@
-"""Shaded housing surfaces (models/housing/surface_mesh.py, report/housing_surface_plots.py,
-report/housing_animation.py) against closed forms:
+"""Shaded housing surfaces (models/housing/surface_mesh.py, report/plots/housing_surface.py,
+report/writers/housing_animation.py) against closed forms:
 
 - the drawn surface is dolfinx's boundary: on an nx x ny x nz box, tetrahedra (6 per hex,
   dolfinx's create_box) and hexahedra alike, 2 (nx ny + ny nz + nz nx) boundary quads ->
@@ -147,7 +147,8 @@ def _res(s, mode=0):
 
 def test_rigid_translation_is_coloured_uniformly(surface):
     from matplotlib import colors
-    from vibrogear.report.housing_surface_plots import _plt, draw_surface, face_normals, mode_panel_data
+    from vibrogear.report.plots.housing_surface import (_plt, draw_surface, face_normals,
+        mode_panel_data)
 
     _, s = surface
     res = _res(s)
@@ -164,7 +165,7 @@ def test_rigid_translation_is_coloured_uniformly(surface):
     ax2 = fig.add_subplot(projection="3d")
     shaded = draw_surface(ax2, res.shape_vertices, res.shape_triangles, val, displacement=disp,
                           norm=colors.Normalize(0, 1), view=view, outline=False)
-    from vibrogear.report.housing_surface_plots import camera_direction
+    from vibrogear.report.plots.housing_surface import camera_direction
 
     nrm = face_normals(res.shape_vertices + disp, res.shape_triangles)
     front = nrm @ camera_direction(*view) > 0
@@ -180,7 +181,8 @@ def test_rigid_translation_is_coloured_uniformly(surface):
 def test_projected_extent_contains_the_box(surface, normal):
     from matplotlib import colors
     from mpl_toolkits.mplot3d import proj3d
-    from vibrogear.report.housing_surface_plots import _plt, draw_surface, mode_panel_data, view_angles
+    from vibrogear.report.plots.housing_surface import (_plt, draw_surface, mode_panel_data,
+        view_angles)
 
     _, s = surface
     res = _res(s)
@@ -204,7 +206,7 @@ def test_projected_extent_contains_the_box(surface, normal):
 
 
 def test_culling_keeps_exactly_the_faces_towards_the_camera(surface):
-    from vibrogear.report.housing_surface_plots import _plt, draw_surface
+    from vibrogear.report.plots.housing_surface import _plt, draw_surface
 
     _, s = surface
     v, t = s["shape_vertices"], s["shape_triangles"]
@@ -222,8 +224,8 @@ def test_culling_keeps_exactly_the_faces_towards_the_camera(surface):
 
 def test_mode_figure_and_animation_are_written(surface, tmp_path):
     from PIL import Image
-    from vibrogear.report.housing_animation import MAX_BYTES, animate_surface
-    from vibrogear.report.housing_surface_plots import mode_panel_data, plot_mode_shapes
+    from vibrogear.report.writers.housing_animation import MAX_BYTES, animate_surface
+    from vibrogear.report.plots.housing_surface import mode_panel_data, plot_mode_shapes
 
     _, s = surface
     res = _res(s)
@@ -262,7 +264,7 @@ def test_operating_shape_recovers_the_harmonic():
 
 
 def test_vertex_normal_field_of_a_flat_plate():
-    from vibrogear.report.housing_surface_plots import vertex_normal_field
+    from vibrogear.report.plots.housing_surface import vertex_normal_field
 
     v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     t = np.array([[0, 1, 2], [0, 2, 3]])
@@ -335,7 +337,7 @@ def test_modes_writer_draws_the_shaded_shapes(small, tmp_path):
     import csv
 
     from PIL import Image
-    from vibrogear.report.housing_report import write_modes_outputs
+    from vibrogear.report.writers.housing import write_modes_outputs
 
     res, _ = small
     files = write_modes_outputs(res, tmp_path, draw=(1, 2, 3, 4, 5, 6, 7, 99))
@@ -353,8 +355,8 @@ def test_ods_faces_the_moving_side_and_is_written(surface, tmp_path):
     """One 'mode' whose normal displacement is 1 on the x = L face only: the drawing moves
     only that face's vertices (along +x), the camera looks at it, the files are written."""
     from vibrogear.analyses.nvh.housing_surface import SurfaceMap
-    from vibrogear.report.housing_surface_plots import face_normals, ods_drawing, view_angles
-    from vibrogear.report.nvh_report import write_ods
+    from vibrogear.report.plots.housing_surface import face_normals, ods_drawing, view_angles
+    from vibrogear.report.writers.nvh import write_ods
 
     _, s = surface
     v, t = s["shape_vertices"], s["shape_triangles"]

@@ -275,10 +275,10 @@ def test_results_draw_themselves_through_report():
     name = "vibrogear.analyses.time_response"
     p = _modules()[name]
     lines = _plot_method_lines(p)
-    assert lines and all(_plot_method_import(name, "vibrogear.report.time_report", n, p)
+    assert lines and all(_plot_method_import(name, "vibrogear.report.writers.time_response", n, p)
                          for n in lines)
-    assert not _plot_method_import(name, "vibrogear.report.time_report", 1, p)
-    assert not _plot_method_import("vibrogear.report.x", "vibrogear.report.time_report",
+    assert not _plot_method_import(name, "vibrogear.report.writers.time_response", 1, p)
+    assert not _plot_method_import("vibrogear.report.x", "vibrogear.report.writers.time_response",
                                    min(lines), p)
 
 

@@ -17,7 +17,7 @@ from vibrogear.analyses.invoke import with_needs
 from vibrogear.analyses.study import build_study, integration_options
 from vibrogear.config import load_scene
 from vibrogear.pipeline.outcome import RunContext
-from vibrogear.report import nvh_report
+from vibrogear.report.writers import nvh as nvh_report
 from vibrogear.solvers.integrator.contact_eval import contact_history
 from vibrogear.solvers.integrator.integrate import integrate
 

@@ -8,7 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
-from vibrogear.report.branch_plots import branch_legend, draw_branches, label_special_points
+from vibrogear.report.plots.branch import branch_legend, draw_branches, label_special_points
 from vibrogear.report.figure import mode_count_note, new_figure, plain_title, save_figure
 
 
@@ -66,7 +66,7 @@ def test_branch_legend_lists_only_what_is_drawn():
 
 
 def test_branch_figure_legend_has_no_stable_entry(tmp_path):
-    from vibrogear.report.branch_plots import plot_branches
+    from vibrogear.report.plots.branch import plot_branches
 
     arrays = _branches()
     svg = save_figure(plot_branches(arrays, title="two_stage: m = 146 (21+25+100)"),
@@ -103,7 +103,7 @@ def _sweep(n=8):
 
 
 def test_bifurcation_has_a_panel_per_mesh_and_rows_per_direction(tmp_path):
-    from vibrogear.report.sweep_plots import plot_bifurcation
+    from vibrogear.report.plots.sweep import plot_bifurcation
 
     svg = save_figure(plot_bifurcation(_sweep(), title="two_stage: m = 146 (21+25+100)"),
                       tmp_path / "b", formats=("svg",))[0].read_text()
@@ -119,7 +119,7 @@ def test_bifurcation_has_a_panel_per_mesh_and_rows_per_direction(tmp_path):
 
 
 def test_waterfall_levels_in_physical_references():
-    from vibrogear.report.nvh_plots import levels_db
+    from vibrogear.report.plots.nvh import levels_db
 
     lev, ref = levels_db([1e-6, 1e-5, 3.16227766e-8], "m")         # amplitudes: 20 log10
     assert ref == "1 \u00b5m" and lev == pytest.approx([0.0, 20.0, -30.0], abs=1e-6)
@@ -130,7 +130,7 @@ def test_waterfall_levels_in_physical_references():
 
 
 def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_path):
-    from vibrogear.report.nvh_plots import plot_waterfall, unidentified_note
+    from vibrogear.report.plots.nvh import plot_waterfall, unidentified_note
 
     kinds = np.array(["mesh", "unidentified", "unidentified", "shaft"])
     amps = np.array([4.0, 2.0, np.sqrt(5.0), 0.0])
@@ -158,7 +158,7 @@ def test_waterfall_marks_identified_lines_and_states_the_unidentified_share(tmp_
 def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
     from vibrogear.config.scene import load_scene
     from vibrogear.analyses.gearbox_modes import mesh_orders_per_rpm, resonance_crossings
-    from vibrogear.report.gearbox_plots import plot_resonance_map
+    from vibrogear.report.plots.gearbox import plot_resonance_map
     from pathlib import Path
 
     gb = load_scene(Path(__file__).resolve().parents[2] / "configs/two_stage.toml").gearbox
@@ -183,7 +183,7 @@ def test_resonance_map_draws_every_mesh_and_its_resonance_speeds(tmp_path):
 
 
 def test_captions_say_what_to_look_at_and_carry_the_mode_count():
-    from vibrogear.report.captions import CAPTIONS, caption
+    from vibrogear.report.page.captions import CAPTIONS, caption
 
     for name in ("bifurcation.png", "fig2.png", "branch_max.png", "resonance_map.png",
                  "nvh_waterfall_dte.png", "erp.png", "gearbox.png", "time_response.png"):
@@ -214,7 +214,7 @@ def _branch_result(stable):
 
 
 def test_branch_waterfall_not_drawn_for_an_orbit_unstable_everywhere(tmp_path):
-    from vibrogear.report.nvh_report import write_branch
+    from vibrogear.report.writers.nvh import write_branch
 
     scene, r = _branch_result([False] * 4)
     files = write_branch(scene, r, tmp_path, 3000.0, "two_stage")

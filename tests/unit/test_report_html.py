@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from vibrogear.cli import main
-from vibrogear.report.html_report import REPORT_NAME, render_html_report
+from vibrogear.report.page.html_report import REPORT_NAME, render_html_report
 
 ROOT = Path(__file__).resolve().parents[2]
 IMPACT_PAIR = str(ROOT / "configs" / "impact_pair.toml")

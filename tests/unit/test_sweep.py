@@ -14,7 +14,7 @@ from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.analyses.sweep.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
-from vibrogear.report.sweep_io import csv_header, read_sweep_npz, write_sweep
+from vibrogear.report.writers.sweep_files import csv_header, read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import classify_period, count_clusters, sweep
 from vibrogear.config.options import SweepOptions
@@ -259,7 +259,7 @@ def test_files_and_plot(tmp_path, hyst_result):
     from matplotlib.figure import Figure
 
     from vibrogear.report.figure import save_figure
-    from vibrogear.report.sweep_plots import plot_bifurcation
+    from vibrogear.report.plots.sweep import plot_bifurcation
 
     paths = write_sweep(hyst_result, tmp_path)
     z = read_sweep_npz(paths["npz"])

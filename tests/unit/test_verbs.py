@@ -20,7 +20,7 @@ def test_readme_verb_table_is_the_registry():
 
 
 def test_every_target_resolves_and_every_output_is_written_by_its_report_package():
-    report_src = "".join(p.read_text() for p in (ROOT / "vibrogear" / "report").glob("*.py"))
+    report_src = "".join(p.read_text() for p in (ROOT / "vibrogear" / "report").rglob("*.py"))
     for verb in VERBS.values():
         assert set(verb.models) <= set(MODEL_KINDS), verb.name
         for kind, run in verb.runs.items():

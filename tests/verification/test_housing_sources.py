@@ -274,7 +274,7 @@ def _modal_scene_text(text: str, npz: Path, cfg: HousingConfig) -> str:
 def test_modal_housing_from_exported_modes_reproduces_the_gearbox(tmp_path, cache):
     """The modes a parametric housing run exports (housing_modes.npz) read back as a modal
     housing: the same reduced gearbox model bit for bit, hence the same coupled frequencies."""
-    from vibrogear.report.housing_report import write_modes_outputs
+    from vibrogear.report.writers.housing import write_modes_outputs
     from vibrogear.models.gearbox.model import build_gearbox
 
     sets = ["gearbox.shafts.0.master_count=8", "gearbox.shafts.1.master_count=8", "housing.modes.count=10"]

@@ -27,7 +27,7 @@ from branch_orbits import extrema_error, stable_orbits_through
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config.scene import load_scene
-from vibrogear.report.fig2 import plot_fig2
+from vibrogear.report.writers.fig2 import plot_fig2
 from vibrogear.report.figure import save_figure
 
 ROOT = Path(__file__).resolve().parents[2]

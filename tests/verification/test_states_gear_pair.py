@@ -107,7 +107,7 @@ def test_coexisting_states_and_files(run, tmp_path):
     for rec in summary["per_speed"]:
         fr = [a["basin_fraction"] for a in rec["attractors"]]
         assert abs(sum(fr) - 1.0) < 1e-12 and rec["n_starts"] + rec["failed"] == STARTS
-    from vibrogear.report.states_report import write
+    from vibrogear.report.writers.states import write
     files = write(None, got, tmp_path)
     with np.load(files["npz"]) as z:
         assert z["attractor_param"].size == len(got.result.attractors)

@@ -75,7 +75,7 @@ class ContinuationStudyResult:
         ``branch_min.png``) of the monitored deformation along the branches as a matplotlib
         Figure (display units; stable solid, unstable dashed, LP / PD / NS marked);
         ``sweep``: a sweep's result (``run.results["sweep"]``) to overlay."""
-        from ..report.bifurcation_figures import branch_figure
+        from ..report.plots.bifurcation import branch_figure
         return branch_figure(self, quantity, sweep)
 
 

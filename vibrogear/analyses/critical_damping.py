@@ -69,7 +69,7 @@ class CriticalDampingResult:
 
 @dataclass(frozen=True, eq=False)
 class CriticalDampingFigures:
-    """What :mod:`vibrogear.report.critical_damping_report` draws: the bisection's result,
+    """What :mod:`vibrogear.report.writers.critical_damping` draws: the bisection's result,
     the extra fold scans between zeta_lo and the cusp, and the figure title."""
     result: CriticalDampingResult
     extra_scans: tuple
@@ -171,7 +171,7 @@ def critical_zeta(cfg_impact_pair, options: ContinuationOptions,
 def run_critical_damping(scene, ctx: RunContext) -> AnalysisOutcome:
     """Runner entry: the critical zeta and the fold curves; the summary is also written
     as ``critical_damping.json``, with ``critical_damping.png/.svg``, by
-    :mod:`vibrogear.report.critical_damping_report`."""
+    :mod:`vibrogear.report.writers.critical_damping`."""
     from .study import integration_options
 
     cfg = scene.critical_damping

@@ -22,7 +22,7 @@ __all__ = ["run", "reference_rpm", "linearisation_model", "RIGID_TOL", "GearboxM
 
 @dataclasses.dataclass(frozen=True, eq=False)
 class GearboxModesResult:
-    """What :mod:`vibrogear.report.gearbox_modes_report` writes: the elastic modes of the
+    """What :mod:`vibrogear.report.writers.gearbox_modes` writes: the elastic modes of the
     reduced model linearised at its static state, and the speed range of the resonance map.
 
     K elastic modes (rigid-body modes counted, not listed), S subsystems, M meshes.
@@ -77,7 +77,7 @@ class GearboxModesResult:
     def plot(self):
         """The resonance map (``resonance_map.png``) as a matplotlib Figure: natural
         frequencies against every mesh's orders over the speed range."""
-        from ..report.gearbox_modes_report import figure
+        from ..report.writers.gearbox_modes import figure
         return figure(self)
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
@@ -118,7 +118,7 @@ def linearisation_model(model, x0):
 def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
     """Modes of the reduced model linearised at the static state (mesh strain-energy share
     per mode, resonance speeds of the mesh orders); the files (``modes.csv``,
-    ``resonance_map.png/.svg``) are written by :mod:`vibrogear.report.gearbox_modes_report`."""
+    ``resonance_map.png/.svg``) are written by :mod:`vibrogear.report.writers.gearbox_modes`."""
     from ..solvers.linear import linear_modes
 
     gm = study.gearbox

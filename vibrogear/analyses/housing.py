@@ -1,6 +1,6 @@
 """Runner glue for housing scenes: ``modes`` (master modes + coupling values).
 
-Under ``mpirun`` every rank computes; the files (:mod:`vibrogear.report.housing_report`)
+Under ``mpirun`` every rank computes; the files (:mod:`vibrogear.report.writers.housing`)
 are written by rank 0 only.
 """
 from __future__ import annotations

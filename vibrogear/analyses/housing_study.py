@@ -4,7 +4,7 @@ P2 meshes at the configured size factors give a Richardson-extrapolated referenc
 (observed order fitted from the three finest levels); P1 and P2 runs are then placed on an
 error / DOF / wall-time chart, and the cheapest run within ``target_error`` is named.  The
 files (``housing_convergence.csv``, ``housing_error_vs_time.png``) are written by
-:mod:`vibrogear.report.housing_report`.
+:mod:`vibrogear.report.writers.housing`.
 """
 from __future__ import annotations
 

@@ -5,7 +5,7 @@ housing cache.  Every finished point is appended to ``housing_sweep_points.jsonl
 (a :class:`~vibrogear.pipeline.resume.PartialStore`), so a killed sweep resumes where it
 stopped, and only a run of the same housing, parameter, values, frequency count and version
 does (:func:`sweep_signature`); otherwise the file is set aside.  ``housing_sweep.csv`` and
-``housing_sweep.png`` are written at the end by :mod:`vibrogear.report.housing_report`
+``housing_sweep.png`` are written at the end by :mod:`vibrogear.report.writers.housing`
 (only when every point succeeded; the finished points stay in the resume file).
 """
 from __future__ import annotations

@@ -34,7 +34,7 @@ __all__ = ["NnmStudyResult", "run", "start_mode"]
 
 @dataclass(frozen=True, eq=False)
 class NnmStudyResult:
-    """What :mod:`vibrogear.report.nnm_report` writes."""
+    """What :mod:`vibrogear.report.writers.nnm` writes."""
     study: object
     branches: tuple                 # NnmBranch per start mode
     freq_scale: float               # display frequency = freq_scale * omega (model units)

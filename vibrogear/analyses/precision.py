@@ -14,7 +14,7 @@ solvers):
   Newton iterations and wall time.
 
 The files (``work_precision.csv``, ``shooting_precision.csv``, ``work_precision.png/.svg``,
-``shooting_precision.png/.svg``) are written by :mod:`vibrogear.report.precision_report`;
+``shooting_precision.png/.svg``) are written by :mod:`vibrogear.report.writers.precision`;
 the numbers are returned for ``summary.json``.
 """
 from __future__ import annotations

@@ -42,7 +42,7 @@ __all__ = ["run_reduction_accuracy", "full_linear_model", "reduced_linear_modes"
 class ReductionAccuracyResult:
     """One row (dict) per count level (``rows``) and per frequency-criterion level
     (``extra``), with the full-vs-reduced mode ``pairs``; what
-    :mod:`vibrogear.report.reduction_report` writes."""
+    :mod:`vibrogear.report.writers.reduction_accuracy` writes."""
     rows: tuple
     extra: tuple
     title: str

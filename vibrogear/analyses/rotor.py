@@ -4,7 +4,7 @@
 free, non-rotating shaft's master modes (what modal synthesis uses); ``run_campbell`` the
 Campbell diagram and critical speeds.  Their files (``modes.csv``, ``master_modes.csv/.npz``,
 ``mode_shapes.png/.svg``; ``campbell.csv``, ``critical_speeds.csv``, ``campbell.png/.svg``)
-are written by :mod:`vibrogear.report.rotor_report`.
+are written by :mod:`vibrogear.report.writers.rotor`.
 """
 from __future__ import annotations
 

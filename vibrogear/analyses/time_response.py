@@ -87,7 +87,7 @@ class TimeResponseResult:
         """The report's figure of this time response (``time_response.png``) as a
         matplotlib Figure: a gearbox's mesh deformations, phase trajectories, mesh and
         bearing forces; the impact pair's deformation and phase trajectory."""
-        from ..report.time_report import figure
+        from ..report.writers.time_response import figure
         return figure(self)
 
 

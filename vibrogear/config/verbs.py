@@ -5,9 +5,10 @@ list of analyses a scene may name (:mod:`.sections`), the runner's table of anal
 writers, the CLI's single-analysis commands and help, and the README's verb table
 (:func:`verb_table_markdown`; a test keeps the README equal to it) all read this table.
 
-Adding a verb is one analysis module (``analyses/<name>.py`` returning an ``AnalysisOutcome``),
-one report module (``report/<name>_report.py`` writing its files) and one entry here; an option
-section also needs its dataclass in :mod:`.sections` and a field of the scene
+Adding a verb is one analysis module (``analyses/<name>.py``, or a wing ``analyses/<name>/``
+whose ``__init__`` names its public functions) returning an ``AnalysisOutcome``, one report
+writer of the same name (``report/writers/<name>.py``) writing its files and one entry here; an
+option section also needs its dataclass under :mod:`.sections` and a field of the scene
 (``docs/architecture.md``, "Adding a verb").
 
 Targets are ``"module:function"`` strings relative to ``vibrogear.analyses`` and
@@ -62,73 +63,73 @@ def _both(analysis: str, report: str, outputs: tuple[str, ...]) -> dict[str, Run
 
 _VERBS = (
     Verb("time_response", "time response from the initial state", "time_response",
-         _both("time_response:run", "time_report:write",
+         _both("time_response:run", "writers.time_response:write",
                ("time_response.npz", "time_response.csv", "time_response.png")), command="time"),
     Verb("sweep", "sequential continuation (brute-force bifurcation diagram) up and down in the "
          "parameter", "sweep",
-         _both("sweep:run", "sweep_report:write", ("sweep.npz", "sweep.csv", "bifurcation.png")),
+         _both("sweep:run", "writers.sweep:write", ("sweep.npz", "sweep.csv", "bifurcation.png")),
          command="sweep"),
     Verb("continuation", "shooting + pseudo-arclength continuation of periodic orbits with Floquet "
          "stability", "continuation",
-         _both("continuation:run", "branch_report:write",
+         _both("continuation:run", "writers.continuation:write",
                ("branch.npz", "branch.csv", "branch_max.png", "branch_min.png")), command="continue",
          reads_saved=("sweep",)),
     Verb("nnm", "nonlinear normal modes: backbones of the conservative model by continuation",
-         "nnm", _both("nnm:run", "nnm_report:write",
+         "nnm", _both("nnm:run", "writers.nnm:write",
                       ("nnm.npz", "nnm.csv", "nnm_fep.png", "nnm_backbone.png")),
          command="nnm"),
     Verb("report", "work-precision study: integrator tolerance and shooting residual against run "
          "time", "report",
-         {"impact_pair": Run("precision:run_report", "precision_report:write",
+         {"impact_pair": Run("precision:run_report", "writers.precision:write",
                              ("work_precision.csv", "work_precision.png", "shooting_precision.csv",
                               "shooting_precision.png"))}, command="report"),
     Verb("critical_damping", "bisection in zeta for the damping where the primary-resonance folds "
          "meet", "critical_damping",
-         {"impact_pair": Run("critical_damping:run_critical_damping", "critical_damping_report:write",
+         {"impact_pair": Run("critical_damping:run_critical_damping", "writers.critical_damping:write",
                              ("critical_damping.json", "critical_damping.png"))}),
     Verb("modes", "modal analysis (gearbox, rotor or housing)", None,
-         {"gearbox": Run("gearbox_modes:run", "gearbox_modes_report:write",
+         {"gearbox": Run("gearbox_modes:run", "writers.gearbox_modes:write",
                          ("modes.csv", "resonance_map.png"), study=True),
-          "rotor": Run("rotor:run_modes", "rotor_report:write_modes",
+          "rotor": Run("rotor:run_modes", "writers.rotor:write_modes",
                        ("modes.csv", "master_modes.npz", "master_modes.csv")),
-          "housing": Run("housing:run_modes", "housing_report:write_modes",
+          "housing": Run("housing:run_modes", "writers.housing:write_modes",
                          ("housing_modes.npz", "modes.csv", "housing_modes.png"))}, command="modes"),
     Verb("campbell", "Campbell diagram of a rotor", None,
-         {"rotor": Run("rotor:run_campbell", "rotor_report:write_campbell",
+         {"rotor": Run("rotor:run_campbell", "writers.rotor:write_campbell",
                        ("campbell.csv", "critical_speeds.csv"))}, command="campbell"),
     Verb("housing_sweep", "housing geometry sweep: first frequencies against one housing parameter",
          "housing_sweep",
-         {"housing": Run("housing_sweep:run_sweep", "housing_report:write_sweep",
+         {"housing": Run("housing_sweep:run_sweep", "writers.housing:write_sweep",
                          ("housing_sweep.csv", "housing_sweep.png"))}),
     Verb("housing_convergence", "housing mesh convergence: frequency error vs DOF vs wall time, P1 "
          "and P2", "housing_convergence",
-         {"housing": Run("housing_study:run_convergence", "housing_report:write_convergence",
+         {"housing": Run("housing_study:run_convergence", "writers.housing:write_convergence",
                          ("housing_convergence.csv", "housing_error_vs_time.png"))}),
     Verb("reduction_accuracy", "gearbox reduction level: frequency error, MAC and response error vs "
          "run time", "reduction_accuracy",
-         {"gearbox": Run("reduction_accuracy:run_reduction_accuracy", "reduction_report:write",
+         {"gearbox": Run("reduction_accuracy:run_reduction_accuracy", "writers.reduction_accuracy:write",
                          ("reduction_levels.csv", "reduction_levels.json", "reduction_accuracy.png"),
                          study=True)}),
     Verb("nvh", "spectra of mesh deformations and forces, bearing forces; housing ERP and surface "
          "velocity", "nvh",
-         {"gearbox": Run("nvh:run", "nvh_report:write", ("spectra.npz", "erp.csv", "erp.png"),
+         {"gearbox": Run("nvh:run", "writers.nvh:write", ("spectra.npz", "erp.csv", "erp.png"),
                          study=True)}, command="nvh", needs=("modes",)),
     Verb("map", "speed x load operating map (sweeps over speed at each load) with LP/PD curves", "map",
-         {"gearbox": Run("map:run", "map_report:write",
+         {"gearbox": Run("map:run", "writers.map:write",
                          ("map.npz", "map.csv", "map_curves.csv", "map_class.png"), study=True)},
          command="map"),
     Verb("runup", "run-up / run-down transient: envelopes, contact losses, order tracks, waterfall",
          "runup",
-         {"gearbox": Run("runup:run", "runup_report:write",
+         {"gearbox": Run("runup:run", "writers.runup:write",
                          ("runup.npz", "runup.csv", "runup_envelope.png", "runup_waterfall.png"),
                          study=True)}, command="runup"),
     Verb("states", "every operating state at every speed: coexisting attractors from random "
          "starts, their basins with Wilson intervals, branches from each, the danger map", "states",
-         _both("states:run", "states_report:write", ("states.npz", "states.csv", "states.png")),
+         _both("states:run", "writers.states:write", ("states.npz", "states.csv", "states.png")),
          command="states", reads_saved=("sweep", "continuation")),
     Verb("optimize", "design optimisation: the variables (any --set key) that minimise or "
          "maximise an analysis's metric under constraints", "optimize",
-         {kind: Run("optimize:run", "optimize_report:write",
+         {kind: Run("optimize:run", "writers.optimize:write",
                     ("optimize.csv", "optimize.json", "best_scene.toml",
                      "optimize_convergence.png")) for kind in MODEL_KINDS}, command="optimize"),
 )

@@ -93,7 +93,7 @@ class OperatingMap:
     def plot(self):
         """The motion class of every point over speed and load (``map_class.png``) as a
         matplotlib Figure."""
-        from ...report.map_plots import plot_class_map
+        from ...report.plots.map import plot_class_map
         return plot_class_map(self.arrays(), title=self.study.title if self.study else "")
 
     @property
@@ -345,7 +345,7 @@ def _finite(a, fill=0.0):
 
 def map_arrays(res) -> dict:
     """The arrays of ``map.npz`` (NaN replaced) as a plain dict (their names and units:
-    :mod:`vibrogear.report.map_report`)."""
+    :mod:`vibrogear.report.writers.map`)."""
     g = res.grid
     status = g("status")
     out = dict(rpm=np.asarray(res.rpm, float), torque=np.asarray(res.torque, float),

@@ -45,7 +45,7 @@ PARTIAL_NAME = "optimize.partial.jsonl"
 
 @dataclass(frozen=True, eq=False)
 class OptimizeResult:
-    """What :mod:`vibrogear.report.optimize_report` writes: every evaluation (``history``,
+    """What :mod:`vibrogear.report.writers.optimize` writes: every evaluation (``history``,
     records in the order the method asked for them, each with ``f``, ``feasible``,
     ``evaluation``), the best one, and the evaluated scene as data (``base``)."""
     history: tuple

@@ -18,7 +18,7 @@ applied through :meth:`~vibrogear.models.gearbox.model.GearboxModel.inertia_forc
 ``<direction>_no_inertia``) and the summary compares the two (``inertia_effect``: peak
 upper envelope of the monitored mesh and its speed, with and without).
 
-The report (:mod:`vibrogear.report.runup_report`) writes ``runup.npz``, ``runup.csv`` and
+The report (:mod:`vibrogear.report.writers.runup`) writes ``runup.npz``, ``runup.csv`` and
 the figures.
 """
 from __future__ import annotations
@@ -68,7 +68,7 @@ class RunupResult:
     """A run-up / run-down: per run (direction; with the inertia torque or not) and mesh
     period the speed, the deformation envelope and contact losses of every mesh, order tracks
     and the waterfall.  :meth:`arrays`: the arrays of ``runup.npz`` (names and units:
-    :mod:`vibrogear.report.runup_report`); :meth:`plot`: the envelopes over the speed."""
+    :mod:`vibrogear.report.writers.runup`); :meth:`plot`: the envelopes over the speed."""
     study: Study
     mesh_names: tuple[str, ...]
     order_names: tuple[str, ...]
@@ -83,7 +83,7 @@ class RunupResult:
     def plot(self):
         """The deformation envelopes of every mesh against the speed
         (``runup_envelope.png``, without the steady state overlaid) as a matplotlib Figure."""
-        from ...report.runup_plots import plot_envelopes
+        from ...report.plots.runup import plot_envelopes
         return plot_envelopes(self)
 
 
@@ -296,7 +296,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
 
 
 def runup_arrays(result) -> dict:
-    """The arrays of ``runup.npz`` (their names and units: :mod:`vibrogear.report.runup_report`)."""
+    """The arrays of ``runup.npz`` (their names and units: :mod:`vibrogear.report.writers.runup`)."""
     out = {"meshes": np.array(result.mesh_names), "order_names": np.array(result.order_names),
            "orders": np.asarray(result.orders, float), "unit": np.array(result.study.monitor.unit),
            "directions": np.array(list(dict.fromkeys(r.direction for r in result.runs))),

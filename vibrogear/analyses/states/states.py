@@ -76,7 +76,7 @@ class StatesResult:
 
     :meth:`arrays`: the arrays of ``states.npz`` by the same names (``attractor_param``,
     ``attractor_qmin`` [m], ``basin_fraction`` [1], ``basin_ci_lo`` / ``_hi``, ...;
-    :mod:`vibrogear.report.states_report` lists them all); :meth:`plot`: the danger map."""
+    :mod:`vibrogear.report.writers.states` lists them all); :meth:`plot`: the danger map."""
     params: np.ndarray                 # (P,)
     attractors: tuple                  # states_cluster.Attractor, grouped by grid value
     n_starts: np.ndarray               # (P,) starts settled without failure
@@ -100,7 +100,7 @@ class StatesResult:
     def plot(self):
         """The danger map (``states.png``) as a matplotlib Figure: every attractor by speed,
         marker area its basin, the sweep's path and the branches."""
-        from ...report.states_report import figure
+        from ...report.writers.states import figure
         return figure(self)
 
 

@@ -95,7 +95,7 @@ def _fin(a) -> np.ndarray:
 
 def states_arrays(res) -> dict:
     """The arrays of ``states.npz`` from a :class:`~vibrogear.analyses.states.states.StatesResult`
-    (the names and units: :mod:`vibrogear.report.states_report`)."""
+    (the names and units: :mod:`vibrogear.report.writers.states`)."""
     atts = res.attractors
     meshes = sorted({g for a in atts for g in a.metrics})
     ci = np.array([a.ci for a in atts], dtype=float).reshape(-1, 2)

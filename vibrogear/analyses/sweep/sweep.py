@@ -66,7 +66,7 @@ class SweepStudyResult:
         impacts and rattle per mesh; ``branches``: a continuation's result
         (``run.results["continuation"]``) to overlay; ``per_contact_rows``: a class row per
         contact group (the scene's ``[figures] motion_rows_per_contact``)."""
-        from ...report.bifurcation_figures import sweep_figure
+        from ...report.plots.bifurcation import sweep_figure
         return sweep_figure(self, branches, per_contact_rows=per_contact_rows)
 
 

@@ -135,7 +135,7 @@ class SweepResult:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays ``sweep.npz`` holds, by the same names (NaN/inf replaced by 0; failed
-        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.sweep_io`
+        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.writers.sweep_files`
         describes them)."""
         ok = self.status == 0
         return dict(**self._class_arrays(),
