@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from vibrogear.config.base import build
-from vibrogear.config.rotor import RotorConfig
+from vibrogear.config.model.rotor import RotorConfig
 from vibrogear.models.rotor.model import build_rotor_model
 
 #: Friswell et al. (2010) steel: E = 211 GN/m^2, G = 81.2 GN/m^2, rho = 7810 kg/m^3

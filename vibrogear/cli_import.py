@@ -126,7 +126,7 @@ def _step_casing(housing: str | None, fixed_region: str | None, length_unit: str
     naming the flag for a missing or unreadable file, a missing or malformed
     --fixed-region, or --fixed-region without a STEP casing."""
     from .config import ConfigError
-    from .config.housing import LENGTH_UNITS, check_file
+    from .config.model.housing import LENGTH_UNITS, check_file
     from .config.rexs.mapping_casing_step import parse_fixed_region
     if housing is None or housing == "box" or Path(housing).suffix.lower() not in (".step", ".stp"):
         if fixed_region is not None:

@@ -213,7 +213,7 @@ def test_import_rexs_gives_the_scene_vibrogear_import_maps():
 
 def test_replace_refills_what_the_scene_derives_as_a_set_does():
     """single_stage with the housing's box sizes and bore positions left to the gearbox
-    (config/housing_sizing.py): a thicker wall through ``replace`` gives the scene the file
+    (config/model/housing_sizing.py): a thicker wall through ``replace`` gives the scene the file
     with that wall gives, the box grown by twice the 5 mm (margin = tip + wall + 5 mm)."""
     import copy
 

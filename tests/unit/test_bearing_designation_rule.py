@@ -27,7 +27,7 @@ import math
 
 import pytest
 
-from vibrogear.config.bearing_catalogue import boundary_dimensions, element_set
+from vibrogear.config.model.bearing_catalogue import boundary_dimensions, element_set
 from vibrogear.models.gearbox.bearing_hertz import contact_constant
 
 IN = 0.0254

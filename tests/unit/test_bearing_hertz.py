@@ -8,7 +8,7 @@ import pytest
 from scipy.special import ellipe, ellipk
 
 from vibrogear.config import ConfigError
-from vibrogear.config.bearing_catalogue import boundary_dimensions, element_set
+from vibrogear.config.model.bearing_catalogue import boundary_dimensions, element_set
 from vibrogear.models.gearbox.bearing_hertz import (PALMGREN_LINE, STEEL_E, STEEL_NU,
                                                     contact_constant, delta_star, ellipticity)
 

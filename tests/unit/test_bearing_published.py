@@ -46,7 +46,7 @@ import math
 import pytest
 from scipy.special import ellipe, ellipk
 
-from vibrogear.config.bearing_catalogue import ElementSet
+from vibrogear.config.model.bearing_catalogue import ElementSet
 from vibrogear.models.gearbox.bearing_hertz import (_approach_coefficient, ball_contact,
                                                     contact_constant, delta_star, ellipticity)
 

@@ -104,7 +104,7 @@ def test_housing_modes_entry_heals(cdir, caplog):
     pytest.importorskip("dolfinx")
     from vibrogear.config import load_scene
     from vibrogear.config.base import as_data, build
-    from vibrogear.config.housing import HousingConfig
+    from vibrogear.config.model.housing import HousingConfig
     from vibrogear.models.housing.run import housing_cache_key, housing_modes
 
     data = as_data(load_scene(ROOT / "configs" / "housing_small.toml").housing)

@@ -7,9 +7,9 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import read_toml_file
-from vibrogear.config.rotor import node_positions
+from vibrogear.config.model.rotor import node_positions
 from vibrogear.config.scene import Scene, scene_from_dict
-from vibrogear.config.shaft_mesh import MAX_ELEMENT_LENGTH
+from vibrogear.config.model.shaft_mesh import MAX_ELEMENT_LENGTH
 
 SCENE = "configs/single_stage.toml"
 EDIT = ["gearbox.gears[0].teeth=32", "gearbox.gears[1].teeth=96",

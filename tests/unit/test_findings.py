@@ -11,7 +11,7 @@ import pytest
 from vibrogear.analyses.findings.findings import derive_findings
 from vibrogear.config import ConfigError
 from vibrogear.config.base import build
-from vibrogear.config.findings_section import FindingsConfig
+from vibrogear.config.sections.findings import FindingsConfig
 from vibrogear.report.writers.findings import console_lines, plot_band_chart
 
 OPS = {">": operator.gt, ">=": operator.ge, "<": operator.lt, "<=": operator.le,

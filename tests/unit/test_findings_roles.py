@@ -15,7 +15,7 @@ from vibrogear.analyses.findings.findings import derive_findings, windows
 from vibrogear.analyses.findings.iso_resonance import iso_resonances
 from vibrogear.analyses.mesh_loads import level_db, mesh_judgement_arrays
 from vibrogear.config.base import build
-from vibrogear.config.findings_section import FindingsConfig
+from vibrogear.config.sections.findings import FindingsConfig
 from vibrogear.report.writers.compare import compare_lines, write_compare_html
 
 from test_findings import check_bands_recompute

@@ -337,7 +337,7 @@ BAD = [
     (["gearbox.gears.0.shaft=nope"], "gearbox.gears[0].shaft", "unknown shaft"),
     (["gearbox.bearings.2.shaft=nope"], "gearbox.bearings[2].shaft", "unknown shaft"),
     (["gearbox.meshes.0.gear_b=z9"], "gearbox.meshes[0].gear_b", "unknown gear"),
-    # a gear between nodes gets its node (config/gearbox.py); the mesh planes then differ
+    # a gear between nodes gets its node (config/model/gearbox.py); the mesh planes then differ
     (["gearbox.gears.1.position=0.105"], "gearbox.meshes[0].gear_b", "different planes"),
     (["gearbox.gears.1.position=0.12"], "gearbox.meshes[0].gear_b", "different planes"),
     (["gearbox.gears.0.free=true"], "gearbox.meshes[0]", "fixed gears"),

@@ -12,7 +12,7 @@ import pytest
 
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"

@@ -10,7 +10,7 @@ import pytest
 
 from vibrogear.config import load_scene
 from vibrogear.config.base import build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 from vibrogear.geometry.housing import (BASE_TAG, bore_layout, build_housing_mesh, housing_volume,
                                         read_msh_arrays)
 from pathlib import Path

@@ -14,7 +14,7 @@ from vibrogear.config.scene import load_scene
 from vibrogear.geometry.hex_grid import (HEX_FACES, axis_lines, boundary_quads, graded_fill, hex_volumes,
                                          merge_hexes, min_corner_jacobian)
 from vibrogear.geometry.housing import BASE_TAG, BORE_TAG0, bore_layout, housing_volume
-from vibrogear.config.housing_mesh import hex_blocks as _blocks
+from vibrogear.config.model.housing_mesh import hex_blocks as _blocks
 from vibrogear.geometry.housing_hex import hex_housing_arrays
 from vibrogear.models.housing.run import housing_cache_keys
 

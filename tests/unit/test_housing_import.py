@@ -14,7 +14,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 from vibrogear.geometry.housing import BoreGeometry, ring_frame
 from vibrogear.geometry.housing_import import bore_segments
 

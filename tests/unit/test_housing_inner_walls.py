@@ -12,8 +12,8 @@ import pytest
 
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import as_data, build
-from vibrogear.config.housing import HousingConfig
-from vibrogear.config.layout import bore_spans
+from vibrogear.config.model.housing import HousingConfig
+from vibrogear.config.model.layout import bore_spans
 from vibrogear.geometry.housing import bore_layout, build_housing_mesh, housing_volume, read_msh_arrays
 from mesh_measures import tet_volume, tri_area
 

@@ -15,7 +15,7 @@ import scipy.sparse.linalg as spla
 
 from vibrogear.config import load_scene
 from vibrogear.config.base import as_data, build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 from vibrogear.models.gearbox.full_linear import mac_matrix
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -20,7 +20,7 @@ import pytest
 
 from reference.timoshenko_beam import timoshenko_cantilever_f1
 from vibrogear.config import ConfigError
-from vibrogear.config.housing import MaterialConfig
+from vibrogear.config.model.housing import MaterialConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"

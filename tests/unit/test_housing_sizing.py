@@ -7,7 +7,7 @@ import pytest
 
 from vibrogear.config import ConfigError
 from vibrogear.config.base import read_toml_file
-from vibrogear.config.layout import gear_tip_radius
+from vibrogear.config.model.layout import gear_tip_radius
 from vibrogear.config.scene import Scene, scene_from_dict
 from vibrogear.models.validate import validate_scene
 

@@ -14,7 +14,7 @@ import pytest
 
 from vibrogear.config import ConfigError
 from vibrogear.config.base import build
-from vibrogear.config.housing import HOUSING_SOLVERS, HousingConfig
+from vibrogear.config.model.housing import HOUSING_SOLVERS, HousingConfig
 
 ROOT = Path(__file__).resolve().parents[2]
 SMALL = ROOT / "configs" / "housing_small.toml"

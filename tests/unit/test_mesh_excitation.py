@@ -1,4 +1,4 @@
-"""Every mesh excites at its own mesh frequency (config/gearbox.py, models/gearbox/model.py).
+"""Every mesh excites at its own mesh frequency (config/model/gearbox.py, models/gearbox/model.py).
 
 The scene: configs/gear_pair.toml (input z1 = 40 -> intermediate z2 = 80) with a second
 stage on a third shaft, z3 on the intermediate shaft -> z4 on the output shaft, no housing.

@@ -273,7 +273,7 @@ def test_box_housing_refuses_an_inner_wall_it_cannot_place(tmp_path, capsys, com
 def test_box_housing_encloses_the_shafts(tmp_path, capsys):
     """Without bearing 34 every casing bearing sits in the front or back plane: the box is
     generated, coaxial shafts 12 and 14 share one bore pair, and the scene checks (every gear
-    tip inside the cavity, every bearing at a bore: config/layout.py)."""
+    tip inside the cavity, every bearing at a bore: config/model/layout.py)."""
     root = _xml_root()
     comps, rels = root.find("components"), root.find("relations")
     comps.remove(_component(root, "34"))

@@ -13,7 +13,7 @@ from vibrogear.analyses.runup.order_tracking import order_tracks, waterfall
 from vibrogear.cli import main
 from vibrogear.config import ConfigError
 from vibrogear.config.base import build
-from vibrogear.config.runup_section import RunupConfig
+from vibrogear.config.sections.runup import RunupConfig
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp

@@ -32,7 +32,7 @@ import pytest
 from vibrogear.analyses.study import build_study
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import build
-from vibrogear.config.runup_section import RunupConfig
+from vibrogear.config.sections.runup import RunupConfig
 from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.models.gearbox.model import build_gearbox
 from vibrogear.models.reduced import Forcing

@@ -3,8 +3,8 @@ import dataclasses
 import re
 from pathlib import Path
 
-from vibrogear.config.gearbox import GearboxConfig
-from vibrogear.config.gearbox_supports import ExternalCouplingConfig, GearboxBearingConfig
+from vibrogear.config.model.gearbox import GearboxConfig
+from vibrogear.config.model.gearbox_supports import ExternalCouplingConfig, GearboxBearingConfig
 from vibrogear.config.reference import scene_reference_markdown
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-reference.md"

@@ -23,7 +23,7 @@ from vibrogear.pipeline.resume import read_items
 from vibrogear.report.writers.sweep_files import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import sweep, sweep_units
-from vibrogear.config.options import SweepOptions
+from vibrogear.config.sections.options import SweepOptions
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -116,7 +116,7 @@ def test_executor_errors_come_back_instead_of_hanging():
 
 def test_sweep_config_segments_and_workers():
     from vibrogear.config.base import ConfigError, build
-    from vibrogear.config.sections import SweepConfig
+    from vibrogear.config.sections.common import SweepConfig
 
     base = {"omega_min": 0.5, "omega_max": 1.0}
     c = build(SweepConfig, base, "sweep")

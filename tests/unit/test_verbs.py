@@ -9,7 +9,7 @@ import pytest
 
 from vibrogear import cli, runner
 from vibrogear.config import scene as scene_mod
-from vibrogear.config import sections
+from vibrogear.config.sections import common as sections
 from vibrogear.config.verbs import MODEL_KINDS, VERBS, verb_table_markdown
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from reference.timoshenko_beam import timoshenko_cantilever_f1
-from vibrogear.config.housing import MaterialConfig
+from vibrogear.config.model.housing import MaterialConfig
 from vibrogear.geometry.housing import build_beam_mesh
 from vibrogear.models.housing.fe import solve_mesh_modes
 

@@ -13,7 +13,7 @@ import pytest
 
 from vibrogear.analyses.housing_study import observed_order, richardson
 from vibrogear.config.base import build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 
 MINI = dict(length=0.10, width=0.08, height=0.08, wall_thickness=0.02, base="none",
             bores=[dict(x=0.05, z=0.045, bore_radius=0.012, boss_radius=0.02, boss_length=0.0,

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from reference.timoshenko_beam import timoshenko_cantilever_f1
-from vibrogear.config.housing import MaterialConfig
+from vibrogear.config.model.housing import MaterialConfig
 
 L, B, H = 1.0, 0.1, 0.05
 E, NU, RHO = 210e9, 0.3, 7850.0

@@ -28,7 +28,7 @@ import pytest
 
 from vibrogear.config import load_scene
 from vibrogear.config.base import as_data, build
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 from vibrogear.geometry.housing import housing_volume
 
 SMALL = Path(__file__).resolve().parents[2] / "configs" / "housing_small.toml"

@@ -14,7 +14,7 @@ import pytest
 from vibrogear.config import load_scene
 from vibrogear.config.base import build
 from vibrogear.config.base import as_data
-from vibrogear.config.housing import HousingConfig
+from vibrogear.config.model.housing import HousingConfig
 from vibrogear.geometry.housing import housing_volume
 
 ROOT = Path(__file__).resolve().parents[2]

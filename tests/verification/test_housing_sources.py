@@ -25,7 +25,7 @@ import pytest
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
 from vibrogear.config.base import as_data, build
-from vibrogear.config.housing import HousingConfig, MaterialConfig
+from vibrogear.config.model.housing import HousingConfig, MaterialConfig
 from vibrogear.geometry.housing import build_beam_mesh, housing_volume, read_msh_arrays, write_housing_step
 from vibrogear.models.housing.fe import solve_mesh_modes
 from vibrogear.models.housing.run import housing_modes

@@ -37,7 +37,7 @@ def test_the_cusp_reference_bracket_is_a_fold_change(tmp_path):
     bracket, none just above (two continuations)."""
     from vibrogear.config import load_scene
     from vibrogear.analyses.optimize.evaluate import Evaluation, evaluate
-    from vibrogear.config.optimize_section import evaluation_data
+    from vibrogear.config.sections.optimize import evaluation_data
 
     scene = load_scene(ROOT / "configs" / "optimize_impact_damping.toml")
     task = Evaluation(base=evaluation_data(scene), config=scene.optimize, scratch=str(tmp_path))

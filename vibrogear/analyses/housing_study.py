@@ -73,7 +73,7 @@ def with_mesh(cfg, *, size: float | None = None, degree: int | None = None, refi
     """A copy of the housing config with other mesh settings (validated)."""
     from ..config.base import build
     from ..config.base import as_data
-    from ..config.housing import HousingConfig
+    from ..config.model.housing import HousingConfig
 
     d = as_data(cfg)
     if size is not None:

@@ -38,7 +38,7 @@ class HousingSweepResult:
 def sweep_point(housing: dict, n_freqs: int) -> dict:
     """Worker: one sweep point from a plain housing dict (picklable)."""
     from ..config.base import build
-    from ..config.housing import HousingConfig
+    from ..config.model.housing import HousingConfig
     from ..geometry.housing import MeshingError
     from ..models.housing.fe import HousingSolveError
     from ..models.housing.run import HousingNumericalError, housing_modes

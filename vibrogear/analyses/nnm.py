@@ -3,7 +3,7 @@ pseudo-arclength continuation in energy (:mod:`vibrogear.solvers.periodic.nnm`).
 
 The conservative model (damping and harmonic excitation removed, the static load kept:
 :func:`~vibrogear.solvers.periodic.nnm_problem.conservative_model`) is linearised at its
-static equilibrium; the start mode comes from ``[nnm]`` (:mod:`vibrogear.config.nnm_section`);
+static equilibrium; the start mode comes from ``[nnm]`` (:mod:`vibrogear.config.sections.nnm`);
 its contact-switch ("onset") energy is the energy of the linear mode whose excursion first
 brings a contact to a gap, E_on = omega^2 a_on^2 / 2 with a_on = min_j |delta_j,s - g_j| /
 |c_j . phi|.  The result holds the backbone(s) in display units: the frequency (Hz for a
@@ -58,7 +58,7 @@ def _mesh_shares(model, x_s, omega, phi, contact: int) -> np.ndarray:
 
 def start_mode(cfg, study, model, x_s, omega, phi, freq_scale) -> int:
     """The elastic-mode index [nnm] asks for (module docstring of the section).  The scene's
-    validation (:meth:`~vibrogear.config.nnm_section.NnmConfig.check_model`) has checked
+    validation (:meth:`~vibrogear.config.sections.nnm.NnmConfig.check_model`) has checked
     what the config decides: ``mesh`` names a mesh, the impact pair's one mode; a gearbox's
     number of elastic modes is known only here, after the reduction."""
     if cfg.mode is not None:

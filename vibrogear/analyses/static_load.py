@@ -206,7 +206,7 @@ def rigid_housing(scene):
     reactions are the housing scene's; the share between the bearings may differ."""
     from dataclasses import replace
 
-    from ..config.layout import shaft_bore
+    from ..config.model.layout import shaft_bore
 
     if scene.housing is None:
         return scene

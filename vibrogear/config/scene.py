@@ -8,26 +8,24 @@ from typing import Any
 
 from .base import (ConfigError, ErrorList, as_data, build, parse_key, parse_override,
                    read_toml_file, set_path, spec)
-from .findings_section import FindingsConfig
-from .gearbox import GearboxConfig
-from .housing import HousingConfig, resolve_file
-from .housing_sizing import fill_housing
-from .housing_studies import HousingConvergenceConfig, HousingSweepConfig
-from .map_section import MapConfig
-from .nvh_section import NvhConfig
-from .nnm_section import NnmConfig
-from .optimize_section import OptimizeConfig
-from .options import Parameter
-from .rotor import RotorConfig
-from .runup_section import RunupConfig
-from .states_section import RpmStatesConfig, StatesConfig
+from .sections.findings import FindingsConfig
+from .model.gearbox import GearboxConfig
+from .model.housing import HousingConfig, resolve_file
+from .model.housing_sizing import fill_housing
+from .sections.housing import HousingConvergenceConfig, HousingSweepConfig
+from .sections.map import MapConfig
+from .sections.nvh import NvhConfig
+from .sections.nnm import NnmConfig
+from .sections.optimize import OptimizeConfig
+from .sections.options import Parameter
+from .model.rotor import RotorConfig
+from .sections.runup import RunupConfig
+from .sections.states import RpmStatesConfig, StatesConfig
 from .verbs import MODEL_KINDS, VERBS
-from .sections import (ContinuationConfig, CriticalDampingConfig, FiguresConfig,
-                       ImpactPairConfig,
-                       IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
-                       RpmContinuationConfig, RpmSweepConfig,
-                       RpmTimeResponseConfig, SceneInfo, ShootingOptions, SweepConfig,
-                       TimeResponseConfig)
+from .sections.common import (ContinuationConfig, CriticalDampingConfig, FiguresConfig,
+    ImpactPairConfig, IntegrationOptions, ReductionAccuracyConfig, ReportConfig,
+    RpmContinuationConfig, RpmSweepConfig, RpmTimeResponseConfig, SceneInfo, ShootingOptions,
+    SweepConfig, TimeResponseConfig)
 
 __all__ = ["Scene", "GearboxScene", "load_scene", "scene_from_dict", "read_toml", "MODEL_SECTIONS"]
 
@@ -111,7 +109,7 @@ class Scene:
         if self.states is not None:
             with errs.catch():
                 self.states.check_model(self.impact_pair, self.gearbox, "states")
-        from .layout import check_layout        # checks across sections, in one place
+        from .model.layout import check_layout        # checks across sections, in one place
         with errs.catch():
             check_layout(self)
         errs.raise_if()

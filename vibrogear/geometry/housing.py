@@ -5,11 +5,11 @@ The only module that imports gmsh (inside the functions).  The contract with the
 surface.  :func:`bore_layout` gives the bearing coupling points from the config alone (pure
 geometry, no gmsh), so the FE model and the gearbox synthesis agree on them.
 
-Coordinates: see :mod:`vibrogear.config.housing`.  Bores are ordered shaft by shaft, and per
+Coordinates: see :mod:`vibrogear.config.model.housing`.  Bores are ordered shaft by shaft, and per
 shaft wall by wall from the front wall (y = 0) to the back wall (y = width): without inner
 walls bore ``2 i`` and ``2 i + 1`` belong to ``bores[i]``; with n inner walls bore
 ``i (n + 2) + j`` (j = 0 front, 1..n the inner walls, n + 1 back), see
-:mod:`vibrogear.config.housing_walls`.
+:mod:`vibrogear.config.model.housing_walls`.
 """
 from __future__ import annotations
 
@@ -23,8 +23,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config.base import ConfigError
-from ..config.housing import HousingConfig
-from ..config.housing_walls import bore_walls
+from ..config.model.housing import HousingConfig
+from ..config.model.housing_walls import bore_walls
 from .mesh_size import _size_field, junction_curves, size_field  # noqa: F401  (housing_import, tests)
 
 __all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",

@@ -32,8 +32,8 @@ from pathlib import Path
 import numpy as np
 
 from ..config.base import ConfigError
-from ..config.housing import HousingConfig
-from ..config.housing_mesh import HexBlock, hex_blocks
+from ..config.model.housing import HousingConfig
+from ..config.model.housing_mesh import HexBlock, hex_blocks
 from .hex_grid import axis_lines, boundary_quads, merge_hexes
 from .housing import BASE_TAG, BORE_TAG0, VOLUME_TAG, HousingMesh, bore_layout
 

@@ -30,7 +30,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config.base import ConfigError
-from ..config.housing import LENGTH_UNITS, HousingConfig
+from ..config.model.housing import LENGTH_UNITS, HousingConfig
 from .housing import (BASE_TAG, BORE_TAG0, VOLUME_TAG, BoreGeometry, HousingMesh, MeshingError,
                       gmsh_session, size_field, write_msh)
 

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..config.housing import HousingConfig
+from ..config.model.housing import HousingConfig
 
 __all__ = ["size_field", "junction_curves"]
 

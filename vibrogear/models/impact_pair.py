@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.options import OMEGA
+from ..config.sections.options import OMEGA
 from .reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 
 __all__ = ["impact_pair_model"]
@@ -35,7 +35,7 @@ def impact_pair_model(zeta: float, kappa: float, f_m: float, f_p: float, b_r: fl
 
 
 def impact_pair_from_config(cfg) -> ReducedModel:
-    """Build from an :class:`~vibrogear.config.sections.ImpactPairConfig`."""
+    """Build from an :class:`~vibrogear.config.sections.common.ImpactPairConfig`."""
     return impact_pair_model(cfg.zeta, cfg.kappa, cfg.f_m, cfg.f_p, cfg.b_r, cfg.contact_damping)
 
 

@@ -6,7 +6,7 @@ given by designation, boundary dimensions or element set (with the element set a
 formula).  ``vibrogear check`` and ``vibrogear import`` print these lines."""
 from __future__ import annotations
 
-from ..config.gearbox_supports import torque_order_ratios
+from ..config.model.gearbox_supports import torque_order_ratios
 
 __all__ = ["derived_lines"]
 

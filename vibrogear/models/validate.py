@@ -1,6 +1,6 @@
 """The scene checks that need the model layer but no solve (gear-mesh geometry: shaft axes,
 mesh planes, centre distances; ISO 6336 gear data).  The config layer checks every field
-and every cross-section rule it can state alone (:mod:`vibrogear.config.layout`); this runs
+and every cross-section rule it can state alone (:mod:`vibrogear.config.model.layout`); this runs
 after it, still before anything is written (``vibrogear check`` and ``run`` call it; so does
 :func:`vibrogear.runner.run_scene`)."""
 from __future__ import annotations

@@ -4,7 +4,7 @@ speeds to avoid, derived from the files a run wrote.
 :func:`derive_findings` is a pure function of the per-point arrays of the run's files
 (``sweep.npz``, ``branch.npz``, ``erp.csv``, ``map.npz``, ``states.npz``: file name ->
 {array name -> array}), the run's summary records and the rules of ``[findings]``
-(:class:`~vibrogear.config.findings_section.FindingsConfig`).  It returns::
+(:class:`~vibrogear.config.sections.findings.FindingsConfig`).  It returns::
 
     {"verdict": str,
      "windows": [{"from", "to", "status", "limits", "margin"}],

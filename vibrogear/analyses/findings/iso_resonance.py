@@ -46,7 +46,7 @@ def _inertia(cfg, gear) -> float:
 def iso_resonances(cfg) -> dict:
     """{"meshes": [{name, z1, pinion, n_E1_pinion_rpm, n_E1_rpm (driving speed),
     main_range_rpm [lo, hi], m_red_kg, c_gamma_alpha_b_N_per_m}], "N_S": ...} of a
-    :class:`~vibrogear.config.gearbox.GearboxConfig`."""
+    :class:`~vibrogear.config.model.gearbox.GearboxConfig`."""
     from ...models.gearbox.mesh_law import iso_mesh_stiffness
     _, gear_p = cfg.speed_ratios()
     out = []

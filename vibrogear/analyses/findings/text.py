@@ -2,7 +2,7 @@
 plain words."""
 from __future__ import annotations
 
-from ...config.findings_section import PRIORITY, base_quantity, rank
+from ...config.sections.findings import PRIORITY, base_quantity, rank
 from ...config.numbers import fmt, fmt_param, merged_ranges, range_text
 
 __all__ = ["verdict_text", "ranges_text", "where_to_run"]

@@ -4,7 +4,7 @@ Its public names are those of :mod:`.optimize`, imported on first use (so that i
 helper of the wing does not load the whole wing).  Its modules:
 
 - ``optimize``: ``vibrogear optimize SCENE``: design optimisation over the scene's ``--set``
-  keys ([optimize], :mod:`vibrogear.config.optimize_section`).
+  keys ([optimize], :mod:`vibrogear.config.sections.optimize`).
 - ``evaluate``: One evaluation of ``vibrogear optimize``: the scene with the variables set, its
   analyses run as the runner runs them (from the verb registry, :mod:`vibrogear.config.verbs`),
   and the objective and constraint metrics read from the returned outcomes.

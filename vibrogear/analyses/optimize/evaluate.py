@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ...config.base import ConfigError
-from ...config.optimize_section import data_with
+from ...config.sections.optimize import data_with
 from ...config.verbs import VERBS
 from ...pipeline.outcome import AnalysisOutcome, RunContext
 from ..invoke import invoke, load, with_needs

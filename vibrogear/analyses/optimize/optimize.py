@@ -1,5 +1,5 @@
 """``vibrogear optimize SCENE``: design optimisation over the scene's ``--set`` keys ([optimize],
-:mod:`vibrogear.config.optimize_section`).
+:mod:`vibrogear.config.sections.optimize`).
 
 Each evaluation builds the scene with the variables set and runs its analyses
 (:mod:`.optimize_eval`); the search method (:mod:`.optimize_methods`) minimises the
@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ...config.base import as_data
-from ...config.optimize_section import evaluation_data
+from ...config.sections.optimize import evaluation_data
 from ...pipeline.executors import broadcast, run_units
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ...pipeline.resume import PartialStore, fingerprint

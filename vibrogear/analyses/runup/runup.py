@@ -28,7 +28,7 @@ from functools import partial
 
 import numpy as np
 
-from ...config.runup_section import MAX_RUNUP_BYTES, gearbox_orders
+from ...config.sections.runup import MAX_RUNUP_BYTES, gearbox_orders
 from ...models.contact_law import flank
 from ...pipeline.executors import run_units
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext

@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..base import ConfigError, NAME_MAX_LEN
-from ..shaft_mesh import mesh_sections
+from ..model.shaft_mesh import mesh_sections
 from .mapping_shafts import STEEL, axial_reference, diameter_at, gear_data, shafts_of
 from .reader import RexsModel, read_rexs
 

@@ -66,7 +66,7 @@ def parse_fixed_region(text: str | None, unit: float) -> dict:
 
 def _width(b) -> float | None:
     if b.get("designation"):
-        from ..bearing_catalogue import boundary_dimensions
+        from ..model.bearing_catalogue import boundary_dimensions
         return boundary_dimensions(b["designation"]).B
     return b.get("width")
 

@@ -25,8 +25,8 @@ from __future__ import annotations
 import math
 
 from ..base import ConfigError
-from ..bearing_catalogue import boundary_dimensions, element_set
-from ..housing_walls import MIN_GAP_WALLS
+from ..model.bearing_catalogue import boundary_dimensions, element_set
+from ..model.housing_walls import MIN_GAP_WALLS
 
 __all__ = ["box_housing", "box_frame", "casing_bearing_ys", "outer_diameter_and_count", "seat_diameter",
            "shafts_into_housing_frame", "STEEL", "WALL", "CLEARANCE"]

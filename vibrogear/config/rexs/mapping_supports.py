@@ -31,7 +31,7 @@ from __future__ import annotations
 import math
 
 from ..base import ConfigError
-from ..bearing_catalogue import bearing_kind, boundary_dimensions
+from ..model.bearing_catalogue import bearing_kind, boundary_dimensions
 
 __all__ = ["bearings", "loads", "analysis_sections", "COUPLING_TWIST", "CONCEPT_STIFFNESS",
            "AXIAL_STIFFNESS", "PLACEHOLDER_STIFFNESS"]

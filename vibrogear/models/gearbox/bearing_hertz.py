@@ -3,7 +3,7 @@
 The contact law of a rolling element is Q = K delta^p (``models/contact_law.py``), Q the
 element's radial force [N], delta its radial compression [m], p = 3/2 for balls (point
 contact) and 10/9 for rollers (line contact).  K [N/m^p] follows from the element set
-(:class:`vibrogear.config.bearing_catalogue.ElementSet`) by the standard formulas of
+(:class:`vibrogear.config.model.bearing_catalogue.ElementSet`) by the standard formulas of
 T. A. Harris, *Rolling Bearing Analysis* (ch. "Contact stress and deformation" and
 "Distributed loads and deflections"):
 
@@ -101,7 +101,7 @@ class HertzConstant:
 
 def contact_constant(es, E_mod: float = STEEL_E, nu: float = STEEL_NU) -> HertzConstant:
     """The radial contact constant of one element of the element set ``es`` (an
-    :class:`~vibrogear.config.bearing_catalogue.ElementSet`, SI units)."""
+    :class:`~vibrogear.config.model.bearing_catalogue.ElementSet`, SI units)."""
     cos_a = math.cos(math.radians(es.contact_angle))
     if es.kind == "ball":
         si, Fi, so, Fo = ball_contact(es.element_diameter, es.pitch_diameter, es.contact_angle,

@@ -38,10 +38,10 @@ from fractions import Fraction
 import numpy as np
 
 from ...config.base import ConfigError
-from ...config.gearbox_supports import torque_order_ratios
-from ...config.layout import shaft_bore
-from ...config.options import RPM as RPM_PARAMETER
-from ...config.rotor import FreeGearConfig, DiscConfig, RotorConfig
+from ...config.model.gearbox_supports import torque_order_ratios
+from ...config.model.layout import shaft_bore
+from ...config.sections.options import RPM as RPM_PARAMETER
+from ...config.model.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
 from .supports import bearings as _bearings, gravity_load, housing_to_rotor
 from .iso6336 import involute, inverse_involute

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...config.housing import MaterialConfig
+from ...config.model.housing import MaterialConfig
 from ...geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
 from ...geometry.housing_hex import read_hex_mesh
 from .fe_eigen import HousingSolveError, _eigensolve, _matmul

@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from ...config.base import ConfigError
-from ...config.housing import LENGTH_UNITS, HousingConfig
+from ...config.model.housing import LENGTH_UNITS, HousingConfig
 from ...geometry.housing import ring_frame
 from ...geometry.housing_import import bore_segments, segment_bores
 from .result import HousingModes

@@ -22,7 +22,7 @@ from typing import Mapping
 
 import numpy as np
 
-from ...config.housing import HousingConfig
+from ...config.model.housing import HousingConfig
 from ...geometry.housing import HousingMesh
 from ...geometry.housing_import import build_mesh, mesh_bores, mesh_info
 from ...cache import cache_key, discard_entry, entry_dir, new_workspace, open_entry, publish_entry

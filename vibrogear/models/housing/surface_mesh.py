@@ -123,7 +123,7 @@ def wall_planes(verts: np.ndarray, tris: np.ndarray, tags: np.ndarray) -> np.nda
 
 def inner_wall_planes(bores) -> list[float]:
     """Middle plane y of each inner wall (1, 2, ...), from the bores named ``<name>/inner<k>``
-    (:mod:`vibrogear.config.housing_walls`); [] for a housing without inner walls."""
+    (:mod:`vibrogear.config.model.housing_walls`); [] for a housing without inner walls."""
     planes: dict[int, float] = {}
     for b in bores:
         m = re.search(r"/inner(\d+)$", getattr(b, "name", "") or "")

@@ -1,6 +1,6 @@
 """Rotor FE model: a rotating Timoshenko shaft with discs, free gears and bearings.
 
-:func:`build_rotor_model` turns a :class:`~vibrogear.config.rotor.RotorConfig` into a frozen
+:func:`build_rotor_model` turns a :class:`~vibrogear.config.model.rotor.RotorConfig` into a frozen
 :class:`RotorModel` holding the sparse matrices of paper eq. (2),
 ``M q'' + (B + w G) q' + (K + w C) q = f``, with ``w`` the shaft spin speed [rad/s].
 
@@ -22,7 +22,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ...config.rotor import RotorConfig, node_positions
+from ...config.model.rotor import RotorConfig, node_positions
 from .elements import (DOF_NAMES, PHI, PSI, THETA, U, V, W, disc_inertia_from_geometry,
                              shaft_element_matrices)
 

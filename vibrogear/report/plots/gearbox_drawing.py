@@ -1,7 +1,7 @@
 """A to-scale drawing of a gearbox scene: ``gearbox.png`` (side view and end view, in mm).
 
-Read from the scene's configuration alone (:mod:`vibrogear.config.gearbox`,
-:mod:`vibrogear.config.housing`), nothing computed:
+Read from the scene's configuration alone (:mod:`vibrogear.config.model.gearbox`,
+:mod:`vibrogear.config.model.housing`), nothing computed:
 
 * **side view** (left): the shafts' axes run left to right (housing y, the front wall at
   y = 0); the vertical axis is the housing coordinate across the shafts in which their axes

@@ -9,7 +9,7 @@ from __future__ import annotations
 import html
 from pathlib import Path
 
-from ...config.findings_section import base_quantity, rank
+from ...config.sections.findings import base_quantity, rank
 from ...config.numbers import fmt, fmt_param, merged_ranges, range_text
 
 __all__ = ["console_lines", "plot_band_chart", "findings_html", "BAND_CHART"]

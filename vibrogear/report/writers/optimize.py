@@ -17,7 +17,7 @@ import math
 import re
 from pathlib import Path
 
-from ...config.optimize_section import data_with
+from ...config.sections.optimize import data_with
 from ...pipeline.files import atomic_write_csv, atomic_write_text, finite_json
 from ..figure import save_figure
 from ..plots.optimize import plot_convergence, plot_landscape

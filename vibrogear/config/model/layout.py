@@ -2,17 +2,17 @@
 ``[housing]`` and the analysis options, run by :meth:`Scene.validate` (so ``vibrogear
 check`` reports them before any output exists).
 
-Housing frame as in :mod:`vibrogear.config.housing`: the box is ``0..length`` (x),
+Housing frame as in :mod:`vibrogear.config.model.housing`: the box is ``0..length`` (x),
 ``0..width`` (y, along the shafts), ``0..height`` (z); the cavity is the box less one wall
 thickness on every side.  A bore pair's front bore spans ``y = -boss_length .. wall`` and
 its back bore ``y = width - wall .. width + boss_length``; an inner wall's bore spans the
-wall (:mod:`~vibrogear.config.housing_walls`).
+wall (:mod:`~vibrogear.config.model.housing_walls`).
 """
 from __future__ import annotations
 
 import math
 
-from .base import ConfigError, ErrorList
+from ..base import ConfigError, ErrorList
 from .housing_walls import bore_walls
 
 __all__ = ["shaft_bore", "check_layout", "check_centre_distances", "working_centre_distance", "bore_spans", "gear_tip_radius", "time_response_bytes",
@@ -26,7 +26,7 @@ MAX_TIME_RESPONSE_BYTES = 4 * 2**30
 
 def bore_spans(housing, bore) -> dict[str, tuple[float, float]]:
     """The housing-frame y range of each bore of ``bore``: front, inner walls, back
-    (:func:`~vibrogear.config.housing_walls.bore_walls`)."""
+    (:func:`~vibrogear.config.model.housing_walls.bore_walls`)."""
     return {side: span for side, span, _, _ in bore_walls(housing, bore)}
 
 

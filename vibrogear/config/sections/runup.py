@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 
 __all__ = ["RunupConfig", "MAX_RUNUP_BYTES", "gearbox_orders"]
 

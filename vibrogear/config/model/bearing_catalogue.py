@@ -33,7 +33,7 @@ import math
 import re
 from dataclasses import dataclass
 
-from .base import ConfigError
+from ..base import ConfigError
 
 __all__ = ["BoundaryDimensions", "ElementSet", "boundary_dimensions", "element_set",
            "bearing_kind", "CONRAD_FILL_DEG", "SERIES"]

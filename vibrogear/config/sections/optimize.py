@@ -18,7 +18,7 @@ import copy
 import math
 from dataclasses import dataclass
 
-from .base import ConfigError, as_data, parse_override, set_path, spec
+from ..base import ConfigError, as_data, parse_override, set_path, spec
 
 __all__ = ["OptimizeConfig", "OptimizeVariable", "OptimizeObjective", "OptimizeConstraint",
            "METHODS", "REDUCTIONS", "evaluation_data", "data_with"]
@@ -138,7 +138,7 @@ class OptimizeConfig:
                               "the objective and every constraint read variables; name the "
                               "analysis of a metric (objective.analysis, a constraint's "
                               "analysis) or give analyses")
-        from .verbs import VERBS
+        from ..verbs import VERBS
         for i, a in enumerate(self.evaluated_analyses()):
             if a not in VERBS or a == "optimize":
                 where = f"analyses[{i}]" if self.analyses else "objective.analysis"

@@ -3,7 +3,7 @@ model declares.
 
 These frozen dataclasses live in the config layer (the lowest one) so that a scene section
 *is* the solver's options object ([integration], [shooting]) or builds it
-(:meth:`~vibrogear.config.sections.ContinuationSettings.options`), while the solvers
+(:meth:`~vibrogear.config.sections.common.ContinuationSettings.options`), while the solvers
 import them from here (``vibrogear.solvers.integrator.integrate.IntegrationOptions`` is this class).
 Their ranges are the :func:`~vibrogear.config.base.spec` metadata of the fields: ``build``
 checks them while reading a scene (naming the field path), and ``__post_init__`` checks the
@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from .base import ConfigError, check, spec
+from ..base import ConfigError, check, spec
 
 __all__ = ["Parameter", "OMEGA", "RPM", "IntegrationOptions", "ShootingOptions",
            "SweepOptions", "ContinuationSteps", "ContinuationOptions", "NnmSteps", "NnmMethod",
@@ -202,7 +202,7 @@ class ContinuationOptions(ContinuationSteps):
 @dataclass(frozen=True, kw_only=True)
 class NnmSteps:
     """Steps, limits and labels of the NNM continuation in energy (shared by ``[nnm]``,
-    :class:`~vibrogear.config.nnm_section.NnmConfig`, and the solver's
+    :class:`~vibrogear.config.sections.nnm.NnmConfig`, and the solver's
     :class:`NnmMethod`, so that their rules are written once).  The steps are relative:
     times the orbit's distance from the static state in state space."""
     ds: float = spec(0.05, gt=0.0, le=10.0, doc="first relative step")
@@ -234,7 +234,7 @@ class NnmMethod(NnmSteps):
     """The settings of :func:`vibrogear.solvers.periodic.nnm.nnm_branch`: the steps
     (:class:`NnmSteps`), the energy range in model units, the integrator's options, the
     periodicity tolerance and the corrector's limits.  ``[nnm]`` builds it
-    (:meth:`~vibrogear.config.nnm_section.NnmConfig.method`)."""
+    (:meth:`~vibrogear.config.sections.nnm.NnmConfig.method`)."""
     energy_min: float
     energy_max: float
     integration: IntegrationOptions = IntegrationOptions(rtol=1e-10, atol=1e-12)

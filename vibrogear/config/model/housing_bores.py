@@ -7,7 +7,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 
 __all__ = ["BoreConfig", "FixedRegionConfig"]
 

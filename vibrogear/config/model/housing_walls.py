@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 
-from .base import ConfigError
+from ..base import ConfigError
 
 __all__ = ["bore_walls", "check_inner_walls", "check_wall_counts", "MIN_GAP_WALLS"]
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import ClassVar
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 from .options import OMEGA, RPM, SweepOptions, check_range
 
 __all__ = ["StatesSettings", "StatesConfig", "RpmStatesConfig"]
@@ -97,7 +97,7 @@ class StatesSettings(SweepOptions):
 
 
 def _with_parameter(parameter, name: str):
-    from .sections import with_parameter
+    from .common import with_parameter
     return with_parameter(StatesSettings, parameter, name)
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 
 __all__ = ["HousingMeshConfig", "ELEMENTS", "MAX_SIZE_PER_WALL", "DEFAULT_SIZE_PER_WALL",
            "HEX_SIZE_GRADIENT", "HEX_DEFAULT_PER_WALL", "HexMeshRule", "hex_rule", "HexBlock", "hex_blocks"]

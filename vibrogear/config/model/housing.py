@@ -13,7 +13,7 @@ Parametric coordinates (metres): the box occupies ``0 <= x <= length``, ``0 <= y
 walls normal to y (the *front* wall at y = 0 and the *back* wall at y = width), with the shaft
 axis parallel to y at (x, z).  Bosses protrude ``boss_length`` outwards from the wall.
 ``inner_walls`` adds walls parallel to those, each shaft axis bored through every wall
-(:mod:`vibrogear.config.housing_walls`: their rules and the bores' numbering).
+(:mod:`vibrogear.config.model.housing_walls`: their rules and the bores' numbering).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 from .housing_bores import BoreConfig, FixedRegionConfig
 from .housing_walls import check_inner_walls, check_wall_counts
 from .housing_mesh import (DEFAULT_SIZE_PER_WALL, ELEMENTS, MAX_SIZE_PER_WALL, HexMeshRule,

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass
 
-from .base import spec
+from ..base import spec
 
 __all__ = ["FindingsConfig", "SEVERITIES", "PRIORITY", "base_quantity", "rank"]
 

@@ -52,7 +52,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 
 __all__ = ["MaterialConfig", "ShaftSectionConfig", "DiscConfig", "FreeGearConfig",
            "BearingConfig", "RotorModesConfig", "CampbellConfig", "RotorConfig",

@@ -7,7 +7,7 @@ import math
 from dataclasses import dataclass
 from fractions import Fraction
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 from .bearing_catalogue import ElementSet, boundary_dimensions, element_set
 
 __all__ = ["GearboxBearingConfig", "ExternalCouplingConfig", "BEARING_EXPONENTS",

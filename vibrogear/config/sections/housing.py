@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
-from .housing import HousingConfig
+from ..base import ConfigError, spec
+from ..model.housing import HousingConfig
 
 __all__ = ["HousingSweepConfig", "HousingConvergenceConfig"]
 
@@ -37,7 +37,7 @@ class HousingSweepConfig:
 
     def housing_points(self, housing: HousingConfig, path: str = "housing_sweep") -> tuple[HousingConfig, ...]:
         """The validated housing of each sweep point (ConfigError names the point and field)."""
-        from .base import as_data, build, set_path
+        from ..base import as_data, build, set_path
 
         keys = self.parameter.split(".")[1:]
         base = as_data(housing)

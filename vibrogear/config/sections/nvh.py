@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .base import ConfigError, spec
+from ..base import ConfigError, spec
 from .options import check_range
 
 __all__ = ["NvhConfig"]
