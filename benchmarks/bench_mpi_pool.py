@@ -2,7 +2,7 @@
 and mpi_peers.py) against ``mpi4py.futures.MPIPoolExecutor`` (Debian's python3-mpi4py), on
 the same work: the gear pair's sweep units (configs/gear_pair.toml, ``--points`` speeds per
 direction in ``--segments`` pieces, both directions), the very function the sweep hands to
-its pool (solvers/sequential/sweep.py ``_walk_unit``).
+its pool (solvers/sequential/sweep.py ``walk_unit``).
 
 Three ways, each started by ``mpirun`` in its own job, interleaved in every repeat so that
 they see the same load:
@@ -76,7 +76,7 @@ def _setup(points: int, segments: int):
     from vibrogear.analyses.study import build_study, integration_options
     from vibrogear.config import load_scene
     from vibrogear.config.sections.options import SweepOptions
-    from vibrogear.solvers.sequential.sweep import _walk_unit, sweep_units
+    from vibrogear.solvers.sequential.sweep import walk_unit, sweep_units
 
     scene = load_scene(SCENE, (f"sweep.n_points={points}", f"sweep.segments={segments}"))
     study = build_study(scene)
@@ -92,8 +92,8 @@ def _setup(points: int, segments: int):
     # one short point before the clock: every compiled kernel a point uses is loaded
     warm = dataclasses.replace(settings, transient_periods=2, extra_transient_periods=0,
                                record_periods=settings.max_period)
-    _walk_unit(study.model, warm, kw, ("up", (0,), params[:1], seed, {}), lambda item: None)
-    return partial(_walk_unit, study.model, settings, kw), units
+    walk_unit(study.model, warm, kw, ("up", (0,), params[:1], seed, {}), lambda item: None)
+    return partial(walk_unit, study.model, settings, kw), units
 
 
 def _digest(records) -> str:

@@ -147,14 +147,14 @@ def _res(s, mode=0):
 
 def test_rigid_translation_is_coloured_uniformly(surface):
     from matplotlib import colors
-    from vibrogear.report.plots.housing_surface import (_plt, draw_surface, face_normals,
+    from vibrogear.report.plots.housing_surface import (agg_pyplot, draw_surface, face_normals,
         mode_panel_data)
 
     _, s = surface
     res = _res(s)
     disp, val, view, _ = mode_panel_data(res, 0)
     np.testing.assert_allclose(val, 1.0, rtol=1e-6)            # |u| / max |u| = 1 on every face
-    plt = _plt()
+    plt = agg_pyplot()
     fig = plt.figure()
     ax = fig.add_subplot(projection="3d")
     flat = draw_surface(ax, res.shape_vertices, res.shape_triangles, val, displacement=disp,
@@ -181,13 +181,13 @@ def test_rigid_translation_is_coloured_uniformly(surface):
 def test_projected_extent_contains_the_box(surface, normal):
     from matplotlib import colors
     from mpl_toolkits.mplot3d import proj3d
-    from vibrogear.report.plots.housing_surface import (_plt, draw_surface, mode_panel_data,
+    from vibrogear.report.plots.housing_surface import (agg_pyplot, draw_surface, mode_panel_data,
         view_angles)
 
     _, s = surface
     res = _res(s)
     disp, val, _, _ = mode_panel_data(res, 1)
-    plt = _plt()
+    plt = agg_pyplot()
     fig = plt.figure(figsize=(4.4, 4.0))
     ax = fig.add_subplot(projection="3d")
     coll = draw_surface(ax, res.shape_vertices, res.shape_triangles, val, displacement=disp,
@@ -206,11 +206,11 @@ def test_projected_extent_contains_the_box(surface, normal):
 
 
 def test_culling_keeps_exactly_the_faces_towards_the_camera(surface):
-    from vibrogear.report.plots.housing_surface import _plt, draw_surface
+    from vibrogear.report.plots.housing_surface import agg_pyplot, draw_surface
 
     _, s = surface
     v, t = s["shape_vertices"], s["shape_triangles"]
-    plt = _plt()
+    plt = agg_pyplot()
     fig = plt.figure()
     counts = []
     for view, cull in (((20.0, -60.0), False), ((20.0, -60.0), True), ((-20.0, 120.0), True)):

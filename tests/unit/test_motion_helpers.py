@@ -8,7 +8,7 @@ import numpy as np
 
 from pathlib import Path
 
-from vibrogear.solvers.sequential.motion import (_fractions, _scaled, count_clusters,
+from vibrogear.solvers.sequential.motion import (_fractions, block_scaled, count_clusters,
                                                  monitored_deformation)
 
 
@@ -45,7 +45,7 @@ def test_fraction_by_hand():
 
 
 def _clusters_by_loop(samples, rel_tol, split):
-    z = _scaled(np.asarray(samples, dtype=float), split)
+    z = block_scaled(np.asarray(samples, dtype=float), split)
     centres = []
     for p in z:
         if not any(float(np.max(np.abs(p - c))) <= rel_tol for c in centres):

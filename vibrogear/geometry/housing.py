@@ -25,7 +25,7 @@ import numpy as np
 from ..config.base import ConfigError
 from ..config.model.housing import HousingConfig
 from ..config.model.housing_walls import bore_walls
-from .mesh_size import _size_field, junction_curves, size_field  # noqa: F401  (housing_import, tests)
+from .mesh_size import add_size_field, junction_curves, size_field  # noqa: F401  (housing_import, tests)
 
 __all__ = ["HousingMesh", "BoreGeometry", "MeshingError", "bore_layout", "build_housing_mesh",
            "build_beam_mesh", "housing_volume", "read_msh_arrays", "ring_frame", "size_field", "junction_curves", "write_housing_step", "VOLUME_TAG", "BASE_TAG", "BORE_TAG0"]
@@ -255,7 +255,7 @@ def build_housing_mesh(cfg: HousingConfig, path: str | Path, *, verbose: bool = 
             gmsh.model.setPhysicalName(2, tag, f"bore_{g.name.replace('/', '_')}")
             bore_tags.append(tag)
             bore_surfs += surfs
-        _size_field(gmsh, cfg, bore_surfs)
+        add_size_field(gmsh, cfg, bore_surfs)
         gmsh.model.mesh.generate(3)
         gmsh.option.setNumber("Mesh.SecondOrderLinear", 1)  # split at straight midpoints: nested
         for _ in range(cfg.mesh.refine):

@@ -12,7 +12,7 @@ from ..config.model.housing import HousingConfig
 __all__ = ["size_field", "junction_curves"]
 
 
-def _size_field(gmsh, cfg: HousingConfig, bore_surfs: list[int]) -> None:
+def add_size_field(gmsh, cfg: HousingConfig, bore_surfs: list[int]) -> None:
     rings = [b.boss_radius - b.bore_radius for b in cfg.bores]
     edges = None
     if cfg.edge_mesh_size is not None:

@@ -34,8 +34,8 @@ import queue as _queue
 import signal
 import traceback
 
-from .units_base import (UnitError, _deliver, _run_serial, _transportable, in_unit, is_root, under_mpi,
-                         inside_unit, deferred_stop, raise_if_stopped)
+from .units_base import (UnitError, deliver_result, run_serial, transportable, in_unit, is_root,
+                         under_mpi, inside_unit, deferred_stop, raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers", "effective_workers", "unit_size", "blas_threads"]
@@ -128,7 +128,7 @@ def run_units(fn, units, *, workers: int | None = None, on_result=None, costs=No
     if kind == "processes":
         w = default_workers(len(units)) if workers is None else min(int(workers), len(units))
         return _run_processes(fn, units, w, on_result, order)
-    return _run_serial(fn, units, on_result)
+    return run_serial(fn, units, on_result)
 
 
 # ---------------------------------------------------------------- processes
@@ -165,7 +165,7 @@ def _process_worker(fn, units, tasks, results, parent_pid) -> None:
             with in_unit():
                 out = fn(units[i], emit)
         except BaseException as exc:            # noqa: BLE001 - sent back to the parent
-            results.put(("error", i, (traceback.format_exc(), _transportable(exc))))
+            results.put(("error", i, (traceback.format_exc(), transportable(exc))))
             break
         results.put(("done", i, out))
 
@@ -202,7 +202,7 @@ def _run_processes(fn, units, workers, on_result, order) -> list:
             if kind == "start":
                 owner[i] = payload
             elif kind == "item":
-                if not _deliver(on_result, i, payload):
+                if not deliver_result(on_result, i, payload):
                     break
             elif kind == "done":
                 results[i] = payload

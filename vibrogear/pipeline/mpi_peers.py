@@ -11,21 +11,21 @@ import socket
 import time
 
 from .outcome import LostUnits
-from .units_base import _comm
+from .units_base import world_comm
 
 __all__ = ["alive", "bcast"]
 
-_CTRL, _DATA, _STOP, _RESULT, _BCAST = 11, 12, 13, 14, 15
+CTRL, DATA, STOP, RESULT, _BCAST = 11, 12, 13, 14, 15
 #: units queued at a computing rank while enough are left (no rank waits for rank 0,
 #: which computes too and answers only between its own items)
-_AHEAD = 2
+AHEAD = 2
 #: seconds between two liveness checks of a peer while waiting on it
-_CHECK_S = 0.2
+CHECK_S = 0.2
 
 #: (host, pid) of every rank, gathered at the first run_mpi (one collective, then none)
-_PEERS: list = []
+PEERS: list = []
 #: ranks known to be gone (rank 0 tells the live ranks with each run's result)
-_LOST: set = set()
+LOST: set = set()
 
 
 #: seconds MPI_Finalize may take once a rank was lost (Open MPI 4.1 sometimes never returns
@@ -34,10 +34,10 @@ _FINALIZE_S = 20.0
 _FINALIZE_GUARD: list = []
 
 
-def _mark_lost(rank: int) -> None:
+def mark_lost(rank: int) -> None:
     """Record a lost rank; the first time, finalize MPI at exit with a time limit: past it,
     the process ends with exit code 1 (what a run that lost a rank exits with anyway)."""
-    _LOST.add(rank)
+    LOST.add(rank)
     if _FINALIZE_GUARD:
         return
     import atexit
@@ -58,26 +58,26 @@ def _bounded_finalize() -> None:
         faulthandler.cancel_dump_traceback_later()
 
 
-class _RootLost(BaseException):
+class RootLost(BaseException):
     """Rank 0 is gone (raised on the other ranks; a BaseException, so that no ``except
     Exception`` inside a unit swallows it)."""
 
 
-def _peers(comm) -> list:
-    if not _PEERS:
-        _PEERS.extend(comm.allgather((socket.gethostname(), os.getpid())))
-    return _PEERS
+def peers(comm) -> list:
+    if not PEERS:
+        PEERS.extend(comm.allgather((socket.gethostname(), os.getpid())))
+    return PEERS
 
 
 def alive(rank: int) -> bool:
     """False once ``rank`` is known to be gone: lost earlier, or a rank on this node whose
     process no longer runs.  A rank on another node counts as alive (it cannot be seen)."""
-    if rank in _LOST:
+    if rank in LOST:
         return False
-    if not _PEERS:
+    if not PEERS:
         return True
-    host, pid = _PEERS[rank]
-    if host != _PEERS[_comm().rank][0]:
+    host, pid = PEERS[rank]
+    if host != PEERS[world_comm().rank][0]:
         return True
     try:
         os.kill(pid, 0)
@@ -97,8 +97,8 @@ def alive(rank: int) -> bool:
 def _poll(test, peer) -> tuple[bool, object]:
     """Call ``test()`` -> (done, value) with a growing pause (0.2 -> 20 ms) until it is done:
     (True, value), or (False, None) once ``peer`` is gone (its pid checked every
-    :data:`_CHECK_S`)."""
-    delay, check = 0.0002, time.monotonic() + _CHECK_S
+    :data:`CHECK_S`)."""
+    delay, check = 0.0002, time.monotonic() + CHECK_S
     while True:
         done, value = test()
         if done:
@@ -107,39 +107,39 @@ def _poll(test, peer) -> tuple[bool, object]:
         if now >= check:
             if not alive(peer):
                 return False, None
-            check = now + _CHECK_S
+            check = now + CHECK_S
         time.sleep(delay)
         delay = min(2 * delay, 0.02)
 
 
-def _wait(req, peer) -> tuple[bool, object]:
+def wait_for(req, peer) -> tuple[bool, object]:
     """Complete ``req`` (a send to or a receive from ``peer``): (True, value), or
     (False, None) once ``peer`` is gone (the request is then abandoned)."""
     return _poll(req.test, peer)
 
 
-def _send(comm, obj, dest: int, tag: int) -> bool:
+def send_to(comm, obj, dest: int, tag: int) -> bool:
     """Send ``obj``; False if ``dest`` is gone (then nothing more is sent to it)."""
-    return alive(dest) and _wait(comm.isend(obj, dest=dest, tag=tag), dest)[0]
+    return alive(dest) and wait_for(comm.isend(obj, dest=dest, tag=tag), dest)[0]
 
 
-def _recv_root(comm, tag: int):
-    """The next message from rank 0 with ``tag``; :class:`_RootLost` if rank 0 is gone."""
+def recv_root(comm, tag: int):
+    """The next message from rank 0 with ``tag``; :class:`RootLost` if rank 0 is gone."""
     def probe():
         m = comm.improbe(source=0, tag=tag)
         return m is not None, m
 
     ok, m = _poll(probe, 0)
     if ok:
-        ok, obj = _wait(m.irecv(), 0)
+        ok, obj = wait_for(m.irecv(), 0)
         if ok:
             return obj
-    raise _RootLost
+    raise RootLost
 
 
-def _root_lost() -> LostUnits:
-    _mark_lost(0)
-    host, pid = _PEERS[0] if _PEERS else ("?", "?")
+def root_lost() -> LostUnits:
+    mark_lost(0)
+    host, pid = PEERS[0] if PEERS else ("?", "?")
     return LostUnits(f"rank 0 (pid {pid} on {host}), which writes the files, was lost; every "
                      "item it received is in the partial file: run the same command again to "
                      "compute the rest", {"lost_ranks": [0]})
@@ -148,7 +148,7 @@ def _root_lost() -> LostUnits:
 _HOOK = [0]                                     # items handed over (the test hook's count)
 
 
-def _test_hook(rank: int) -> None:
+def lose_rank_hook(rank: int) -> None:
     """``VIBROGEAR_TEST_LOSE_RANK=R:N``: rank R dies (SIGKILL) after its N-th item."""
     spec = os.environ.get("VIBROGEAR_TEST_LOSE_RANK")
     if not spec:
@@ -163,16 +163,16 @@ def bcast(value, tag: int = _BCAST):
     """``value`` from rank 0 on every live rank, point to point (a dead rank is skipped
     instead of blocking everyone, as a collective ``bcast`` would); ``tag``: the message
     tag (the executor's final outcome has its own)."""
-    comm = _comm()
+    comm = world_comm()
     if comm.size < 2:
         return value
-    _peers(comm)
+    peers(comm)
     if comm.rank == 0:
         for r in range(1, comm.size):
-            if r not in _LOST and not _send(comm, value, r, tag):
-                _mark_lost(r)
+            if r not in LOST and not send_to(comm, value, r, tag):
+                mark_lost(r)
         return value
     try:
-        return _recv_root(comm, tag)
-    except _RootLost:
-        raise _root_lost() from None
+        return recv_root(comm, tag)
+    except RootLost:
+        raise root_lost() from None

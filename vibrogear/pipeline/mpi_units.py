@@ -36,11 +36,12 @@ import os
 import time
 import traceback
 
-from .mpi_peers import (_AHEAD, _CHECK_S, _CTRL, _DATA, _LOST, _PEERS, _RESULT, _STOP,
-                        _mark_lost, _peers, _recv_root, _root_lost, _RootLost, _send, _test_hook,
-                        _wait, alive, bcast)
+from .mpi_peers import (AHEAD, CHECK_S, CTRL, DATA, LOST, PEERS, RESULT, STOP,
+                        mark_lost, peers, recv_root, root_lost, RootLost, send_to, lose_rank_hook,
+                        wait_for, alive, bcast)
 from .outcome import LostUnits
-from .units_base import UnitError, _comm, _deliver, _run_serial, _Stop, _transportable, in_unit
+from .units_base import (UnitError, world_comm, deliver_result, run_serial, StopUnit, transportable,
+                         in_unit)
 
 __all__ = ["run_mpi", "bcast", "alive", "LostUnits"]
 
@@ -48,22 +49,22 @@ log = logging.getLogger(__name__)
 
 def run_mpi(fn, units, on_result, order, describe=None) -> list:
     """The MPI backend of :func:`~.executors.run_units` (see its module docstring)."""
-    comm = _comm()
+    comm = world_comm()
     try:
         if comm.size < 2:
-            return _run_serial(fn, units, on_result)
-        _peers(comm)
+            return run_serial(fn, units, on_result)
+        peers(comm)
         if comm.rank == 0:
             outcome = bcast(_MpiRoot(comm, fn, units, on_result, order, describe).run(),
-                            tag=_RESULT)
+                            tag=RESULT)
         else:
             try:
                 _mpi_worker(comm, fn)
-            except _RootLost:
-                raise _root_lost() from None
-            outcome = bcast(None, tag=_RESULT)
+            except RootLost:
+                raise root_lost() from None
+            outcome = bcast(None, tag=RESULT)
             for r in outcome["lost_ranks"]:
-                _mark_lost(r)
+                mark_lost(r)
     except LostUnits:
         raise
     except BaseException:                       # noqa: BLE001 - never leave mpirun hanging
@@ -84,9 +85,9 @@ class _MpiRoot:
     """Rank 0: hands out units in ``order`` (one at a time, a second one ahead while more
     than one per rank is left), computes units itself between the messages it serves,
     delivers every item to ``on_result``.  ``on_result`` returning False interrupts every
-    rank's unit (tag _STOP) and skips the queued ones; an error lets the units already
-    handed out (at most _AHEAD per rank) finish, their items delivered; then every rank
-    ends (_CTRL).  A lost rank: see the module docstring."""
+    rank's unit (tag STOP) and skips the queued ones; an error lets the units already
+    handed out (at most AHEAD per rank) finish, their items delivered; then every rank
+    ends (CTRL).  A lost rank: see the module docstring."""
 
     def __init__(self, comm, fn, units, on_result, order, describe):
         from collections import deque
@@ -96,22 +97,22 @@ class _MpiRoot:
         self.describe = describe
         self.todo, self.results = deque(order), [None] * len(units)
         self.workers = range(1, comm.size)
-        self.active = {r for r in self.workers if r not in _LOST}   # not yet said "bye"
+        self.active = {r for r in self.workers if r not in LOST}   # not yet said "bye"
         self.queued = {r: deque() for r in self.workers}   # units sent, not finished
         self.running: dict[int, int | None] = {r: None for r in self.workers}
         self.items = [0] * len(units)            # items delivered per unit
-        self.ended: set[int] = set(_LOST)        # ranks sent the final _CTRL stop (or gone)
+        self.ended: set[int] = set(LOST)        # ranks sent the final CTRL stop (or gone)
         self.lost: list[tuple[int, int]] = []    # (rank, unit it was computing)
         self.stopping = self.interrupted = False   # interrupted: on_result asked to stop
         self.error, self.status, self.any_source = None, MPI.Status(), MPI.ANY_SOURCE
-        self.next_check = time.monotonic() + _CHECK_S
+        self.next_check = time.monotonic() + CHECK_S
 
     # ------------------------------------------------------------ messages
 
-    def to(self, r, obj, tag=_CTRL) -> bool:
-        if r in _LOST:
+    def to(self, r, obj, tag=CTRL) -> bool:
+        if r in LOST:
             return False
-        if _send(self.comm, obj, r, tag):
+        if send_to(self.comm, obj, r, tag):
             return True
         self.lose(r)
         return False
@@ -120,7 +121,7 @@ class _MpiRoot:
         if self.stopping or r in self.ended:
             return
         while self.todo and (not self.queued[r] or (
-                len(self.queued[r]) < _AHEAD and len(self.todo) > self.comm.size)):
+                len(self.queued[r]) < AHEAD and len(self.todo) > self.comm.size)):
             i = self.todo.popleft()
             self.queued[r].append(i)
             if not self.to(r, ("unit", i, self.units[i])):
@@ -136,14 +137,14 @@ class _MpiRoot:
         self.todo.clear()
         for r in sorted(self.active):
             if interrupt:
-                self.to(r, ("stop",), _STOP)
+                self.to(r, ("stop",), STOP)
             if r not in self.ended:
                 self.ended.add(r)
                 self.to(r, ("stop",))
 
     def deliver(self, i, item):
         self.items[i] += 1
-        if not self.interrupted and not _deliver(self.on_result, i, item):
+        if not self.interrupted and not deliver_result(self.on_result, i, item):
             self.stop()
 
     def handle(self, r, msg):
@@ -170,11 +171,11 @@ class _MpiRoot:
     def receive(self, source) -> bool:
         """Receive and handle one message from ``source`` (a rank or ANY_SOURCE) if there
         is one; False if none (or its sender died while it came)."""
-        m = self.comm.improbe(source=source, tag=_DATA, status=self.status)
+        m = self.comm.improbe(source=source, tag=DATA, status=self.status)
         if m is None:
             return False
         r = self.status.Get_source()
-        ok, msg = _wait(m.irecv(), r)
+        ok, msg = wait_for(m.irecv(), r)
         if not ok:
             self.lose(r)
             return False
@@ -194,12 +195,12 @@ class _MpiRoot:
     # ------------------------------------------------------------ lost ranks
 
     def watch(self) -> bool:
-        """Check (every _CHECK_S) that the ranks still working are alive; True if one was
+        """Check (every CHECK_S) that the ranks still working are alive; True if one was
         lost now."""
         now = time.monotonic()
         if now < self.next_check:
             return False
-        self.next_check = now + _CHECK_S
+        self.next_check = now + CHECK_S
         gone = [r for r in sorted(self.active) if not alive(r)]
         for r in gone:
             self.lose(r)
@@ -207,9 +208,9 @@ class _MpiRoot:
 
     def lose(self, r):
         """Rank ``r`` is gone: its running unit is lost, its queued ones go back to todo."""
-        if r in _LOST:
+        if r in LOST:
             return
-        _mark_lost(r)
+        mark_lost(r)
         self.active.discard(r)
         self.ended.add(r)
         while self.receive(r):                  # what it sent before it died counts
@@ -221,7 +222,7 @@ class _MpiRoot:
         if not self.stopping:
             self.todo.extendleft(reversed(self.queued[r]))
         self.queued[r].clear()
-        host, pid = _PEERS[r]
+        host, pid = PEERS[r]
         log.error("rank %d (pid %s on %s) was lost%s; the other ranks go on", r, pid, host,
                   f" while computing work unit {i}" if i is not None else "")
 
@@ -235,7 +236,7 @@ class _MpiRoot:
         return text
 
     def lost_report(self) -> tuple[list, str]:
-        units = [{"unit": i, "rank": r, "host": _PEERS[r][0], "pid": _PEERS[r][1],
+        units = [{"unit": i, "rank": r, "host": PEERS[r][0], "pid": PEERS[r][1],
                   "label": self.label(i), "items_kept": self.items[i]} for r, i in self.lost]
         ranks = sorted({r for r, _ in self.lost})
         parts = [f"{u['label']} on rank {u['rank']} (results of it kept: {u['items_kept']})"
@@ -251,19 +252,19 @@ class _MpiRoot:
     def own_unit(self, i):
         def emit(item):
             self.deliver(i, item)
-            _test_hook(0)
+            lose_rank_hook(0)
             self.serve(block=False)
             if self.interrupted:
-                raise _Stop
+                raise StopUnit
 
         try:
             with in_unit():
                 self.results[i] = self.fn(self.units[i], emit)
-        except _Stop:
+        except StopUnit:
             pass
         except Exception as exc:                # noqa: BLE001 - ends every rank as a worker's
             if self.error is None:
-                self.error = (i, traceback.format_exc(), _transportable(exc))
+                self.error = (i, traceback.format_exc(), transportable(exc))
             self.stop(interrupt=False)
 
     def run(self) -> dict:
@@ -279,7 +280,7 @@ class _MpiRoot:
         lost_units, message = self.lost_report() if self.lost and not self.interrupted \
             else ([], "")
         return {"results": self.results, "error": self.error, "lost_units": lost_units,
-                "message": message, "lost_ranks": sorted(_LOST)}
+                "message": message, "lost_ranks": sorted(LOST)}
 
 
 def _mpi_worker(comm, fn) -> None:
@@ -287,17 +288,17 @@ def _mpi_worker(comm, fn) -> None:
     stopping = False
 
     def send(msg) -> None:
-        if not _send(comm, msg, 0, _DATA):
-            raise _RootLost
+        if not send_to(comm, msg, 0, DATA):
+            raise RootLost
 
-    def interrupted() -> bool:                  # a pending interrupt (tag _STOP), received
-        if comm.iprobe(source=0, tag=_STOP):
-            comm.recv(source=0, tag=_STOP)
+    def interrupted() -> bool:                  # a pending interrupt (tag STOP), received
+        if comm.iprobe(source=0, tag=STOP):
+            comm.recv(source=0, tag=STOP)
             return True
         return False
 
     while True:
-        msg = _recv_root(comm, _CTRL)
+        msg = recv_root(comm, CTRL)
         if msg[0] == "stop":
             while interrupted():                # nothing left unreceived
                 pass
@@ -312,17 +313,17 @@ def _mpi_worker(comm, fn) -> None:
         def emit(item, i=i):
             nonlocal stopping
             send(("item", i, item))
-            _test_hook(comm.rank)
+            lose_rank_hook(comm.rank)
             if interrupted():
                 stopping = True
-                raise _Stop
+                raise StopUnit
 
         try:
             with in_unit():
                 out = fn(unit, emit)
-        except _Stop:                           # interrupted (stopping is set)
+        except StopUnit:                           # interrupted (stopping is set)
             continue
         except Exception as exc:                # noqa: BLE001 - sent back to rank 0
-            send(("error", i, traceback.format_exc(), _transportable(exc)))
+            send(("error", i, traceback.format_exc(), transportable(exc)))
             continue
         send(("done", i, out))

@@ -43,33 +43,33 @@ class UnitError(RuntimeError):
         super().__init__(f"work unit {unit} failed:\n{remote}")
 
 
-class _Stop(Exception):
+class StopUnit(Exception):
     """Raised inside ``emit`` to abandon the current unit (stop requested)."""
 
 
-def _comm():
+def world_comm():
     from mpi4py import MPI
     return MPI.COMM_WORLD
 
 
-def _deliver(on_result, i, item) -> bool:
+def deliver_result(on_result, i, item) -> bool:
     return on_result is None or on_result(i, item) is not False
 
 
-def _run_serial(fn, units, on_result) -> list:
+def run_serial(fn, units, on_result) -> list:
     results: list = [None] * len(units)
     for i, unit in enumerate(units):
         def emit(item, i=i):
-            if not _deliver(on_result, i, item):
-                raise _Stop
+            if not deliver_result(on_result, i, item):
+                raise StopUnit
         try:
             results[i] = fn(unit, emit)
-        except _Stop:
+        except StopUnit:
             break
     return results
 
 
-def _transportable(exc: BaseException):
+def transportable(exc: BaseException):
     import pickle
     try:
         return pickle.loads(pickle.dumps(exc))

@@ -94,7 +94,7 @@ from .gearbox_supports import (BEARING_EXPONENTS, MAX_COMMON_PERIOD, MAX_ORDER_P
                                ExternalCouplingConfig, GearboxBearingConfig, order_period,
                                torque_order_ratios)
 from .shaft_mesh import MAX_ELEMENT_LENGTH, mesh_sections, with_nodes_at
-from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, _node_at, node_positions
+from .rotor import DiscConfig, MaterialConfig, ShaftSectionConfig, node_at, node_positions
 
 __all__ = ["GearboxConfig", "ShaftConfig", "GearConfig", "MeshConfig", "GearboxBearingConfig",
            "ExternalCouplingConfig", "BEARING_EXPONENTS", "MAX_COMMON_PERIOD",
@@ -145,7 +145,7 @@ class ShaftConfig:
     modal_damping: float = spec(0.0, ge=0.0, lt=1.0, doc="damping ratio of the elastic modes")
 
     def node(self, position: float, path: str) -> int:
-        return _node_at(node_positions(self.sections), position, path)
+        return node_at(node_positions(self.sections), position, path)
 
 
 @dataclass(frozen=True, kw_only=True)

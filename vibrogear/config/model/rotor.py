@@ -229,17 +229,17 @@ class RotorConfig:
             seen: dict[int, int] = {}
             for i, item in enumerate(getattr(self, group)):
                 fpath = f"{path}.{group}[{i}].position"
-                node = _node_at(nodes, item.position, fpath)
+                node = node_at(nodes, item.position, fpath)
                 if group == "bearings" and node in seen:
                     raise ConfigError(fpath, f"node {node} (z = {nodes[node]:g} m) already has "
                                       f"bearing {seen[node]}; at most one bearing per node")
                 seen[node] = i
 
     def node_of(self, position: float) -> int:
-        return _node_at(node_positions(self.sections), position, "position")
+        return node_at(node_positions(self.sections), position, "position")
 
 
-def _node_at(nodes: list[float], z: float, path: str) -> int:
+def node_at(nodes: list[float], z: float, path: str) -> int:
     length = nodes[-1]
     if not 0.0 <= z <= length * (1 + POSITION_TOL):
         raise ConfigError(path, f"value {z:g} outside the shaft: must be in [0, {length:g}] m")

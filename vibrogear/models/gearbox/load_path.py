@@ -244,12 +244,12 @@ def _working_radii(scene, cfg):
     """Working pitch radius of gear_a of each mesh [m] (None without the scene)."""
     if scene is None:
         return None
-    from .model import _mesh_geometry, _shaft_axis    # the model's own geometry
+    from .model import mesh_geometry, shaft_axis    # the model's own geometry
     _, gear_p = cfg.speed_ratios()
-    axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    axes = [shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
     out = []
     for j in range(len(cfg.meshes)):
-        geom, _, _ = _mesh_geometry(cfg, j, axes, gear_p)
+        geom, _, _ = mesh_geometry(cfg, j, axes, gear_p)
         out.append(geom.base_radius_a / math.cos(geom.transverse_pressure_angle))
     return out
 

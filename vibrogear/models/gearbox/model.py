@@ -167,7 +167,7 @@ def _housing_subsystem(scene, count):
     return sub, hm
 
 
-def _shaft_axis(scene, sh, i) -> tuple[float, float]:
+def shaft_axis(scene, sh, i) -> tuple[float, float]:
     """Housing-frame (x, z) of shaft i's axis."""
     path = f"gearbox.shafts[{i}]"
     if scene.housing is not None:
@@ -194,7 +194,7 @@ def build_gearbox(scene, *, master_counts=None, housing_count=None,
     cfg = scene.gearbox
     t0 = time.perf_counter()
     shaft_p, gear_p = cfg.speed_ratios()
-    axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    axes = [shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
     subsystems, rotors, free_dof = [], [], {}
     for i, sh in enumerate(cfg.shafts):
         gears = [(k, g) for k, g in enumerate(cfg.gears) if g.shaft == sh.name]
@@ -280,7 +280,7 @@ def _gear_psi(rotor, node, k, free_dof) -> int:
     return free_dof[k] if k in free_dof else rotor.dof(node, "psi")
 
 
-def _mesh_geometry(cfg, i, axes, gear_p):
+def mesh_geometry(cfg, i, axes, gear_p):
     """(geometry, (shaft, gear index) of gear_a and of gear_b) of ``meshes[i]``; a
     ConfigError where the gears lie in different planes or the centre distance does not
     match the pitch radii."""
@@ -328,11 +328,11 @@ def check_layout(scene) -> None:
     that ``vibrogear check`` reports them."""
     cfg = scene.gearbox
     _, gear_p = cfg.speed_ratios()
-    axes = [_shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
+    axes = [shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
     if cfg.master_modes == "frequency":
         highest_speed(scene)                 # the criterion needs the scene's speed range
     for i, m in enumerate(cfg.meshes):
-        _mesh_geometry(cfg, i, axes, gear_p)
+        mesh_geometry(cfg, i, axes, gear_p)
         if m.iso6336 or m.stiffness_levels:
             _mesh_law(cfg, i)
     # shooting needs a common excitation period (the analyses this run does: a verb alone
@@ -382,7 +382,7 @@ def _meshes(cfg, axes, shaft_p, gear_p, rotors, free_dof):
         return tuple(float(v) for v in row)
 
     for i, (m, (k_mesh, law), idx) in enumerate(zip(cfg.meshes, laws, slots)):
-        geom, (sa, ka), (sb, kb) = _mesh_geometry(cfg, i, axes, gear_p)
+        geom, (sa, ka), (sb, kb) = mesh_geometry(cfg, i, axes, gear_p)
         ga, gb = cfg.gears[ka], cfg.gears[kb]
         parts = []
         for s, g, k, c in ((sa, ga, ka, geom.c_a), (sb, gb, kb, geom.c_b)):

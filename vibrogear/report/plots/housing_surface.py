@@ -29,7 +29,7 @@ DEFAULT_FRACTION = 0.06
 _LIGHT = np.array([-0.4, -0.5, 0.77])
 
 
-def _plt():
+def agg_pyplot():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -196,7 +196,7 @@ def plot_mode_shapes(res, modes: Sequence[int], *, fraction: float = DEFAULT_FRA
     cols = min(3, len(modes))
     rows = -(-len(modes) // cols)
     fig = new_figure((4.4 * cols + 0.8, 4.0 * rows + 0.7))
-    hatch = _hatched(res.shape_triangles, res.shape_facet_tag)
+    hatch = hatched_faces(res.shape_triangles, res.shape_facet_tag)
     norm = colors.Normalize(0.0, 1.0)
     axes = []
     motion = res.mode_motion()
@@ -237,7 +237,7 @@ def _wall_key(normals, names=()) -> str:
     return "; ".join(parts) + "; base at z min, top wall at z max"
 
 
-def _hatched(tris, tags) -> np.ndarray:
+def hatched_faces(tris, tags) -> np.ndarray:
     """The supported faces (tag 1) and the faces that touch them."""
     tags = np.asarray(tags)
     fixed_nodes = np.unique(tris[tags == 1])

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..figure import new_figure, plain_title, save_figure
-from .sweep import _CATS, class_categories
+from .sweep import CLASS_COLOURS, class_categories
 
 __all__ = ["write_map_figures", "plot_class_map", "plot_value_map"]
 
@@ -72,8 +72,8 @@ def plot_class_map(arrays, *, title: str = ""):
     from matplotlib.patches import Patch
 
     fig, axes, _ = _panels(arrays)
-    cmap = ListedColormap([c for _, c in _CATS])
-    norm = BoundaryNorm(np.arange(len(_CATS) + 1) - 0.5, len(_CATS))
+    cmap = ListedColormap([c for _, c in CLASS_COLOURS])
+    norm = BoundaryNorm(np.arange(len(CLASS_COLOURS) + 1) - 0.5, len(CLASS_COLOURS))
     xe, ye = _edges(arrays["rpm"]), _edges(arrays["torque"])
     used = set()
     for j, ax in enumerate(axes):
@@ -83,7 +83,7 @@ def plot_class_map(arrays, *, title: str = ""):
         used |= set(int(c) for c in np.unique(cats.compressed()))
         ax.pcolormesh(xe, ye, cats, cmap=cmap, norm=norm, shading="flat")
         _draw_curves(ax, arrays)
-    handles = [Patch(color=_CATS[c][1], label=_CATS[c][0]) for c in sorted(used)]
+    handles = [Patch(color=CLASS_COLOURS[c][1], label=CLASS_COLOURS[c][0]) for c in sorted(used)]
     fig.legend(handles=handles, loc="center right", fontsize=8, frameon=False,
                title="motion class", title_fontsize=8)
     fig.suptitle(plain_title(title), fontsize=10)

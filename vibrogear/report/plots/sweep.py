@@ -31,7 +31,7 @@ __all__ = ["plot_bifurcation", "class_categories", "motion_rows", "draw_band"]
 _STYLE = {"up": dict(color="tab:blue", marker="^", label="up"),
           "down": dict(color="tab:red", marker="v", label="down")}
 #: categories of the band: (label, colour)
-_CATS = (("period 1", "#2ca02c"), ("period 2", "#98df8a"), ("period 3+", "#bcbd22"),
+CLASS_COLOURS = (("period 1", "#2ca02c"), ("period 2", "#98df8a"), ("period 3+", "#bcbd22"),
          ("quasi-periodic", "#1f77b4"), ("chaotic", "#d62728"), ("not settled", "#8c8c8c"),
          ("not periodic (no exponent)", "#d9d9d9"), ("failed", "#000000"),
          ("multi-frequency forced", "#17becf"))
@@ -95,14 +95,14 @@ def draw_band(ax, param, rows):
     for r, (label, sel, cats) in enumerate(rows):
         y = len(rows) - 1 - r
         for x, c in zip(param[sel], cats[sel]):
-            ax.add_patch(_rect(x - 0.5 * w, y + 0.08, w, 0.84, _CATS[c][1]))
+            ax.add_patch(_rect(x - 0.5 * w, y + 0.08, w, 0.84, CLASS_COLOURS[c][1]))
             used.add(int(c))
     ax.set_ylim(0, len(rows))
     ax.set_yticks(np.arange(len(rows)) + 0.5)
     ax.set_yticklabels([lab for lab, _, _ in rows][::-1], fontsize=7)
     ax.tick_params(axis="y", length=0)
     from matplotlib.patches import Patch
-    handles = [Patch(color=_CATS[c][1], label=_CATS[c][0]) for c in sorted(used)]
+    handles = [Patch(color=CLASS_COLOURS[c][1], label=CLASS_COLOURS[c][0]) for c in sorted(used)]
     ax.legend(handles=handles, **_LEGEND)
 
 
@@ -152,7 +152,7 @@ def _spectral_panel(ax, data, param, direction, ok, mclass, dirs):
         ax.plot(param[sel], flat[sel], _STYLE[d]["marker"], ms=3.5, color=_STYLE[d]["color"],
                 lw=0, mfc="none", label=f"{d}: flatness")
         qp = ok & (direction == d) & (mclass == 2) & (f2 > 0)
-        right.plot(param[qp], f2[qp], "*", ms=5, color=_CATS[3][1], lw=0,
+        right.plot(param[qp], f2[qp], "*", ms=5, color=CLASS_COLOURS[3][1], lw=0,
                    label=f"{d}: quasi-periodic f2 / f1" if np.any(qp) else None)
     ax.set_ylabel("Poincare spectrum\nflatness", fontsize=8)
     ax.set_ylim(-0.02, 0.7)

@@ -77,7 +77,7 @@ def _shaded_modes(res, out: Path, draw) -> dict[str, str]:
     """The modes ``draw`` (1-based; those beyond the solved count left out) 6 per figure, and
     the first one animated."""
     from .housing_animation import animate_surface
-    from ..plots.housing_surface import DPI, _hatched, mode_panel_data, plot_mode_shapes
+    from ..plots.housing_surface import DPI, hatched_faces, mode_panel_data, plot_mode_shapes
 
     modes = [i - 1 for i in dict.fromkeys(draw) if i <= res.n_modes]
     files = {}
@@ -93,7 +93,7 @@ def _shaded_modes(res, out: Path, draw) -> dict[str, str]:
         animate_surface(out / name, res.shape_vertices, res.shape_triangles, val, disp,
                         title=title, view=view, norm=colors.Normalize(0.0, 1.0),
                         tags=res.shape_facet_tag,
-                        hatch=_hatched(res.shape_triangles, res.shape_facet_tag))
+                        hatch=hatched_faces(res.shape_triangles, res.shape_facet_tag))
         files["animation"] = name
     return files
 

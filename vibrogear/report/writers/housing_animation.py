@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..plots.housing_surface import _plt, draw_surface
+from ..plots.housing_surface import agg_pyplot, draw_surface
 
 __all__ = ["animate_surface", "MAX_BYTES"]
 
@@ -34,7 +34,7 @@ def animate_surface(path: Path, verts, tris, face_value, displacement, *, title:
 
     from ...pipeline.files import atomic_write_bytes
 
-    plt = _plt()
+    plt = agg_pyplot()
     disp = np.asarray(displacement)
     norm = norm or colors.Normalize(float(np.min(face_value)), float(np.max(face_value)))
     frames = []

@@ -14,7 +14,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from ...models.rotor.model import RotorModel
-from .modes import (MODE_TYPES, RPM, _residuals, _solve_reduced, _status, rotor_outcome,
+from .modes import (MODE_TYPES, RPM, mode_residuals, solve_reduced, modes_status, rotor_outcome,
                           basis_error_estimate, classify_whirl, modal_energy_share, reduce_rotor)
 
 __all__ = ["CampbellResult", "CriticalSpeed", "campbell_diagram"]
@@ -76,7 +76,7 @@ def campbell_diagram(model: RotorModel, speeds_rpm, *, n_modes: int = 8,
     lams = []
     lines_q = []
     for i, rpm in enumerate(speeds):
-        lam, q, _ = _solve_reduced(red, rpm * RPM)
+        lam, q, _ = solve_reduced(red, rpm * RPM)
         lam, q = lam[:extra], q[:, :extra]
         if vecs_prev is None:
             pick = np.arange(min(n_modes, lam.size))
@@ -108,13 +108,13 @@ def campbell_diagram(model: RotorModel, speeds_rpm, *, n_modes: int = 8,
         types[i, :k] = ty
         whirl[i, :k] = [w if t == "lateral" else "-" for w, t in zip(wl, ty)]
         if i in (0, len(lines_q) - 1):
-            max_res = max(max_res, float(_residuals(model, speeds[i] * RPM, lams[i], x).max()))
-    est = basis_error_estimate(red, speeds[-1] * RPM, lams[-1], _residuals(
+            max_res = max(max_res, float(mode_residuals(model, speeds[i] * RPM, lams[i], x).max()))
+    est = basis_error_estimate(red, speeds[-1] * RPM, lams[-1], mode_residuals(
         model, speeds[-1] * RPM, lams[-1], red.basis @ lines_q[-1]))
     crit = _critical_speeds(red, speeds, freqs, lines_q, whirl, types, orders)
     timings = {"reduce_s": t_red, "sweep_s": t_sweep,
                "total_s": time.perf_counter() - t0}
-    status, msg = _status(np.concatenate(lams), np.array([max_res]), est, red.basis.shape[1],
+    status, msg = modes_status(np.concatenate(lams), np.array([max_res]), est, red.basis.shape[1],
                           campbell=True)
     return CampbellResult(speeds, freqs, zetas, whirl, types, tuple(orders), tuple(crit), max_res,
                           est, red.basis.shape[1], status, msg, timings)
@@ -136,7 +136,7 @@ def _critical_speeds(red, speeds, freqs, lines_q, whirl, types, orders):
 
 
 def _line_freq(red, rpm, ref):
-    lam, q, _ = _solve_reduced(red, rpm * RPM)
+    lam, q, _ = solve_reduced(red, rpm * RPM)
     j = int(np.argmax(_mac(ref[:, None], q)[0]))
     return lam[j].imag / (2 * np.pi)
 

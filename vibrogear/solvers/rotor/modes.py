@@ -213,7 +213,7 @@ def modal_energy_share(model: RotorModel, shapes: np.ndarray) -> np.ndarray:
     return share / np.where(tot > 0, tot, 1.0)
 
 
-def _residuals(model: RotorModel, omega: float, lam: np.ndarray, x: np.ndarray) -> np.ndarray:
+def mode_residuals(model: RotorModel, omega: float, lam: np.ndarray, x: np.ndarray) -> np.ndarray:
     k_s, b_s = model.supported()
     d = b_s + omega * model.G
     kk = k_s + omega * model.C
@@ -260,7 +260,7 @@ def basis_error_estimate(red: ReducedRotor, omega: float, lam: np.ndarray,
     lat = ~other
     if np.any(lat) and not red.lateral_complete:
         cut = red.truncated()
-        coarse, _, _ = _solve_reduced(cut, omega)
+        coarse, _, _ = solve_reduced(cut, omega)
         coarse = coarse[~np.isin(coarse, cut.other_lam)]
         limit = 0.5 * 2 * np.pi * cut.basis_hz[cut.n_lateral - 1]
         ok = lat & (np.abs(lam) <= limit)
@@ -285,7 +285,7 @@ def _nearest_change(lam: np.ndarray, coarse: np.ndarray) -> np.ndarray:
     return d / np.maximum(np.abs(lam), 1e-300)
 
 
-def _solve_reduced(red: ReducedRotor, omega: float):
+def solve_reduced(red: ReducedRotor, omega: float):
     """Oscillatory modes at ``omega`` in basis coordinates, sorted by frequency."""
     m = red.n_lateral
     lam, vec = sla.eig(red.state_matrix(omega))
@@ -336,11 +336,11 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
         want = count if count is not None else 12
         red = reduced if reduced is not None else reduce_rotor(model, n_basis, count=want)
         timings["reduce_s"] = time.perf_counter() - t0
-        lam, q, n_rigid = _solve_reduced(red, omega)
+        lam, q, n_rigid = solve_reduced(red, omega)
         lam, q = _trim(lam, q, count, cutoff_hz)
         x = red.basis @ q
         timings["error_estimate"] = basis_error_estimate(red, omega, lam,
-                                                         _residuals(model, omega, lam, x))
+                                                         mode_residuals(model, omega, lam, x))
         nb = red.basis.shape[1]
     else:
         raise ValueError(f"method must be 'reduced' or 'full', got {method!r}")
@@ -353,11 +353,11 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
     types = tuple(MODE_TYPES[i] for i in np.argmax(share, axis=1))
     wl, ratio = classify_whirl(model, x)
     whirl = tuple(w if t == "lateral" else "-" for w, t in zip(wl, types))
-    res = _residuals(model, omega, lam, x)
+    res = mode_residuals(model, omega, lam, x)
     timings["total_s"] = time.perf_counter() - t0
     wn = np.abs(lam)
     est = timings.pop("error_estimate", 0.0)
-    status, msg = _status(lam, res, est if method == "reduced" else 0.0, nb)
+    status, msg = modes_status(lam, res, est if method == "reduced" else 0.0, nb)
     return RotorModes(speed_rpm=float(speed_rpm), eigenvalues=lam, frequencies_hz=lam.imag / (2 * np.pi),
                       natural_frequencies_hz=wn / (2 * np.pi),
                       damping_ratios=-lam.real / np.where(wn > 0, wn, 1.0), whirl=whirl,
@@ -367,7 +367,7 @@ def rotor_modes(model: RotorModel, speed_rpm: float = 0.0, *, count: int | None 
                       message=msg, timings=timings)
 
 
-def _status(lam, residuals, est, n_basis, *, campbell: bool = False) -> tuple[str, str]:
+def modes_status(lam, residuals, est, n_basis, *, campbell: bool = False) -> tuple[str, str]:
     """("ok" | "inaccurate" | "failed", message): non-finite eigenvalues or residuals fail
     (e.g. an overflowing stiffness); a reduction error estimate above :data:`ERROR_LIMIT`
     is inaccurate, with advice naming the scene key that enlarges the basis.  (Residuals

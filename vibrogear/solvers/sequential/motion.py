@@ -291,7 +291,7 @@ def monitored_deformation(model: ReducedModel, param: float, t, states) -> np.nd
     return states[:, :model.n_modes] @ ct.directions[j] - e
 
 
-def _scaled(samples: np.ndarray, split: int | None, ref=None) -> np.ndarray:
+def block_scaled(samples: np.ndarray, split: int | None, ref=None) -> np.ndarray:
     """Samples divided by block scales (largest |value| in each block of ``ref``, default
     the samples themselves; tiny floor)."""
     s = np.asarray(samples, dtype=float)
@@ -320,7 +320,7 @@ def classify_period(samples, max_period: int, period_tol: float, *,
         s = s[:, None]
     if s.shape[0] < 2 or not np.all(np.isfinite(s)):
         return 0, math.nan
-    z = _scaled(s, split)
+    z = block_scaled(s, split)
     defects = {}
     for n in range(1, min(int(max_period), s.shape[0] - 1) + 1):
         defects[n] = float(np.max(np.abs(z[n:] - z[:-n])))
@@ -341,7 +341,7 @@ def count_clusters(samples, rel_tol: float = 1e-3, *, split: int | None = None) 
         s = s[:, None]
     if s.shape[0] == 0 or not np.all(np.isfinite(s)):
         return 0
-    z = _scaled(s, split)
+    z = block_scaled(s, split)
     centres = np.empty_like(z)      # greedy, in sample order; one array op per sample
     k = 0
     for p in z:
@@ -462,5 +462,5 @@ def period_defect(samples, n: int, *, split: int | None = None) -> float:
         s = s[:, None]
     if n < 1 or s.shape[0] <= n:
         return math.nan
-    z = _scaled(s, split)
+    z = block_scaled(s, split)
     return float(np.max(np.abs(z[n:] - z[:-n])))

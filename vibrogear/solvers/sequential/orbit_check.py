@@ -51,7 +51,7 @@ from ...config.sections.options import IntegrationOptions, ShootingOptions
 from ..periodic.floquet import split_trivial
 from ..integrator.integrate import integrate
 from ..periodic.shooting import shoot
-from .motion import _scaled
+from .motion import block_scaled
 
 __all__ = ["OrbitCheck", "check_orbit", "near_periods", "extrapolate", "MAX_ITER", "NEAR",
            "PROBE_ITER", "PROBE_DROP", "NEWTON_MAX_STATES", "EXTRAPOLATE"]
@@ -111,7 +111,7 @@ def near_periods(samples, periods=(1, 2), near: float = NEAR) -> tuple[int, ...]
     s = np.asarray(samples, dtype=float)
     if s.ndim != 2 or s.shape[0] < 2 or not np.all(np.isfinite(s)):
         return ()
-    z = _scaled(s[:, :max(s.shape[1] // 2, 1)], None)
+    z = block_scaled(s[:, :max(s.shape[1] // 2, 1)], None)
     return tuple(n for n in periods if n < s.shape[0]
                  and float(np.max(np.abs(z[n:] - z[:-n]))) <= near)
 
@@ -159,7 +159,7 @@ def _extrapolated(model, param, drift, n, period_tol, options, m):
             return None
         # every step of the window, scaled as the period test scales a record: a slow mode
         # that rotates (|mu| ~ 1, small angle) moves little in one period
-        z = _scaled(np.vstack([x, tr.u]), m)
+        z = block_scaled(np.vstack([x, tr.u]), m)
         defect = float(np.max(np.abs(z[1:] - z[:-1])))
         if defect <= 0.5 * period_tol:
             return (x, rate, defect) if _approaches(model, drift, x, n) else None
