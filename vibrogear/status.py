@@ -4,8 +4,10 @@ Every solver result (integration, shooting, static equilibrium, sweep, continuat
 carries a :class:`Status` and a message that starts from :data:`MESSAGES`, and shows the
 same face, :class:`Outcome`, through its ``outcome`` property: status, message, counters,
 wall time and error estimate, of one shape everywhere, for scripts and post-processing
-that take any result (the run summary still spells out each analysis's own fields; no
-analysis reads ``outcome`` yet).  The compiled
+that take any result.  An analysis that runs several solves (the runs of a run-up, the
+sweeps of a map, the starts of a census, the backbones of ``nnm``) hands the runner one
+outcome, :meth:`Outcome.combine` of its solves': counters summed in one place, not by hand.
+The compiled
 integrator loop returns plain negative integers (numba has no enums); they are the values
 of the integrator members below and become a :class:`Status` in one place,
 :func:`from_code`.  The integers are also what ``sweep.npz`` stores per point, so the files
@@ -115,6 +117,41 @@ class Outcome:
     @property
     def ok(self) -> bool:
         return self.status.success
+
+    @classmethod
+    def combine(cls, outcomes, *, status: Status | None = None, message: str | None = None,
+                wall_s: float | None = None) -> "Outcome":
+        """One outcome of several solves.
+
+        ``counters``: each name summed over the solves; ``error_estimate``: each name's
+        largest value (None where no solve has one); ``wall_s``: the solves' wall times
+        summed, unless given (the analysis's own clock, where the solves ran side by side).
+        ``status`` / ``message``, unless given: :attr:`Status.OK` where every solve
+        succeeded (none at all included); the solves' one status where all failed alike;
+        else :attr:`Status.PARTIAL`, "k of n solves failed", with the first failure's
+        message."""
+        outs = list(outcomes)
+        counters: dict = {}
+        errors: dict = {}
+        for o in outs:
+            for k, v in o.counters.items():
+                counters[k] = counters.get(k, 0) + v
+            for k, v in o.error_estimate.items():
+                old = errors.get(k)
+                errors[k] = v if old is None else old if v is None else max(old, v)
+        failed = [o for o in outs if not o.ok]
+        if status is None:
+            if not failed:
+                status, text = Status.OK, MESSAGES[Status.OK]
+            elif len(failed) == len(outs) and len({o.status for o in failed}) == 1:
+                status, text = failed[0].status, failed[0].message
+            else:
+                status = Status.PARTIAL
+                text = (f"{len(failed)} of {len(outs)} solves failed; the first: "
+                        f"{failed[0].message}")
+            message = text if message is None else message
+        return cls(status, MESSAGES[Status(status)] if message is None else message, counters,
+                   sum(o.wall_s for o in outs) if wall_s is None else wall_s, errors)
 
 
 def from_code(code: int) -> Status:

@@ -40,6 +40,41 @@ LAYERS = {
     "__init__.py": 11,      # the package: the version and the API, re-exported on first use
 }
 
+#: floors inside the packages that are built of wings (a sub-package, or a module directly
+#: under the package), lowest first.  An import from one part to another of the same package
+#: goes to a lower floor, never sideways or up: in analyses/ the helpers every verb shares,
+#: then the sweep (whose branches a continuation and the census start from), then the verbs;
+#: in config/ the loader, the solvers' options, the machine (model/), the verbs' options
+#: (sections/) and the REXS import, the scene that joins them; in report/ the figure base and
+#: the file formats, the figures (plots/), the writers, the page.  docs/architecture.md,
+#: section "Wings", has this table.
+WINGS = {
+    "analyses": {
+        "static_load.py": 0, "mesh_loads.py": 0,
+        "study.py": 1, "invoke.py": 1, "housing_compute.py": 1,
+        "sweep/": 2,
+        "continuation.py": 3, "critical_damping.py": 3, "gearbox_modes.py": 3, "housing.py": 3,
+        "housing_study.py": 3, "housing_sweep.py": 3, "nnm.py": 3, "precision.py": 3,
+        "reduction_accuracy.py": 3, "rotor.py": 3, "time_response.py": 3, "findings/": 3,
+        "map/": 3, "nvh/": 3, "optimize/": 3, "runup/": 3, "states/": 3,
+    },
+    "config": {
+        "errors.py": 0, "numbers.py": 0, "verbs.py": 0,
+        "base.py": 1,
+        "options.py": 2,
+        "model/": 3,
+        "sections/": 4, "rexs/": 4,
+        "scene.py": 5,
+        "reference.py": 6,
+    },
+    "report": {
+        "figure.py": 0, "sweep_files.py": 0, "branch_files.py": 0,
+        "plots/": 1,
+        "writers/": 2,
+        "page/": 3,
+    },
+}
+
 #: (importing module, imported module): why the import is allowed.  Empty: the 9 upward
 #: imports (analyses -> report) that existed went away when every analysis got its report
 #: writer.  An entry here must name its reason and appear in docs/architecture.md.
@@ -356,3 +391,77 @@ def test_pipeline_imports_only_config():
            if imported.startswith("vibrogear") and not
            (imported in allowed or imported.startswith(tuple(a + "." for a in allowed[:3])))]
     assert not bad, bad
+
+
+def _wing(module: str) -> tuple[str, str] | None:
+    """(package, part) of a module inside a package of :data:`WINGS`, else None."""
+    parts = module.split(".")
+    if len(parts) < 3 or parts[1] not in WINGS:
+        return None
+    return parts[1], f"{parts[2]}/" if (PKG / parts[1] / parts[2]).is_dir() else f"{parts[2]}.py"
+
+
+def test_every_wing_has_a_floor():
+    have = {_wing(m) for m in _modules()} - {None}
+    listed = {(pkg, part) for pkg, floors in WINGS.items() for part in floors}
+    assert sorted(have - listed) == [], "parts of a winged package without a floor in WINGS"
+    assert sorted(listed - have) == [], "WINGS names parts that do not exist"
+
+
+def test_imports_between_wings_go_down():
+    bad = []
+    for (a, b), lines in _edges().items():
+        wa, wb = _wing(a), _wing(b)
+        if wa and wb and wa[0] == wb[0] and wa[1] != wb[1]:
+            floors = WINGS[wa[0]]
+            if floors[wb[1]] >= floors[wa[1]]:
+                bad.append(f"  {a} -> {b} (line {', '.join(map(str, lines))}): {wa[1]} is on "
+                           f"floor {floors[wa[1]]}, {wb[1]} on floor {floors[wb[1]]}")
+    assert not bad, f"{wa[0] if bad else ''} imports sideways or up:\n" + "\n".join(sorted(bad))
+
+
+def test_architecture_doc_states_the_same_wings():
+    stated: dict = {}
+    for line in _arch_section("Wings").splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if line.lstrip().startswith("|") and len(cells) == 3 and cells[1].isdigit():
+            pkg = cells[0].strip("`/")
+            for name in re.findall(r"`([^`]+)`", cells[2]):
+                stated.setdefault(pkg, {})[name] = int(cells[1])
+    assert stated == WINGS
+
+
+def _private_imports(name: str, path: Path) -> list[tuple[str, str, int]]:
+    """(imported module, private name, line) for each ``from M import _x`` of a vibrogear
+    module M other than the importing one (inside functions included)."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if target.split(".")[0] != "vibrogear" or target == name:
+                continue
+            out += [(target, a.name, node.lineno) for a in node.names
+                    if a.name.startswith("_") and not a.name.startswith("__")]
+    return out
+
+
+def test_no_module_imports_another_modules_private_names():
+    """A name that another module needs is public in the module that defines it (or the
+    two modules are one); ``_name`` stays private to its module."""
+    bad = [f"  {n}:{line} imports {t}.{x}" for n, p in _modules().items()
+           for t, x, line in _private_imports(n, p)]
+    assert not bad, "imports of private names:\n" + "\n".join(bad)
+
+
+def test_the_private_name_rule_sees_a_private_import(tmp_path):
+    p = tmp_path / "x.py"
+    p.write_text("from .study import _helper, public\nfrom vibrogear.status import Outcome\n"
+                 "def f():\n    from ..report.figure import _private\n")
+    assert _private_imports("vibrogear.analyses.x", p) == [
+        ("vibrogear.analyses.study", "_helper", 1), ("vibrogear.report.figure", "_private", 4)]

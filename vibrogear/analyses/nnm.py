@@ -27,6 +27,7 @@ from ..solvers.periodic.nnm import nnm_branch
 from ..solvers.periodic.nnm_problem import (conservative_model, linear_modes_at,
                                             onset_amplitude)
 from ..solvers.static import static_equilibrium
+from ..status import Outcome
 from .study import integration_options
 
 __all__ = ["NnmStudyResult", "run", "start_mode"]
@@ -139,7 +140,8 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
                             linear_frequencies=omega * fs, delta_static=d_s,
                             shapes=tuple(shapes), conservative=cm)
     return AnalysisOutcome(summary=_summary(result, wall, opts, cfg, rigid, notes),
-                           result=result)
+                           result=result,
+                           solver=Outcome.combine((b.outcome for b in branches), wall_s=wall))
 
 
 def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):

@@ -98,15 +98,10 @@ class OperatingMap:
 
     @property
     def outcome(self) -> Outcome:
-        """The map as a whole (each row's sweep holds its points' statuses)."""
-        defects = [r.error_estimate["max_periodicity_defect"] for r in self.rows]
-        return Outcome(self.status_code, self.status_message, {
-            "points": sum(r.param.size for r in self.rows),
-            "failed_points": sum(int(np.sum(r.status != 0)) for r in self.rows),
-            "rhs_calls": sum(r.rhs_calls for r in self.rows)}, self.wall_time, {
-            "rtol": self.rows[0].rtol if self.rows else None,
-            "atol": self.rows[0].atol if self.rows else None,
-            "max_periodicity_defect": max((d or 0.0) for d in defects) if defects else None})
+        """The map as a whole: its rows' sweeps combined (counters summed, the largest
+        error estimates), with the map's own status and wall time."""
+        return Outcome.combine([r.outcome for r in self.rows], status=self.status_code,
+                               message=self.status_message, wall_s=self.wall_time)
 
 
 def grid_array(m: OperatingMap, name: str) -> np.ndarray:

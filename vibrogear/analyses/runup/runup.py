@@ -33,6 +33,7 @@ from ...models.contact_law import flank
 from ...pipeline.executors import run_units
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ...solvers.sequential.ramp import RampResult, SpeedProfile, ramp
+from ...status import Outcome
 from .order_tracking import Waterfall, order_tracks, waterfall
 from ..study import Study, integration_options
 
@@ -292,7 +293,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
             **{d: inertia_effect(by[d, True], by[d, False], wi) for d in cfg.directions}}
     return AnalysisOutcome(summary=summary, result=RunupResult(
         study=study, mesh_names=mesh_names, order_names=names, orders=orders, runs=runs,
-        teeth=teeth))
+        teeth=teeth), solver=Outcome.combine(r.ramp.outcome for r in runs))
 
 
 def runup_arrays(result) -> dict:

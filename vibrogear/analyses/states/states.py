@@ -42,6 +42,7 @@ from .cluster import cluster_point, interval_widths
 from .starts import draw_start, start_scales
 from ..study import Study, integration_options
 from ...solvers.sequential.record_json import record_from_json, record_to_json
+from ...status import Outcome
 
 __all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
 
@@ -285,10 +286,9 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     sweep = compare_with_sweep(study, attractors, (previous or {}).get("sweep"))
     timings["census_wall"] = t_census
     timings["total_wall"] = time.perf_counter() - wall
+    solves = Outcome.combine((r.outcome for r in recs), wall_s=t_census)
     counters = {"starts_settled": len(recs), "starts_resumed": resumed, "rounds": info["rounds"],
-                "steps": int(sum(r.steps for r in recs)),
-                "rhs_calls": int(sum(r.rhs_calls for r in recs)),
-                "events": int(sum(r.events for r in recs))}
+                **{k: solves.counters.get(k, 0) for k in ("steps", "rhs_calls", "events")}}
     result = StatesResult(params=params, attractors=tuple(attractors),
                           n_starts=np.array(n_ok, int), n_failed=np.array(n_failed, int),
                           study=study, branches=tuple(branches), branch_notes=tuple(notes),
@@ -297,5 +297,5 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     summary.update(split.summary())
     if store is not None and store.note:
         summary["resume"] = store.note
-    return AnalysisOutcome(summary=summary, result=result,
+    return AnalysisOutcome(summary=summary, result=result, solver=solves,
                            partial_files=() if store is None else (store.path,))

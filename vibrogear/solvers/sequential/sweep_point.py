@@ -73,7 +73,7 @@ from .motion import (CHAOTIC, FAILED, batch_blocks, best_defect, monitored_name,
                      classify_period, contact_groups, count_clusters, metrics_with_errors,
                      monitored_deformation, monitored_quantities, motion_class, period_defect,
                      resolutions, resolved_period)
-from ...status import Status
+from ...status import Outcome, Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
            "SETTLE_WINDOW", "PHASES"]
@@ -125,6 +125,14 @@ class PointRecord:
     @property
     def ok(self) -> bool:
         return self.status == 0
+
+    @property
+    def outcome(self) -> Outcome:
+        """The point's solve as an :class:`~vibrogear.status.Outcome` (integrator counters;
+        the point's evidence is in its fields), for :meth:`Outcome.combine`."""
+        return Outcome(self.status, self.message, {
+            "steps": self.steps, "rejected": self.rejected, "rhs_calls": self.rhs_calls,
+            "events": self.events}, self.wall_time, {})
 
 
 def failed_point(direction, index, param, R, status, message, u_seed, counts=None,
