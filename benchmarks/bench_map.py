@@ -39,7 +39,7 @@ from vibrogear.analyses.map.map import compute_map  # noqa: E402
 from vibrogear.analyses.study import integration_options  # noqa: E402
 from vibrogear.analyses.study import build_study  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
-from vibrogear.config.sections.options import SweepOptions  # noqa: E402
+from vibrogear.config.options import SweepOptions  # noqa: E402
 from vibrogear.solvers.sequential.sweep import sweep  # noqa: E402
 
 TARGET_S = 120.0

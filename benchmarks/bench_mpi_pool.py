@@ -75,7 +75,7 @@ def _setup(points: int, segments: int):
 
     from vibrogear.analyses.study import build_study, integration_options
     from vibrogear.config import load_scene
-    from vibrogear.config.sections.options import SweepOptions
+    from vibrogear.config.options import SweepOptions
     from vibrogear.solvers.sequential.sweep import walk_unit, sweep_units
 
     scene = load_scene(SCENE, (f"sweep.n_points={points}", f"sweep.segments={segments}"))

@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 
 from vibrogear.analyses.study import build_study, integration_options  # noqa: E402
 from vibrogear.config import load_scene  # noqa: E402
-from vibrogear.config.sections.options import SweepOptions  # noqa: E402
+from vibrogear.config.options import SweepOptions  # noqa: E402
 from vibrogear.solvers.integrator.integrate import integrate  # noqa: E402
 from vibrogear.solvers.sequential.sweep_point import run_point  # noqa: E402
 

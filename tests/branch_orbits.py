@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vibrogear.config.sections.options import ShootingOptions
+from vibrogear.config.options import ShootingOptions
 from vibrogear.solvers.periodic.shooting import shoot
 
 __all__ = ["stable_orbits_through", "extrema_error"]

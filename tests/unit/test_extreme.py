@@ -15,10 +15,10 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import shoot
 from vibrogear.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification.impact_exact import ImpactParams, linear_frf
 from vibrogear.verification.impact_orbits import periodic_orbit
-from vibrogear.config.sections.options import ShootingOptions
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 

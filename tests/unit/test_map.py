@@ -13,7 +13,7 @@ from vibrogear.analyses.map.map import PARTIAL_NAME, compute_map
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 from vibrogear.solvers.sequential.sweep import sweep
 
 GEAR_PAIR = str(Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml")

@@ -20,7 +20,7 @@ from scipy.integrate import quad
 from vibrogear.cli import main
 from vibrogear.config.base import ConfigError
 from vibrogear.config.sections.nnm import NnmConfig
-from vibrogear.config.sections.options import IntegrationOptions
+from vibrogear.config.options import IntegrationOptions
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.solvers.integrator.integrate import integrate
@@ -234,7 +234,7 @@ def test_the_steps_rule_is_written_once_and_names_the_field():
     """[nnm] and the solver's settings share :class:`NnmSteps`: one ds rule, one field name,
     and the section builds the solver's NnmMethod with every step it holds."""
     from vibrogear.config.base import build
-    from vibrogear.config.sections.options import NnmSteps
+    from vibrogear.config.options import NnmSteps
 
     assert issubclass(NnmConfig, NnmSteps) and issubclass(NnmMethod, NnmSteps)
     with pytest.raises(ConfigError) as exc:

@@ -178,7 +178,7 @@ def test_every_solver_result_shows_one_outcome(orbit):
     rotor modes and Campbell: the same five fields; the status is the result's own, the
     counters are the result's own numbers."""
     from rotor_fixtures import friswell_two_disc
-    from vibrogear.config.sections.options import SweepOptions
+    from vibrogear.config.options import SweepOptions
     from vibrogear.solvers.periodic.shooting import shoot
     from vibrogear.solvers.rotor.campbell import campbell_diagram
     from vibrogear.solvers.rotor.modes import rotor_modes

@@ -14,10 +14,10 @@ from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.analyses.sweep.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
-from vibrogear.report.writers.sweep_files import csv_header, read_sweep_npz, write_sweep
+from vibrogear.report.sweep_files import csv_header, read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import classify_period, count_clusters, sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 
 # impact pair with a stiff outer spring (hardening): a resonance that bends to the
 # right, coexisting large / small responses for Omega ~ 0.7-0.9, period 2 near 0.45-0.5

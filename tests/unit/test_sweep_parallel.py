@@ -20,10 +20,10 @@ from vibrogear.models.reduced import ReducedModel
 from vibrogear.pipeline.executors import UnitError, backend_for, run_units
 from vibrogear.analyses.sweep.sweep import PARTIAL_NAME, resumable_sweep
 from vibrogear.pipeline.resume import read_items
-from vibrogear.report.writers.sweep_files import read_sweep_npz, write_sweep
+from vibrogear.report.sweep_files import read_sweep_npz, write_sweep
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.sweep import sweep, sweep_units
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -242,7 +242,7 @@ import sys
 import numpy as np
 import test_sweep_parallel as t
 from vibrogear.analyses.sweep.sweep import resumable_sweep
-from vibrogear.report.writers.sweep_files import write_sweep
+from vibrogear.report.sweep_files import write_sweep
 model = t.boom_model() if sys.argv[2] == "boom" else t.MODEL
 res, store, _ = resumable_sweep(model, t.GRID, sys.argv[1], settings=t.SETTINGS, u0=t.U0, options=t.OPTS)
 if store is not None:                  # rank 0 writes the files, as the runner does

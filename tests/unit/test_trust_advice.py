@@ -9,7 +9,7 @@ import numpy as np
 
 from vibrogear.analyses.study import integration_options
 from vibrogear.config import load_scene
-from vibrogear.config.sections.options import IntegrationOptions
+from vibrogear.config.options import IntegrationOptions
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.solvers.integrator.trust import DEFAULT_RTOL, _tighten, assess
 from vibrogear.status import Status

@@ -14,7 +14,7 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import periodic_flow
 from vibrogear.status import Status
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 from vibrogear.verification.impact_exact import ImpactParams
 from vibrogear.verification.impact_orbits import periodic_orbit
 

@@ -28,7 +28,7 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.periodic.shooting import periodic_flow, shoot
 from vibrogear.status import Status
 from vibrogear.solvers.sequential.sweep import classify_period
-from vibrogear.config.sections.options import ShootingOptions
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 ZETA, C_DRAG, B, K = 0.05, 0.2, 1.0, 20.0

@@ -29,7 +29,7 @@ except ImportError:  # tests/ itself on sys.path (pytest rootdir-less import)
 
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
-from vibrogear.config.sections.options import ShootingOptions
+from vibrogear.config.options import ShootingOptions
 
 try:
     from vibrogear.solvers.periodic.shooting import shoot

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from vibrogear.config.sections.options import IntegrationOptions, SweepOptions
+from vibrogear.config.options import IntegrationOptions, SweepOptions
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.sequential.strob_evidence import spectral_evidence
 from vibrogear.solvers.integrator.integrate import integrate

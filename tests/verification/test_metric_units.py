@@ -17,7 +17,7 @@ from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 
 GEAR_PAIR = Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml"
 OPT = IntegrationOptions(rtol=1e-9, atol=1e-15)

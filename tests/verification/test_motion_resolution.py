@@ -26,7 +26,7 @@ import pytest
 
 from vibrogear.config import load_scene
 from vibrogear.config.base import ConfigError
-from vibrogear.config.sections.options import IntegrationOptions, SweepOptions
+from vibrogear.config.options import IntegrationOptions, SweepOptions
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.solvers.sequential.motion import (CHAOTIC, MULTI_FREQUENCY, PERIODIC,
                                                  classify_period, resolved_period)

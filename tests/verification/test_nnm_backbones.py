@@ -17,7 +17,7 @@ import pytest
 
 from vibrogear.analyses.study import build_study
 from vibrogear.config import load_scene
-from vibrogear.config.sections.options import ContinuationOptions, IntegrationOptions
+from vibrogear.config.options import ContinuationOptions, IntegrationOptions
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.linear import linear_modes
 from vibrogear.solvers.periodic.continuation import (PeriodicOrbitProblem, PseudoArclength,

@@ -15,7 +15,7 @@ from vibrogear.config import load_scene
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.sequential.ramp import SpeedProfile, ramp
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 
 pytestmark = pytest.mark.slow
 

@@ -16,7 +16,7 @@ import numpy as np
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 from reference import impact_exact as ex  # the flow and the periodic orbits
 
 #: tests/verification/test_sweep_evidence.py's double-sided orbit and chaotic pair

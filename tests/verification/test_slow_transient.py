@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from vibrogear.config.sections.options import IntegrationOptions, SweepOptions
+from vibrogear.config.options import IntegrationOptions, SweepOptions
 from vibrogear.models.impact_pair import impact_pair_model
 from vibrogear.solvers.sequential.motion import PERIODIC
 from vibrogear.solvers.sequential.sweep import sweep

@@ -64,7 +64,7 @@ def _stable_orbits(study, scene, branches, p):
     """(n, qmax) of each stable branch orbit at ``p``, shot at exactly ``p`` from the
     bracketing branch points (linear interpolation of their states)."""
     from vibrogear.analyses.study import integration_options
-    from vibrogear.config.sections.options import ShootingOptions
+    from vibrogear.config.options import ShootingOptions
     from vibrogear.solvers.periodic.shooting import shoot
 
     opts = integration_options(scene, section=scene.continuation, study=study)

@@ -22,9 +22,9 @@ from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate
 from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
 from vibrogear.solvers.sequential.motion import CHAOTIC, PERIODIC
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 from reference import impact_exact as ex  # the flow and the periodic orbits
-from vibrogear.config.sections.options import ShootingOptions
+from vibrogear.config.options import ShootingOptions
 
 OPT = IntegrationOptions(rtol=1e-10, atol=1e-12)
 #: configs/impact_pair.toml (zeta, kappa, f_m, f_p, b_r)

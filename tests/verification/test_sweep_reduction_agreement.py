@@ -26,7 +26,7 @@ from vibrogear.config.scene import read_toml, scene_from_dict
 from vibrogear.solvers.integrator.integrate import IntegrationOptions
 from vibrogear.solvers.static import static_equilibrium
 from vibrogear.solvers.sequential.sweep import sweep
-from vibrogear.config.sections.options import SweepOptions
+from vibrogear.config.options import SweepOptions
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "configs" / "two_stage.toml"

@@ -12,7 +12,7 @@ equilibrium itself: it exists, unstable, inside the rattle windows, and its bran
 where stability is lost (PD / NS / LP).  For a dimensional
 model (gearbox: states ~1e-5 m, speeds ~1e3 rpm) the arclength is measured in parameter
 units: the parameter is scaled by range / |u|, so ``ds``, ``ds_min``, ``ds_max`` are given in
-the scene's parameter unit (:class:`~vibrogear.config.sections.options.ContinuationSteps`).
+the scene's parameter unit (:class:`~vibrogear.config.options.ContinuationSteps`).
 
 With ``from_sweep`` also a branch both ways from each distinct period-n window of the sweep
 (this run's sweep outcome, or an earlier run's ``sweep.npz`` in the output folder, which the
@@ -41,7 +41,7 @@ from ..solvers.integrator.integrate import integrate
 from ..solvers.periodic.shooting import shoot
 from ..solvers.periodic.starting_orbit import starting_orbit
 from .study import Study, integration_options
-from ..config.sections.options import ShootingOptions
+from ..config.options import ShootingOptions
 
 __all__ = ["ContinuationStudyResult", "run", "starting_orbit", "coverage"]
 

@@ -31,7 +31,7 @@ from ..solvers.periodic.shooting import shoot
 from ..solvers.static import static_equilibrium
 from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow
 from ..verification.impact_orbits import periodic_orbit
-from ..config.sections.options import ShootingOptions
+from ..config.options import ShootingOptions
 from .study import ATOL_PER_RTOL_BY_MODEL
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",

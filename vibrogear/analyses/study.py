@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config.sections.options import IntegrationOptions, Parameter
+from ..config.options import IntegrationOptions, Parameter
 from ..models.reduced import ReducedModel
 from ..pipeline.outcome import NumericalFailure
 from ..pipeline.resume import fingerprint
@@ -174,7 +174,7 @@ def _requested_options(scene, record, period_tol, section) -> IntegrationOptions
         return dataclasses.replace(opts, rtol=own, atol=atol_for(scene.model_kind, own))
     if not record or scene.gearbox is None or rtol_given(scene):
         return opts
-    from ..config.sections.options import SweepOptions
+    from ..config.options import SweepOptions
 
     acc = getattr(section, "accuracy", None) or getattr(scene.sweep, "accuracy", None) or \
         SweepOptions.__dataclass_fields__["accuracy"].default

@@ -17,7 +17,7 @@ from .sections.map import MapConfig
 from .sections.nvh import NvhConfig
 from .sections.nnm import NnmConfig
 from .sections.optimize import OptimizeConfig
-from .sections.options import Parameter
+from .options import Parameter
 from .model.rotor import RotorConfig
 from .sections.runup import RunupConfig
 from .sections.states import RpmStatesConfig, StatesConfig

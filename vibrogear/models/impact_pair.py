@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..config.sections.options import OMEGA
+from ..config.options import OMEGA
 from .reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 
 __all__ = ["impact_pair_model"]

@@ -29,7 +29,7 @@ from functools import partial
 
 import numpy as np
 
-from ...config.sections.options import ContinuationOptions
+from ...config.options import ContinuationOptions
 from ...pipeline.executors import run_units, under_mpi
 from ...solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ...solvers.periodic.starting_orbit import starting_orbit
@@ -178,7 +178,7 @@ def locate_bifurcations(model, scaling: LoadScaling, scales, first_window, *, ma
                         split=None) -> tuple:
     """:class:`LoadBifurcations` per load factor in ``scales`` (returned in increasing
     load), visiting the loads outward from the one nearest 1 (module docstring).
-    ``steps``: the :class:`~vibrogear.config.sections.options.ContinuationSteps` fields (rpm);
+    ``steps``: the :class:`~vibrogear.config.options.ContinuationSteps` fields (rpm);
     ``workers``: local processes for the windows of one load (None: all cores); under MPI
     collective (every rank calls it and gets the same result).  ``split``: a
     :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the windows."""

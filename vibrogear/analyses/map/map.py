@@ -42,7 +42,7 @@ from ...status import Outcome, Status
 from ...solvers.sequential.sweep import assemble_result, sweep_units
 from ...solvers.sequential.sweep_point import run_point
 from .load_scaling import LoadScaling, load_scaling
-from ...config.sections.options import SweepOptions
+from ...config.options import SweepOptions
 from ..study import Study, integration_options, start_state
 from ...solvers.sequential.record_json import record_from_json, record_to_json
 
@@ -185,7 +185,7 @@ def compute_map(study: Study, scaling: LoadScaling, rpm, scales, settings, optio
                 out=None, root: bool = True, callback=None, force_periods: int = 4,
                 force_samples: int = 128, split=None) -> OperatingMap:
     """The map of ``study`` over ``rpm`` x load factors ``scales`` with the sweep settings
-    ``settings`` (:class:`~vibrogear.config.sections.options.SweepOptions`) and integrator
+    ``settings`` (:class:`~vibrogear.config.options.SweepOptions`) and integrator
     ``options``.  ``out``: folder of the partial file (None: not resumable);
     ``callback(row, record)`` after each new point; ``split``: a
     :class:`~vibrogear.pipeline.wall_split.WallSplit` that times the units."""

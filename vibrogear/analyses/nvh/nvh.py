@@ -105,7 +105,7 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
         raise ConfigError("nvh.rpm_min", "no steady points: list 'sweep' before 'nvh' in "
                           "scene.analyses (with nvh.use_sweep = true), or give the [nvh] "
                           "speed grid rpm_min / rpm_max")
-    from ...config.sections.options import SweepOptions
+    from ...config.options import SweepOptions
     from ...solvers.sequential.sweep import sweep
 
     rpm = np.linspace(cfg.rpm_min, cfg.rpm_max, cfg.n_speeds)

@@ -28,7 +28,7 @@ from functools import partial
 
 import numpy as np
 
-from ...config.sections.options import ContinuationOptions, ShootingOptions
+from ...config.options import ContinuationOptions, ShootingOptions
 from ...pipeline.executors import broadcast, effective_workers, run_units
 from ...solvers.periodic.continuation import PeriodicOrbitProblem, PseudoArclength, continuation
 from ...solvers.periodic.shooting import shoot

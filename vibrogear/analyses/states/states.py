@@ -31,7 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...config.sections.options import SweepOptions
+from ...config.options import SweepOptions
 from ...pipeline.executors import broadcast, effective_workers, run_units, unit_size
 from ...pipeline.wall_split import WallSplit
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext

@@ -62,7 +62,7 @@ def _same_family(a: Window, b: Window, rel_tol: float) -> bool:
 def period_windows(data: dict, n_states: int, *, rel_tol: float = 1e-3,
                    min_points: int = 1) -> list[Window]:
     """The distinct period-n windows of sweep arrays ``data`` (``sweep.npz``'s, or
-    :func:`~vibrogear.report.writers.sweep_files.sweep_arrays`): see the module docstring."""
+    :func:`~vibrogear.report.sweep_files.sweep_arrays`): see the module docstring."""
     param = np.asarray(data["param"], dtype=float)
     if param.size == 0 or np.asarray(data["u_end"]).shape[-1] != n_states:
         return []

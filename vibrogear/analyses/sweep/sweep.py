@@ -23,7 +23,7 @@ from ...solvers.sequential.motion import CHAOTIC, MOTION_LEGEND, QUASI_PERIODIC
 from ...status import Status
 from ...solvers.sequential.record_json import json_number as _num, record_from_json, record_to_json
 from ...solvers.sequential.sweep import SweepResult, sweep
-from ...config.sections.options import SweepOptions
+from ...config.options import SweepOptions
 from ..study import Study, integration_options
 
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME", "motion_summary"]

@@ -89,7 +89,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..base import ConfigError, ErrorList, spec
-from ..sections.options import RPM, Parameter
+from ..options import RPM, Parameter
 from .gearbox_supports import (BEARING_EXPONENTS, MAX_COMMON_PERIOD, MAX_ORDER_PERIOD,
                                ExternalCouplingConfig, GearboxBearingConfig, order_period,
                                torque_order_ratios)

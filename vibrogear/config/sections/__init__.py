@@ -1,4 +1,4 @@
 """The option sections of a scene: one module per verb with options, named as the verb
 (``map``, ``nvh``, ``runup``, ``states``, ``nnm``, ``optimize``, ``findings``, ``housing`` for
-the housing studies), the sections every scene may have (``common``) and the solvers' own option
-objects (``options``), each validated once, at load time."""
+the housing studies) and the sections every scene may have (``common``), each validated once,
+at load time; they build the solvers' own option objects (:mod:`vibrogear.config.options`)."""

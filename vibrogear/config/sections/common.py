@@ -2,13 +2,13 @@
 
 The sections that take the continuation parameter ([sweep], [continuation],
 [time_response]) read it under the keys of the parameter the model declares
-(:class:`~vibrogear.config.sections.options.Parameter`: ``omega_min``/``omega_max``/``omega`` for the
+(:class:`~vibrogear.config.options.Parameter`: ``omega_min``/``omega_max``/``omega`` for the
 impact pair, ``rpm_min``/``rpm_max``/``rpm`` for gearboxes): one settings class each, and
 one class per parameter made by :func:`with_parameter`, which adds the keys as fields and
 reads them back as ``param_min``/``param_max`` (or ``param``).  Errors name the key the
 user wrote, because it is the field's name.  [integration] and [shooting] are the solvers'
 own options objects; [continuation] builds the solver's
-:class:`~vibrogear.config.sections.options.ContinuationOptions` (:meth:`ContinuationSettings.options`).
+:class:`~vibrogear.config.options.ContinuationOptions` (:meth:`ContinuationSettings.options`).
 """
 from __future__ import annotations
 
@@ -18,8 +18,8 @@ from typing import ClassVar
 
 from ..base import ConfigError, check_name, spec
 from ..verbs import VERBS
-from .options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
-                      Parameter, ShootingOptions, SweepOptions, check_range)
+from ..options import (OMEGA, RPM, ContinuationOptions, ContinuationSteps, IntegrationOptions,
+    Parameter, ShootingOptions, SweepOptions, check_range)
 
 __all__ = ["SceneInfo", "FiguresConfig", "ReductionAccuracyConfig", "ImpactPairConfig", "IntegrationOptions", "ShootingOptions",
            "SweepSettings", "ContinuationSettings", "TimeResponseSettings", "with_parameter",

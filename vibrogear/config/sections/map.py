@@ -6,7 +6,7 @@ static loads.  The load is given either as the transmitted input torque (``torqu
 of the motor coupling (``twist_min`` / ``twist_max``, rad), exactly one of the two; every
 coupling's twist is scaled by the same factor, so the scene's load pattern (motor and load
 side) is kept.  Each load row is a sweep over speed with this section's sweep settings
-(:class:`~vibrogear.config.sections.options.SweepOptions`: transient, record, directions, period
+(:class:`~vibrogear.config.options.SweepOptions`: transient, record, directions, period
 tolerance, workers, ...).  ``curves``: also locate the fold (LP) and period-doubling (PD)
 points of the period-1 branch at each load by pseudo-arclength continuation in speed and
 join them into curves in the (speed, load) plane.
@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..base import ConfigError, spec
-from .options import SweepOptions, check_range
+from ..options import SweepOptions, check_range
 
 __all__ = ["MapConfig"]
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..base import ConfigError, spec
-from .options import IntegrationOptions, NnmMethod, NnmSteps
+from ..options import IntegrationOptions, NnmMethod, NnmSteps
 
 __all__ = ["NnmConfig"]
 

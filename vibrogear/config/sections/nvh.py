@@ -21,7 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ..base import ConfigError, spec
-from .options import check_range
+from ..options import check_range
 
 __all__ = ["NvhConfig"]
 

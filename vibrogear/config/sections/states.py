@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from ..base import ConfigError, spec
-from .options import OMEGA, RPM, SweepOptions, check_range
+from ..options import OMEGA, RPM, SweepOptions, check_range
 
 __all__ = ["StatesSettings", "StatesConfig", "RpmStatesConfig"]
 

@@ -40,7 +40,7 @@ import numpy as np
 from ...config.base import ConfigError
 from ...config.model.gearbox_supports import torque_order_ratios
 from ...config.model.layout import shaft_bore
-from ...config.sections.options import RPM as RPM_PARAMETER
+from ...config.options import RPM as RPM_PARAMETER
 from ...config.model.rotor import FreeGearConfig, DiscConfig, RotorConfig
 from .couplings import gear_mesh_geometry, mesh_contact_parameters
 from .supports import bearings as _bearings, gravity_load, housing_to_rotor

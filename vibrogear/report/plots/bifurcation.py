@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..writers.branch_files import branch_arrays
+from ..branch_files import branch_arrays
 from .branch import plot_branches
 from ..figure import plain_title, save_figure
-from ..writers.sweep_files import sweep_arrays
+from ..sweep_files import sweep_arrays
 from .sweep import plot_bifurcation
 
 __all__ = ["display_arrays", "draw_bifurcation", "plot_branch_figures", "plot_combined",

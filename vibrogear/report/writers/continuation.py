@@ -12,9 +12,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..plots.bifurcation import display_arrays, plot_branch_figures, plot_combined
-from .branch_files import write_branches
+from ..branch_files import write_branches
 from .fig2 import write_fig2
-from .sweep_files import read_sweep_npz, sweep_arrays
+from ..sweep_files import read_sweep_npz, sweep_arrays
 
 __all__ = ["write", "plot_branch_figures", "plot_combined"]
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from ..plots.bifurcation import display_arrays
-from .branch_files import branch_arrays
+from ..branch_files import branch_arrays
 from ..plots.branch import branch_legend, draw_branches, label_special_points
 from ..figure import new_figure, plain_title, save_figure
 from ..plots.sweep import class_categories, draw_band, motion_rows

@@ -94,9 +94,9 @@ def _forced(previous, out, study, name: str, file: str):
     got = (previous or {}).get(name)
     if got is not None and got.result is not None:
         if name == "continuation":
-            from .branch_files import branch_arrays
+            from ..branch_files import branch_arrays
             return branch_arrays(got.result.branches)
-        from .sweep_files import sweep_arrays
+        from ..sweep_files import sweep_arrays
         return sweep_arrays(got.result.sweep)
     path = Path(out) / file
     if path.is_file():

@@ -27,10 +27,10 @@ import numpy as np
 
 from ...analyses.runup.runup import runup_arrays
 from ...pipeline.files import atomic_write_bytes, atomic_write_npz
-from .branch_files import branch_arrays
+from ..branch_files import branch_arrays
 from ..figure import save_figure
 from ..plots.runup import plot_envelopes, plot_orders, plot_waterfall
-from .sweep_files import read_sweep_npz, sweep_arrays
+from ..sweep_files import read_sweep_npz, sweep_arrays
 
 __all__ = ["write", "runup_arrays", "steady_state"]
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ..plots.bifurcation import (display_arrays, draw_bifurcation, plot_branch_figures,
     plot_combined)
-from .sweep_files import read_sweep_npz, write_sweep
+from ..sweep_files import read_sweep_npz, write_sweep
 
 __all__ = ["write", "display_arrays", "draw_bifurcation"]
 

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions   # defined once, with the [integration] rules
+from ...config.options import IntegrationOptions   # defined once, with the [integration] rules
 from ...models.reduced import ReducedModel
 from .dopri import JAC_AUTO, JAC_BLAS, JAC_LOOPS, LoopResult, dopri_loop, loop_inputs
 from .kernels import model_arrays

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions
+from ...config.options import IntegrationOptions
 from ...models.reduced import ReducedModel
 from .integrate import integrate
 

@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions
+from ...config.options import IntegrationOptions
 from ...models.contact_law import evaluate_set
 from ...models.reduced import Forcing, ReducedModel
 from ...status import Status

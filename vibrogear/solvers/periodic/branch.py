@@ -1,7 +1,7 @@
 """The objects of a continuation: the problem (a periodic orbit of a model), the method
 (shooting + pseudo-arclength with its settings) and the result (branches of points, special
 points, status, counters, wall time, error estimates).  The options are
-:class:`~vibrogear.config.sections.options.ContinuationOptions`; the algorithm is
+:class:`~vibrogear.config.options.ContinuationOptions`; the algorithm is
 :func:`vibrogear.solvers.periodic.continuation.continuation`.
 """
 from __future__ import annotations
@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions
+from ...config.options import IntegrationOptions
 from ...models.reduced import ReducedModel
 from .floquet import split_trivial, stability
 from ...status import Outcome, Status

@@ -30,7 +30,7 @@ differ (a contact interval appears or vanishes: :func:`.special_points.grazing_n
 
 Call shape (BifurcationKit's): ``continuation(problem, method, options, callback)`` ->
 :class:`~.branch.ContinuationResult`, with the problem, method and result types in
-:mod:`.branch` and the options in :mod:`vibrogear.config.sections.options`.
+:mod:`.branch` and the options in :mod:`vibrogear.config.options`.
 """
 from __future__ import annotations
 
@@ -41,7 +41,7 @@ from typing import Callable
 
 import numpy as np
 
-from ...config.sections.options import ContinuationOptions, ShootingOptions
+from ...config.options import ContinuationOptions, ShootingOptions
 from ...pipeline.executors import blas_threads
 from .branch import (Branch, BranchPoint, ContinuationResult, PeriodicOrbitProblem,
                      PseudoArclength, SpecialPoint, stability_notes)

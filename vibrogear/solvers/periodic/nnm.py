@@ -32,7 +32,7 @@ from typing import Callable
 
 import numpy as np
 
-from ...config.sections.options import NnmMethod
+from ...config.options import NnmMethod
 from ...pipeline.executors import blas_threads
 from ...status import Outcome, Status
 from .branch import PseudoArclength

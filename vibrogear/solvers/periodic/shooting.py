@@ -47,7 +47,7 @@ from .floquet import (floquet_multipliers, liouville_error, neutral_directions, 
                       stability)
 from ..integrator.integrate import IntegrationOptions, Trajectory, integrate
 from ...status import Outcome, Status
-from ...config.sections.options import ShootingOptions
+from ...config.options import ShootingOptions
 
 __all__ = ["PeriodicFlow", "periodic_flow", "periodic_residual", "ShootingResult", "shoot",
            "residual_norm", "newton_step"]

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...config.sections.options import ShootingOptions
+from ...config.options import ShootingOptions
 from ...pipeline.executors import blas_threads
 from ..integrator.integrate import integrate
 from ..integrator.split_flow import ColumnSplit

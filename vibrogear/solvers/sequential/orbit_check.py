@@ -47,7 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions, ShootingOptions
+from ...config.options import IntegrationOptions, ShootingOptions
 from ..periodic.floquet import split_trivial
 from ..integrator.integrate import integrate
 from ..periodic.shooting import shoot

@@ -52,7 +52,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions
+from ...config.options import IntegrationOptions
 from ...models.contact_law import harmonic_series
 from ...models.reduced import Forcing, ReducedModel
 from ..integrator.integrate import integrate

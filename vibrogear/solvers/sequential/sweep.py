@@ -31,7 +31,7 @@ from functools import cached_property, partial
 
 import numpy as np
 
-from ...config.sections.options import SweepOptions
+from ...config.options import SweepOptions
 from ...models.reduced import ReducedModel
 from ...pipeline.executors import broadcast, is_root, run_units, under_mpi
 from ..integrator.integrate import IntegrationOptions
@@ -135,7 +135,7 @@ class SweepResult:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays ``sweep.npz`` holds, by the same names (NaN/inf replaced by 0; failed
-        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.writers.sweep_files`
+        points flagged by ``ok = False`` and ``status < 0``; :mod:`vibrogear.report.sweep_files`
         describes them)."""
         ok = self.status == 0
         return dict(**self._class_arrays(),
@@ -267,7 +267,7 @@ def sweep(model: ReducedModel, params, settings: SweepOptions | None = None, *,
     """Sequential continuation of ``model`` over ``params`` in independent units (see the
     module docstring), run by :func:`~vibrogear.pipeline.executors.run_units`.
 
-    ``settings`` (:class:`~vibrogear.config.sections.options.SweepOptions`, default its defaults):
+    ``settings`` (:class:`~vibrogear.config.options.SweepOptions`, default its defaults):
     ``lyapunov``: the largest Lyapunov exponent of points without a period (their class
     evidence); ``shoot``: Newton on the period map from such a point's settled state
     before it is called quasi-periodic or chaotic (:mod:`.sweep_point`);

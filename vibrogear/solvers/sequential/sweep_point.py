@@ -62,7 +62,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...config.sections.options import IntegrationOptions, SweepOptions
+from ...config.options import IntegrationOptions, SweepOptions
 from ...models.contact_law import flank
 from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate

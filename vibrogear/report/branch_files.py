@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ...pipeline.files import atomic_write_bytes, atomic_write_npz
-from ...solvers.periodic.branch import branch_arrays
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
+from ..solvers.periodic.branch import branch_arrays
 
 __all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
 

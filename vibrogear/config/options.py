@@ -16,7 +16,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from ..base import ConfigError, check, spec
+from .base import ConfigError, check, spec
 
 __all__ = ["Parameter", "OMEGA", "RPM", "IntegrationOptions", "ShootingOptions",
            "SweepOptions", "ContinuationSteps", "ContinuationOptions", "NnmSteps", "NnmMethod",

@@ -56,7 +56,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...pipeline.files import atomic_write_bytes, atomic_write_npz
+from ..pipeline.files import atomic_write_bytes, atomic_write_npz
 
 __all__ = ["write_sweep", "sweep_arrays", "read_sweep_npz", "csv_header"]
 
