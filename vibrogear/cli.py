@@ -156,8 +156,12 @@ def _main(argv: list[str] | None) -> int:
     from .config import ConfigError
     from .pipeline.files import check_output_dir
 
+    from .config import load_scene
+
     try:
-        scene = api.load(args.scene, tuple(args.overrides))
+        # read and overridden here, checked below for the analyses this command runs (a
+        # verb on a scene that lists continuation beyond the period limit still runs)
+        scene = load_scene(args.scene, tuple(args.overrides))
         if args.command in SINGLE:
             scene = api.with_analyses(scene, [SINGLE[args.command]])
         out = (check_output_dir(args.out) if args.out is not None else

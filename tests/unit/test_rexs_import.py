@@ -272,8 +272,10 @@ def test_box_housing_refuses_an_inner_wall_it_cannot_place(tmp_path, capsys, com
 
 def test_box_housing_encloses_the_shafts(tmp_path, capsys):
     """Without bearing 34 every casing bearing sits in the front or back plane: the box is
-    generated, coaxial shafts 12 and 14 share one bore pair, and the scene checks (every gear
-    tip inside the cavity, every bearing at a bore: config/model/layout.py)."""
+    generated, coaxial shafts 12 and 14 share one bore pair, and the layout checks (every gear
+    tip inside the cavity, every bearing at a bore: config/model/layout.py).  The scene as a whole
+    is then refused by its load path: without bearing 34, shafts 12 and 14 (joined by bearing
+    36) tilt about bearings 33 and 35 as a mechanism, so shaft 14 is free radially."""
     root = _xml_root()
     comps, rels = root.find("components"), root.find("relations")
     comps.remove(_component(root, "34"))
@@ -290,7 +292,10 @@ def test_box_housing_encloses_the_shafts(tmp_path, capsys):
     # the two axes 190 mm apart in the box
     (a, b) = h["bores"]
     assert math.hypot(a["x"] - b["x"], a["z"] - b["z"]) == pytest.approx(0.19, abs=1e-9)
-    assert main(["check", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "gearbox.shafts[2]" in err and "'shaft14' is free radially" in err
 
 
 def test_detailed_geometry_bearing(tmp_path):

@@ -415,8 +415,10 @@ def _motion_bands(arrays, rules, kw) -> list[Band]:
                                           "(no Lyapunov exponent computed)"),
                                          ("multi-frequency forced motion", MULTI_FREQUENCY,
                                           "fine", lambda idx: f"follows the forcing's "
-                                          f"frequencies at {_points(idx.size)}: it repeats "
-                                          "every common excitation period")):
+                                          f"frequencies at {_points(idx.size)} (meshes "
+                                          "exciting at their own frequencies): periodic over "
+                                          "their common period, or, where that exceeds the "
+                                          "period limit, not chaotic")):
         out += _bands(arrays, dict(quantity=quantity, where="gearbox" if kw["param_unit"]
                                    == "rpm" else "system", metric="motion_class", op="==",
                                    threshold=code, severity=severity), ev, **kw)

@@ -74,23 +74,34 @@ def deformation_scale(model: ReducedModel) -> np.ndarray:
     te = np.sum(np.hypot(ct.error_cos, ct.error_sin), axis=1) if ct.count else np.zeros(0)
     st = static_equilibrium(model, 0.0)
     static = np.abs(ct.directions @ st.x) if st.converged else np.zeros(ct.count)
-    scale = _gap_width(ct) + static + te + _resonant(model)
+    scale = _gap_width(ct) + static + te + _resonant(model, st.x if st.converged else None)
     _SCALE[model] = scale
     return scale
 
 
-def _resonant(model: ReducedModel) -> np.ndarray:
+def _resonant(model: ReducedModel, x_static=None) -> np.ndarray:
     """(nc,) the largest deformation the harmonic forcing can drive through each contact
     if every master mode resonated at once: sum_i |c_ji| |F_i| / (d_i w_i) over the damped
     elastic modes (inf where an undamped elastic mode is forced: no bound); where the
     forcing also drives a mode without modal stiffness (a shaft's rigid rotation, held by
     a coupling spring in the low-rank part: a torque order), the static response to each
     forcing vector through the whole model, amplified by 1 / (2 zeta_min) of the damped
-    modes."""
+    modes.  The mesh stiffness variation counts as a forcing too: at the static state
+    ``x_static`` a contact carrying the force f_j with relative stiffness harmonics a_jh
+    is driven by up to f_j sum_h |a_jh| along its direction (without it, a rolling element
+    at the edge of its load zone, deflected by nanometres statically, was bounded by
+    nanometres while every stage's mesh excited it)."""
     ct, f = model.contacts, model.forcing
     if not ct.count:
         return np.zeros(0)
     amp = np.sum(np.abs(f.Fc), axis=0) + np.sum(np.abs(f.Fs), axis=0)
+    mod = np.sum(np.hypot(ct.stiffness_cos, ct.stiffness_sin), axis=1)
+    if x_static is not None and np.any(mod > 0.0):
+        d = ct.directions @ x_static
+        over = np.maximum(d - ct.gap_hi, 0.0)
+        under = np.where(np.isfinite(ct.gap_lo), np.maximum(ct.gap_lo - d, 0.0), 0.0)
+        f_static = ct.k_hi * over ** ct.exponent + ct.k_lo * under ** ct.exponent
+        amp = amp + np.abs(ct.directions).T @ (f_static * mod)
     w = np.sqrt(np.maximum(model.omega2, 0.0))
     damped = (w > 0.0) & (model.damping > 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
