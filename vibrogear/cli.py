@@ -1,5 +1,8 @@
-"""Command line: ``vibrogear run|check|sweep|continue|report|modes|time|map|nvh|runup SCENE``,
-``vibrogear import MODEL.rexs [-o SCENE.toml]``.
+"""Command line: ``vibrogear COMMAND SCENE`` (``run`` the scene's analyses, ``check`` it, or
+one verb alone: ``time``, ``sweep``, ``continue``, ... as the verb registry names them),
+``vibrogear import MODEL.rexs [-o SCENE.toml]``, ``vibrogear compare RUN_A RUN_B`` and
+``vibrogear cache clear|info``.  ``vibrogear --help`` lists every command (the list is read
+from the parser, so it stays whole).
 
 Exit codes: 0 done; 1 a numerical failure (the message says where and why) or an analysis
 that produced nothing; 2 invalid input (a scene, an option, an output folder, the cache
@@ -62,7 +65,17 @@ def _parser() -> argparse.ArgumentParser:
     cmp.add_argument("--out", default=None, help="folder for compare.html (default RUN_B)")
     cache = sub.add_parser("cache", help="manage the on-disk cache")
     cache.add_argument("action", choices=["clear", "info"])
+    p.description = _description(list(sub.choices))
     return p
+
+
+def _description(commands: list[str]) -> str:
+    """The help's first lines: every command by name, then the exit codes."""
+    _, _, codes = (__doc__ or "").partition("\n\nExit codes")
+    import textwrap
+    listed = textwrap.fill(f"{len(commands)} commands: {', '.join(commands)}.", 79)
+    return (f"{listed}\nRun `vibrogear COMMAND --help` for one command's options.\n\n"
+            f"Exit codes{codes}")
 
 
 def _error(kind: str, exc: BaseException) -> None:

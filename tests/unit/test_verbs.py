@@ -90,3 +90,17 @@ def test_with_needs_runs_a_needed_verb_once_and_only_where_it_did_not_run(monkey
     assert calls == [] and again["modes"] is seen["modes"]
     assert invoke_mod.with_needs("sweep", "gearbox", None, None, None, {}) == {}
     assert calls == []
+
+
+def test_help_lists_every_command(capsys):
+    """``vibrogear --help`` names every command the parser has (the verbs' own commands, run,
+    check, import, compare, cache), 17 today."""
+    import pytest
+    with pytest.raises(SystemExit):
+        cli.main(["--help"])
+    text = capsys.readouterr().out
+    commands = ["run", "check", *[v.command for v in VERBS.values() if v.command], "import",
+                "compare", "cache"]
+    assert len(commands) == 17
+    listed = text.split("commands:", 1)[1].split(".", 1)[0].replace("\n", " ")
+    assert [c.strip() for c in listed.split(",")] == commands
