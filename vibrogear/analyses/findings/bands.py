@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...config.numbers import fmt, fmt_param, range_text
+from ...config.numbers import fmt, fmt_param
 from ...solvers.sequential.motion import (APERIODIC, CHAOTIC, MULTI_FREQUENCY, NOT_SETTLED,
     QUASI_PERIODIC)
 

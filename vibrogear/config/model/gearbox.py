@@ -508,12 +508,6 @@ class GearboxConfig:
              for k in (self.gear_index(m.gear_a, "") for m in self.meshes)]
         return tuple(x / f[0] for x in f)
 
-    def mesh_excitation_orders(self) -> tuple[tuple[Fraction, ...], ...]:
-        """Per mesh: the orders (over meshes[0]'s mesh frequency, exact) of the harmonics
-        it excites, h r_j for h = 1 .. its excitation_harmonics (none with excite = false)."""
-        return tuple(tuple(h * r for h in range(1, m.excitation_harmonics + 1))
-                     for m, r in zip(self.meshes, self.mesh_frequency_ratios()))
-
     def mesh_period(self) -> int:
         """Mesh periods of meshes[0] after which the meshes' excitation repeats: the least
         common multiple of the denominators of every excited mesh's frequency ratio."""

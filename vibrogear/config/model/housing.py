@@ -135,11 +135,6 @@ class HousingConfig:
     def rib_t(self) -> float:
         return self.rib_thickness if self.rib_thickness is not None else self.wall_thickness
 
-    @property
-    def file_path(self) -> Path | None:
-        """The imported file (made absolute against the scene file's folder when loaded)."""
-        return Path(self.file) if self.file is not None else None
-
     def key_data(self) -> dict[str, Any]:
         """The config as cache-key data: a parametric housing's keys are those it had before the
         imported sources existed; an imported one adds the file's SHA-256 (content, not name)."""

@@ -100,12 +100,6 @@ def _name(text: str) -> str:
     return s[:NAME_MAX_LEN]
 
 
-def _parts(model, assembly_id: str, part_type: str) -> list:
-    return [model.components[r.ref("part")] for r in model.relations_of("assembly")
-            if r.ref("assembly") == assembly_id and r.ref("part") is not None
-            and model.components[r.ref("part")].type == part_type]
-
-
 def _owner(model, part_id: str, owner_type: str):
     return model.owner(part_id, owner_type)
 

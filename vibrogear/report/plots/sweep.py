@@ -106,9 +106,6 @@ def draw_band(ax, param, rows):
     ax.legend(handles=handles, **_LEGEND)
 
 
-_band = draw_band
-
-
 def _mesh_panel(ax, data, g, param, direction, ok, dirs):
     """Mesh ``g``: impacts per period on each flank (left), time out of contact (right)."""
     from matplotlib.lines import Line2D

@@ -24,8 +24,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
-import numpy as np
-
 from ...config.options import IntegrationOptions
 from ...models.reduced import ReducedModel
 from .integrate import integrate

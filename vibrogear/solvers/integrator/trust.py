@@ -42,7 +42,6 @@ from dataclasses import replace
 import numpy as np
 
 from ...config.options import IntegrationOptions
-from ...models.contact_law import evaluate_set
 from ...models.reduced import Forcing, ReducedModel
 from ...status import Status
 

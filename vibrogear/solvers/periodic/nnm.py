@@ -40,7 +40,6 @@ from .corrector import (QUASI_NEWTON_MOVE, adapted_step, correct, predictor, tan
                         tangent_turned)
 from .floquet import liouville_error, split_trivial
 from .nnm_problem import NnmCorrectorProblem, energy, energy_gradient, phase_vector
-from .shooting import residual_norm
 from .special_points import switch_counts
 
 __all__ = ["NnmMethod", "NnmPoint", "NnmBranch", "nnm_branch", "rational_near"]
