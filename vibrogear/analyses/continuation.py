@@ -17,7 +17,7 @@ the scene's parameter unit (:class:`~vibrogear.config.options.ContinuationSteps`
 With ``from_sweep`` also a branch both ways from each distinct period-n window of the sweep
 (this run's sweep outcome, or an earlier run's ``sweep.npz`` in the output folder, which the
 runner loads: ``previous["sweep"]``), each half ending with its reason
-(:mod:`.sweep_branches`).
+(:mod:`.sweep.branches`).
 
 The summary's status is ``ok`` only where every branch ended for a reason that belongs to
 the branch (it left the range, rejoined the period-1 branch, or reached a grazing orbit);
@@ -226,7 +226,7 @@ def _from_sweep(study, sweep, res: ContinuationResult, method, options, cfg):
     """Branches started both ways from each distinct period-n window of ``sweep`` (the
     outcome of this run's sweep, or of an earlier run's ``sweep.npz`` in the output folder,
     handed over by the runner) that no branch traced so far passes through
-    (:mod:`.sweep_branches`).  Returns (the result with them appended, a summary of the
+    (:mod:`.sweep.branches`).  Returns (the result with them appended, a summary of the
     windows: where each started and how each half ended)."""
     import dataclasses
 

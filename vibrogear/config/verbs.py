@@ -1,14 +1,14 @@
 """The one registry of verbs: name -> option section, model kinds, analysis, report writer, files.
 
 Scene validation (:mod:`.scene`: which section a verb needs, which models support it), the
-list of analyses a scene may name (:mod:`.sections`), the runner's table of analyses and report
-writers, the CLI's single-analysis commands and help, and the README's verb table
+list of analyses a scene may name (:mod:`.sections.common`), the runner's table of analyses
+and report writers, the CLI's single-analysis commands and help, and the README's verb table
 (:func:`verb_table_markdown`; a test keeps the README equal to it) all read this table.
 
 Adding a verb is one analysis module (``analyses/<name>.py``, or a wing ``analyses/<name>/``
 whose ``__init__`` names its public functions) returning an ``AnalysisOutcome``, one report
 writer of the same name (``report/writers/<name>.py``) writing its files and one entry here; an
-option section also needs its dataclass under :mod:`.sections` and a field of the scene
+option section also needs its dataclass under :mod:`.sections.common` and a field of the scene
 (``docs/architecture.md``, "Adding a verb").
 
 Targets are ``"module:function"`` strings relative to ``vibrogear.analyses`` and

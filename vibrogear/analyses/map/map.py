@@ -19,7 +19,7 @@ number of workers.  Each finished point is appended to ``map.partial.jsonl``
 (:class:`~vibrogear.pipeline.resume.PartialStore`: reused only with the same physics,
 loads, grid, settings, options and version), which the runner deletes once ``map.npz``
 exists.  With ``curves = true`` the LP / PD points of the period-1 branch are located at
-every load and joined (:mod:`.bifurcation_curves`).
+every load and joined (:mod:`.curves`).
 """
 from __future__ import annotations
 

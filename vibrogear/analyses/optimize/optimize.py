@@ -2,7 +2,7 @@
 :mod:`vibrogear.config.sections.optimize`).
 
 Each evaluation builds the scene with the variables set and runs its analyses
-(:mod:`.optimize_eval`); the search method (:mod:`.optimize_methods`) minimises the
+(:mod:`.evaluate`); the search method (:mod:`.methods`) minimises the
 penalised value
 
     f = s * objective + penalty * violation        (s = +1 for sense "min", -1 for "max")

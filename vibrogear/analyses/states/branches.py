@@ -6,7 +6,7 @@
   a branch point's), its stability the Floquet multipliers'.  One work unit per attractor,
   on local processes or every MPI rank.
 * :func:`continue_branches`: pseudo-arclength continuation both ways from each periodic
-  attractor through which no branch found so far passes (:func:`.sweep_branches.on_branch`:
+  attractor through which no branch found so far passes (:func:`..sweep.branches.on_branch`:
   branches of this run's continuation, then those continued here, in grid order), within
   the census's range, each half-branch a work unit (in waves: :func:`continue_branches`).
   Branches that the sweep path never reaches (isolas) appear here with their LP / PD / NS.
@@ -17,7 +17,7 @@
   overall range of the monitored deformation (plus 3 standard errors of the attractor's
   extrema); for a non-periodic one (whose extrema are the envelope over its starts' records,
   wider than one record's) a range [qmin, qmax] that overlaps the attractor's over at least
-  :data:`~.states_cluster.RANGE_OVERLAP` of their union, the census's own grouping test.  A
+  :data:`~.cluster.RANGE_OVERLAP` of their union, the census's own grouping test.  A
   heuristic, named as such in the summary; ``seen_by_sweep`` is None where there is no
   sweep.
 """

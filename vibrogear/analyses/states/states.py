@@ -3,7 +3,7 @@
 The sweep follows one path up and one down; the continuation follows the branches it is
 started on.  Neither sees a state that only a disturbance reaches.  This census does:
 
-1. **Starts**: at each grid value, ``starts`` random initial states (:mod:`.states_starts`).
+1. **Starts**: at each grid value, ``starts`` random initial states (:mod:`.starts`).
 2. **Settling**: each start is one sweep point
    (:func:`~vibrogear.solvers.sequential.sweep_point.run_point`: transient until settled,
    record window, class with its evidence, contact metrics) with the section's sweep
@@ -15,8 +15,8 @@ started on.  Neither sees a state that only a disturbance reaches.  This census 
    done).  With ``basin_tol`` the starts run in rounds of ``batch`` per grid value and a
    value stops once every basin's 95 % interval is narrower than ``basin_tol``.
 3. **Attractors**: the settled motions of each grid value grouped, with basin fractions and
-   Wilson intervals (:mod:`.states_cluster`).
-4. **Orbits and branches** (:mod:`.states_branches`): each periodic attractor shot (Newton on
+   Wilson intervals (:mod:`.cluster`).
+4. **Orbits and branches** (:mod:`.branches`): each periodic attractor shot (Newton on
    the period map: its exact extrema and Floquet multipliers), then, with ``branches``, a
    continuation both ways from each one that no branch found so far passes through; each
    attractor compared with the sweep of this run or of ``sweep.npz`` in the output folder.

@@ -3,7 +3,7 @@
 
 The page needs no server, no script and nothing from the network: the style sheet is inline,
 figures are ``<img>`` links to the PNGs beside it and every other file in the folder is a
-relative link.  It opens on the findings (:mod:`.findings_report`) and a drawing of the
+relative link.  It opens on the findings (:mod:`..writers.findings`) and a drawing of the
 gearbox, then gives per analysis its key figure with a caption that says what to look at,
 its numerical status, warnings and, folded, its error estimates, values, other figures and
 files; a glossary, the run's details and the folder's files close it.  Nothing is wider than

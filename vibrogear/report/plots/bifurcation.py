@@ -1,8 +1,9 @@
 """The figures a sweep and a continuation share: the bifurcation diagram of sweep arrays
 (optionally with branches overlaid), the branch figures ``branch_max`` / ``branch_min``
 (optionally with sweep points overlaid) and ``bifurcation_branches`` (both in one figure).
-Both writers, :mod:`.sweep_report` and :mod:`.branch_report`, draw through this module, so
-whichever of the two runs second draws the combined figure without importing the other."""
+Both writers, :mod:`..writers.sweep` and :mod:`..writers.continuation`, draw through this
+module, so whichever of the two runs second draws the combined figure without importing the
+other."""
 from __future__ import annotations
 
 from pathlib import Path

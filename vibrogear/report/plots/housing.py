@@ -1,7 +1,7 @@
 """Plots of housing results: mode previews, geometry sweeps, error against run time.
 
 Takes result objects and plain tables and returns matplotlib Figures (on their own Agg
-canvas, no pyplot state); the report writer saves them (:mod:`.housing_report`, at 110 dpi).
+canvas, no pyplot state); the report writer saves them (:mod:`..writers.housing`, at 110 dpi).
 """
 from __future__ import annotations
 

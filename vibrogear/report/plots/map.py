@@ -2,7 +2,7 @@
 
 * ``map_class.png``: the motion class of every point (period 1 / 2 / 3+, quasi-periodic,
   chaotic, not settled, ...) as categorical colours with a legend, one panel per sweep
-  direction (the colours of the sweep's class band, :mod:`.sweep_plots`);
+  direction (the colours of the sweep's class band, :mod:`.sweep`);
 * ``map_impacts_<mesh>.png``: contact onsets (both flanks) per mesh period;
 * ``map_rattle_<mesh>.png``: impact energy per period (log colour scale);
 * ``map_max_force_<mesh>.png``: the largest mesh force [N].

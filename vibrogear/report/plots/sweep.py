@@ -11,13 +11,13 @@ one that rattles: its drive-flank (filled) and back-flank (open) impacts per exc
 period (left axis) and the share of the time its teeth are out of contact (right axis,
 line); last, where any mesh rattles, the impact energy per period of each mesh (log scale;
 see solvers/sequential/motion.py).  With ``spectral`` and the stroboscopic spectral
-evidence (``strob_flatness``, ``base_f2_order``; sweep_io.py) a panel of the flatness of
+evidence (``strob_flatness``, ``base_f2_order``; report/sweep_files.py) a panel of the flatness of
 every non-periodic point's Poincare spectrum and a quasi-periodic point's f2 / f1.
 
 With ``branches`` (the arrays of a continuation's ``branch.npz``, same display unit) the
 top panel also carries the continuation branches' maxima and minima: stable solid,
 unstable dashed, LP / PD / NS marked and named with their speeds, never overprinting
-(:mod:`.branch_plots`).
+(:mod:`.branch`).
 """
 from __future__ import annotations
 

@@ -1,20 +1,20 @@
 """``fig2.png/.svg``: the seed paper's Fig. 2 with the continuation on top of it.
 
 One figure from a sweep and a continuation of the same scene (written by the continuation's
-report writer, :mod:`.branch_report`, when the sweep's arrays are at hand):
+report writer, :mod:`.continuation`, when the sweep's arrays are at hand):
 
 * top panel: the minima and maxima of the monitored deformation (a gearbox: the G1 mesh
   deformation) at every settled sweep point as dots (up and down sweeps in two colours),
   the zero line (below it the mesh is interrupted), and over them the continuation
   branches' maxima and minima: stable solid, unstable dashed, LP / PD / NS marked and named
-  (:func:`.branch_plots.draw_branches`);
+  (:func:`..plots.branch.draw_branches`);
 * bottom panel: the motion class of every sweep point as a colour band, one row per sweep
   direction (with ``per_contact_rows``, ``[figures] motion_rows_per_contact``, also one per
-  contact group whose own class differs; the band of :mod:`.sweep_plots`).
+  contact group whose own class differs; the band of :mod:`..plots.sweep`).
 
 Unlike ``bifurcation_branches.png`` it leaves out the Poincare samples and the impact and
 rattle panels, so that it reads as the seed's diagram.  Both arrays come in display units
-(:func:`.bifurcation_figures.display_arrays`).
+(:func:`..plots.bifurcation.display_arrays`).
 """
 from __future__ import annotations
 

@@ -8,7 +8,7 @@
 * ``best_scene.toml``: the evaluated scene (its analyses, without [optimize]) with the best
   variables: ``vibrogear check`` accepts it and ``vibrogear run`` runs it;
 * ``optimize_convergence.png/.svg`` and, for one or two variables,
-  ``optimize_landscape.png/.svg`` (:mod:`.optimize_plots`).
+  ``optimize_landscape.png/.svg`` (:mod:`..plots.optimize`).
 """
 from __future__ import annotations
 
