@@ -84,7 +84,8 @@ def test_gear_pair_bands_recompute_and_torque_balance(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("scene", ["two_stage", "single_stage", "two_stage_helical",
-                                   "two_stage_iso6336", "two_stage_seed"])
+                                   "two_stage_iso6336", "two_stage_seed", "fva_two_stage",
+                                   "three_stage"])
 def test_shipped_gearbox_scene_bands_recompute(scene, tmp_path):
     _summary, _arrays, f = _check(scene, tmp_path)
     roles = {m["name"]: m["role"] for m in f["meshes"]}

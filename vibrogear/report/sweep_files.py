@@ -15,8 +15,8 @@
   deformation and force repeats within its resolution, 0: none), ``resolution_defect``
   (their largest difference in resolutions), ``qmax_res`` (the monitored deformation's
   resolution) and ``qmax_err`` (batch-means error of qmax); ``hysteresis_<mesh>``
-  (|qmax up - qmax down| at each point's speed, the monitored mesh's; 0 where either
-  failed); ``transient_used`` (periods), ``settled_by``; per contact group
+  (|qmax up - qmax down| at each point's speed beyond the two points' ``qmax_err``, the
+  monitored mesh's; 0 where within them or where either failed); ``transient_used`` (periods), ``settled_by``; per contact group
   ``period_n_<g>`` / ``motion_class_<g>`` and the rattle / contact metrics
   (``impacts_drive_<mesh>``, ``impacts_back_<mesh>``, ``impact_velocity_rms_<mesh>``,
   ``impact_velocity_max_<mesh>``, ``contact_fraction_<mesh>``, ``rattle_<mesh>``,

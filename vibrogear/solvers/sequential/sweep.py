@@ -171,20 +171,27 @@ class SweepResult:
         return out
 
     def hysteresis_arrays(self) -> dict:
-        """``hysteresis_<monitored>``: per point, |qmax up - qmax down| at its speed (the
-        same value on the up and the down point; 0 where either failed or the sweep ran one
-        way)."""
+        """``hysteresis_<monitored>``: per point, how far qmax up and qmax down at its speed
+        differ beyond their batch-means errors, max(|qmax up - qmax down| - (qmax_err up +
+        qmax_err down), 0) (the same value on the up and the down point; 0 where either failed
+        or the sweep ran one way; without ``qmax_err`` the plain difference).  The error term
+        keeps a record that samples a slow beat differently up and down (meshes exciting at
+        their own frequencies, a common period longer than the record) from reading as two
+        coexisting states."""
         key = getattr(self, "monitored", "") or "monitored"
         param = np.asarray(self.param, float)
         d = np.asarray(self.direction, str)
         q = np.asarray(self.qmax, float)
+        err = np.asarray((self.metrics or {}).get("qmax_err", np.zeros(param.size)), float)
+        err = np.where(np.isfinite(err), err, 0.0)
         ok = (np.asarray(self.status) == 0) & np.isfinite(q)
         h = np.zeros(param.size)
         if np.any(d == "up") and np.any(d == "down"):
             for k in range(param.size):
                 other = np.flatnonzero((param == param[k]) & (d != d[k]) & ok)
                 if ok[k] and other.size:
-                    h[k] = abs(q[k] - q[other[0]])
+                    o = other[0]
+                    h[k] = max(abs(q[k] - q[o]) - (err[k] + err[o]), 0.0)
         return {f"hysteresis_{key}": h}
 
     @property
