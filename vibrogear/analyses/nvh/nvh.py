@@ -35,6 +35,7 @@ from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ...solvers.integrator.contact_eval import contact_history
 from ...solvers.integrator.integrate import integrate
 from ...solvers.sequential.spectrum import amplitude_spectrum
+from ...status import Outcome
 from .housing_surface import erp_db, erp_spectrum, erp_watts, rms_velocity_field, surface_map
 from .line_sources import label_points, natural_frequencies, point_summary, sweep_classes
 from ..study import Study, integration_options
@@ -264,10 +265,12 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     records = {"dte": [], "mesh_force": [], "bearing_force": []}
     parseval = {k: 0.0 for k in records}
     erp, erp_bins, kept, rates_at, best, warnings = [], [], [], {}, (-1.0, None), []
+    solves = []             # each steady point's record: one outcome for the runner
     with ctx.progress(len(rpm), "nvh") as bar:
         for p, u0 in zip(rpm, states0):
             p = float(p)
             t, span, tr = _record(study, p, u0, R, S, opts)
+            solves.append(tr.outcome)
             bar.update(1, f"{p:.4g} rpm")
             if not tr.ok:
                 warnings.append(f"nvh: {p:g} rpm left out: {tr.message}")
@@ -357,4 +360,5 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
             "record": "one orbit period (n_periods excitation periods) per point",
             "max_closure_rel": float(branch.closure.max()),
             "parseval_max_rel_error": branch.parseval}
-    return AnalysisOutcome(summary=summary, result=res, warnings=tuple(warnings))
+    return AnalysisOutcome(summary=summary, result=res, warnings=tuple(warnings),
+                           solver=Outcome.combine(solves))
