@@ -307,7 +307,7 @@ def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
     new_walls = walls[np.isfinite(walls)]
     classes = np.concatenate([r.motion_class for r in res.rows])
     names = [MOTION_LEGEND[int(c)] for c in classes]
-    rhs = sum(r.rhs_calls for r in res.rows)
+    rhs = res.outcome.counters.get("rhs_calls", 0)     # the rows' sweeps combined
     n = int(walls.size)
     solver = float(np.sum(new_walls))
     return {           # status, message, error estimate: the runner's spine (res.outcome)
