@@ -7,6 +7,10 @@ layer, never of a higher one.  Every ``import`` statement counts, also those ins
 ``KNOWN_EXCEPTIONS`` with their reason; an exception that no longer occurs fails the test too,
 so the list (and the doc) stays true.  No two modules may import each other, directly or
 through others (no import circles), whatever their layers.
+
+Inside the packages built of wings (analyses/, config/, report/: ``WINGS``), an import from
+one wing to another goes to a lower floor; and no module imports another module's private
+(``_name``) names.
 """
 from __future__ import annotations
 
