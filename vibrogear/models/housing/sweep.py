@@ -12,10 +12,15 @@ parameter (a wall thickness) solves the variants in order, each from what the on
 - **matrices**: K re-assembled into the same matrix; the GLL-lumped diagonal mass as the vector
   int rho phi_i dx (the diagonal the fresh solve extracts from the full M, whose off-diagonal part it
   checked to be zero on the chain's first variant).
-- **eigen-solve**: the Cholesky factor refactored numerically, block Lanczos started from the previous
-  variant's ``count + guard`` Ritz vectors (one block), to the same criterion as a fresh solve
-  (SLEPc's ||K^-1 M x - theta x||_M / theta < ``housing.modes.tol`` for every wanted mode), then the
-  same subspace step; a breakdown falls back to a fresh solve of that variant.
+- **eigen-solve**: the Cholesky factor refactored numerically (the ordering reused), then
+  Rayleigh-Ritz on the block Krylov space of the previous variant's ``count + guard`` modes
+  (:func:`krylov_refine`: a few solves with ``count + guard`` right-hand sides instead of block
+  Lanczos from a random block), to the fresh solve's criterion, SLEPc's ||K^-1 M x - theta x||_M /
+  theta, at the sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved
+  afresh.  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves
+  near-zero new blocks; the previous factor as a preconditioner of LOBPCG needed 7 steps for 1e-4,
+  and its criterion, evaluated with the old factor, passed low modes 3 % off: the check needs the
+  variant's own factor.)
 
 Every variant, fresh or reused, gets the fresh solve's residual check with new products,
 max ||K x - lambda M x|| / ||K x|| over its modes.  ``reuse=False`` gives the fresh solve of each
