@@ -120,3 +120,35 @@ def test_reused_start_sweep_matches_each_fresh_solve(small_sweep):
     assert np.allclose(reused[0].freqs_hz, fresh[0].freqs_hz, rtol=1e-12)
     # a thicker wall stiffens the housing: the first frequency rises
     assert reused[2].freqs_hz[0] > reused[1].freqs_hz[0] > reused[0].freqs_hz[0]
+
+
+def test_housing_sweep_analysis_reuses_in_runs(tmp_path):
+    """The ``housing_sweep`` analysis with an all-hex housing: the points in one run of neighbours,
+    each but the first from the previous one; every frequency within 1 % of the point's fresh solve."""
+    import csv
+    import json
+    import os
+    import subprocess
+    import sys
+
+    from vibrogear.config import load_scene
+    from vibrogear.models.housing.sweep import sweep_housing_modes
+
+    scene_path = str(ROOT / "configs" / "housing_sweep.toml")
+    sets = ['housing.mesh.element="hex"', "housing.mesh.size=0.03", "housing_sweep.values=[0.010, 0.011]",
+            "housing_sweep.n_freqs=4", "housing_sweep.processes=1"]
+    out = tmp_path / "sweep"
+    env = {**os.environ, "VIBROGEAR_CACHE_DIR": str(tmp_path / "cache"), "OPENBLAS_NUM_THREADS": "1"}
+    args = [str(Path(sys.executable).parent / "vibrogear"), "run", scene_path, "--out", str(out), "--quiet"]
+    for text in sets:
+        args += ["--set", text]
+    r = subprocess.run(args, env=env, cwd=ROOT, capture_output=True, text=True, timeout=400)
+    assert r.returncode == 0, r.stderr[-3000:]
+    points = [json.loads(line) for line in (out / "housing_sweep_points.jsonl").read_text().splitlines()[1:]]
+    assert [p["start"] for p in points] == ["fresh", "previous"]
+    with (out / "housing_sweep.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    got = np.array([[float(row[f"f{k}_hz"]) for k in range(1, 5)] for row in rows])
+    scene = load_scene(scene_path, tuple(sets))
+    fresh = sweep_housing_modes(scene.housing_sweep.housing_points(scene.housing), count=4, reuse=False)
+    assert np.max(np.abs(got / np.array([f.freqs_hz for f in fresh]) - 1)) < 0.01

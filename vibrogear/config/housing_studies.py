@@ -20,6 +20,9 @@ class HousingSweepConfig:
     n: int = spec(5, ge=2, le=1000)
     n_freqs: int = spec(6, ge=1, le=1000)
     processes: int = spec(2, ge=1, le=64)
+    reuse: bool = spec(True, doc="solve the points in order, each from the previous one's mesh nodes, factor "
+                       "ordering and modes (all-hex parametric housings; a chain per process), to the "
+                       "fresh solve's criterion at 1e-2; false: every point from nothing")
 
     def validate(self, path: str) -> None:
         if not self.parameter.startswith("housing.") or len(self.parameter) <= len("housing."):
