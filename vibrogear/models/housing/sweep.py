@@ -179,8 +179,14 @@ def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
     ksp = _factor(K, comm)
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lam, X, st = _lanczos(K, ksp.getPC().getFactorMatrix(), mdiag, comm, nev=count, extra=guard,
-                          tol=cfg.modes.tol, start=None)
+    try:
+        lam, X, st = _lanczos(K, ksp.getPC().getFactorMatrix(), mdiag, comm, nev=count, extra=guard,
+                              tol=cfg.modes.tol, start=None)
+    except Breakdown as exc:
+        ksp.destroy()
+        K.destroy()
+        raise HousingSolveError(f"{exc} (the sweep has no Krylov-Schur fallback: run the point as a "
+                                "'modes' scene)") from exc
     timings["iterations"] = time.perf_counter() - t0
     return _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X), lam, X, mdiag, st
 
