@@ -6,6 +6,7 @@ previous factor as preconditioner, the previous modes as start); right after eac
 same variant is solved afresh (its own generated mesh, assembly, factor, random-start block
 Lanczos) in the same process.  Reported: each variant's seconds by stage, the ratio reused / fresh,
 the largest relative difference of its ``count`` frequencies from the fresh ones, the residuals,
+(all points with the base housing's mesh sizes, as the ``housing_sweep`` analysis runs them),
 and the machine's load average (the machine is shared: compare ratios within the run, not seconds).
 
     PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python benchmarks/bench_housing_sweep.py \\
@@ -38,18 +39,17 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-    from vibrogear.config.housing import HousingConfig
-    from vibrogear.config.base import as_data, build
+    from vibrogear.config.base import build
+    from vibrogear.config.housing_studies import HousingSweepConfig, pinned_hex_sizes
     from vibrogear.config.scene import load_scene
     from vibrogear.models.housing.sweep import DEFAULT_TOL, sweep_housing_modes
 
-    base = as_data(load_scene(ROOT / args.config, ('housing.mesh.element="hex"',
-                                                   f"housing.mesh.degree={args.degree}")).housing)
-    values = np.linspace(args.min, args.max, args.n)
-    cfgs = []
-    for t in values:
-        d = dict(base, wall_thickness=float(t))
-        cfgs.append(build(HousingConfig, d, "housing"))
+    base = load_scene(ROOT / args.config, ('housing.mesh.element="hex"', f"housing.mesh.degree={args.degree}")).housing
+    # the [housing_sweep] the analysis would run: its points share the base housing's mesh sizes
+    opts = build(HousingSweepConfig, {"parameter": "housing.wall_thickness", "min": args.min, "max": args.max,
+                                      "n": args.n, "n_freqs": args.count}, "housing_sweep")
+    values = np.array(opts.points())
+    cfgs = opts.housing_points(base)
     tol = DEFAULT_TOL if args.tol is None else args.tol
     load0 = os.getloadavg()
     rows = []
@@ -80,6 +80,7 @@ def main(argv=None) -> int:
     summary = {
         "config": args.config, "element": "hex", "degree": args.degree, "count": args.count,
         "wall_thickness": [float(v) for v in values], "tolerance": tol,
+        "mesh_sizes_m": pinned_hex_sizes(base), "base_wall_thickness": base.wall_thickness,
         "ratio_further_max": max((r["ratio"] for r in further), default=None),
         "ratio_further_mean": float(np.mean([r["ratio"] for r in further])) if further else None,
         "max_rel_freq_diff": max(r["max_rel_freq_diff"] for r in rows),
