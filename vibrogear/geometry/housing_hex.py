@@ -62,10 +62,14 @@ def _block_lines(a: float, b: float, h: float, centre: float | None = None,
 def _grid(cfg: HousingConfig, blocks: list[HexBlock], counts: CellCounts | None = None):
     L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
     rule = cfg.hex_mesh
-    e, hb, out_size = rule.edge, rule.bore, 2.5 * t
-    ex = {0.0: t, t: e, L - t: e, L: t}
-    ey = {0.0: t, t: e, W - t: e, W: t}
-    ez = {0.0: t, t: e, H - t: e, H: t}
+    # the outer faces and the parts outside the box (overhang, base plate, bosses) are sized from
+    # the junction size ``edge`` (by default the wall thickness), so that a sweep that fixes the
+    # mesh sizes (the reusing housing sweep) keeps one grid while the wall changes
+    e, hb = rule.edge, rule.bore
+    out_size = 2.5 * e
+    ex = {0.0: e, t: e, L - t: e, L: e}
+    ey = {0.0: e, t: e, W - t: e, W: e}
+    ez = {0.0: e, t: e, H - t: e, H: e}
     for blk in blocks:
         for v in _block_lines(blk.x0, blk.x1, hb, blk.bx, blk.rib, counts):
             ex[float(v)] = hb
