@@ -8,10 +8,12 @@ parameter (a wall thickness) solves the variants in order, each from what the on
   (:func:`..geometry.housing_hex.moved_hex_nodes`: the same cells and DOF numbering, the node
   coordinates of the variant's own fresh mesh).  The dolfinx mesh, function space, compiled forms,
   the stiffness matrix's sparsity and the factor's symbolic analysis (ordering) stay.  Where the
-  counts differ (a grid line appears or merges: the sizes at the outer faces follow the wall) the
-  variant is meshed afresh and starts a new chain; replaying the old counts there would solve
-  another mesh than the variant's own (measured: 35 % more cells from 10 to 11.7 mm walls, one base
-  layer more, as slow as the fresh solve).
+  counts differ (a grid line appears or merges, e.g. a bore block's edge, 0.25 x wall from the
+  inner face) the variant is meshed afresh and starts a new chain: replaying the old counts there
+  would solve another mesh than the variant's own (measured before the outer sizes followed
+  ``edge_size``: 35 % more cells from 10 to 11.7 mm walls, as slow as the fresh solve).  The
+  ``housing_sweep`` analysis gives every point the base housing's mesh sizes, so one grid serves
+  as long as the geometry allows.
 - **matrices**: K re-assembled into the same matrix; the GLL-lumped diagonal mass as the vector
   int rho phi_i dx (the diagonal the fresh solve extracts from the full M, whose off-diagonal part it
   checked to be zero on the chain's first variant).
