@@ -208,7 +208,8 @@ def _run_plan(scene: Scene, ctx: RunContext, source: str, plan, outcomes=None) -
         if findings is not None:
             summary["findings"] = findings
         if ctx.out is not None:
-            failure = _write_overview(scene, ctx.out, findings, failure)
+            failure = _write_overview(scene, ctx.out, findings, failure,
+                                      summary.get("load_path"))
     summary["wall_time_s"]["total"] = time.perf_counter() - t_all
     if ctx.out is not None:
         failure = _write_run_files(ctx.out, summary, failure, html=True)
@@ -254,7 +255,7 @@ def _write_run_files(out: Path, summary: dict, failure, *, html: bool):
     return failure
 
 
-def _write_overview(scene: Scene, out: Path, findings, failure):
+def _write_overview(scene: Scene, out: Path, findings, failure, load_path=None):
     """The figures the report opens on: the speed-band chart of the findings and the
     drawing of the gearbox."""
     from .report.writers.findings import BAND_CHART, plot_band_chart
@@ -264,7 +265,7 @@ def _write_overview(scene: Scene, out: Path, findings, failure):
             chart.unlink(missing_ok=True)        # never an old run's chart
         if scene.gearbox is not None:
             from .report.plots.gearbox_drawing import draw_gearbox
-            draw_gearbox(scene, Path(out) / "gearbox.png")
+            draw_gearbox(scene, Path(out) / "gearbox.png", load_path)
     except OSError as exc:
         if failure is None:
             failure = WriteFailure(_file_error(exc))

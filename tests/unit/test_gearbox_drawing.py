@@ -123,3 +123,27 @@ def test_a_scene_without_gearbox_is_refused():
     scene = load_scene(CONFIGS / "impact_pair.toml")
     with pytest.raises(ValueError, match="no \\[gearbox\\]"):
         gearbox_layout(scene)
+
+
+def test_power_flow_line_per_mesh_between_its_gears():
+    """With a load path the side view carries one line per mesh from gear_a's centre to
+    gear_b's (their pitch circles touch: its length is the centre distance), solid for a
+    loaded mesh and dashed for an idle one, labelled with the load path's tooth force."""
+    scene = load_scene("configs/two_stage.toml")
+    lp = {"meshes": [{"name": "G1", "role": "loaded", "normal_force_N": 2420.0,
+                      "power_kW": 55.3},
+                     {"name": "G2", "role": "idle", "normal_force_N": 16.4, "power_kW": 0.0}]}
+    fig = figure_of(scene, lp)
+    side = fig.axes[0]
+    lines = {ln.get_gid(): ln for ln in side.get_lines() if (ln.get_gid() or "").startswith("power:")}
+    assert set(lines) == {"power:G1", "power:G2"}
+    gears = {g.name: g for g in scene.gearbox.gears}
+    for m in scene.gearbox.meshes:
+        x, y = lines[f"power:{m.name}"].get_data()
+        a, b = gears[m.gear_a], gears[m.gear_b]
+        centre_distance_mm = 0.5 * (a.teeth * a.module + b.teeth * b.module) * 1e3
+        assert math.hypot(x[1] - x[0], y[1] - y[0]) == pytest.approx(centre_distance_mm,
+                                                                    rel=1e-6)
+    assert lines["power:G1"].get_linestyle() == "-" and lines["power:G2"].get_linestyle() == "--"
+    texts = [t.get_text() for t in side.texts]
+    assert "G1: F_n 2.42 kN, 55.3 kW" in texts and "G2: idle" in texts

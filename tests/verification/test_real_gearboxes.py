@@ -132,3 +132,25 @@ def test_shipped_scene_time_response_carries_its_static_tooth_force(name):
             continue
         mean = float(np.mean(a["force"][names.index(mesh), half:]))
         assert mean == pytest.approx(m["normal_force_N"], rel=0.03), mesh
+
+
+def test_intermediate_shaft_thrusts_of_same_hand_gears_oppose():
+    """The FVA intermediate shaft carries the wheel of stage 19 (helix -21 deg) and the
+    pinion of stage 20 (helix -10 deg): the same hand, the design rule that makes their
+    thrusts oppose (the wheel is driven, the pinion drives).  Its locating bearings take the
+    difference of the two thrusts F_n sin(beta_b), 2690 - 2001 = 689 N, not their sum; the
+    input and output shafts take one stage's thrust each.  (Before the helical normal's
+    axial sign followed the gear's sense of rotation, the intermediate shaft's bearings took
+    the sum, 4691 N.)"""
+    from vibrogear.analyses.static_load import static_load
+    scene = load_scene(SCENES["fva_two_stage"])
+    gb = scene.gearbox
+    hand = _hand_balance(gb)
+    thrust = {m.name: hand[m.name][1] for m in gb.meshes}
+    lp = static_load(scene, source=SCENES["fva_two_stage"]).load_path.as_dict()
+    axial = {}
+    for b in lp["bearings"]:
+        axial[b["shaft"]] = axial.get(b["shaft"], 0.0) + b["axial_N"]
+    assert axial["shaft12"] == pytest.approx(thrust["stage19"], rel=5e-3)
+    assert axial["shaft14"] == pytest.approx(thrust["stage20"], rel=5e-3)
+    assert axial["shaft13"] == pytest.approx(thrust["stage19"] - thrust["stage20"], rel=5e-3)

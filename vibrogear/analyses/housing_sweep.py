@@ -7,6 +7,12 @@ stopped, and only a run of the same housing, parameter, values, frequency count 
 does (:func:`sweep_signature`); otherwise the file is set aside.  ``housing_sweep.csv`` and
 ``housing_sweep.png`` are written at the end by :mod:`vibrogear.report.writers.housing`
 (only when every point succeeded; the finished points stay in the resume file).
+
+With ``reuse`` (the default) and an all-hex parametric housing, the points are split into
+``processes`` runs of neighbouring values, each solved in order by
+:func:`vibrogear.models.housing.sweep.sweep_housing_modes` (every point after a run's first from the
+previous point's mesh, factor ordering and modes; no housing cache); a run's points are stored
+when it ends.
 """
 from __future__ import annotations
 
@@ -53,6 +59,31 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
             "cached": res.cached, "seconds": time.perf_counter() - t0}
 
 
+def sweep_chain(housings: list, n_freqs: int) -> list[dict]:
+    """Worker: the points of one run of neighbouring values (plain housing dicts), each from the
+    previous one (:func:`vibrogear.models.housing.sweep.sweep_housing_modes`)."""
+    from ..config.base import build
+    from ..config.model.housing import HousingConfig
+    from ..geometry.housing import MeshingError
+    from ..models.housing.fe import HousingSolveError
+    from ..models.housing.sweep import sweep_housing_modes
+
+    cfgs = [build(HousingConfig, h, "housing") for h in housings]
+    try:
+        res = sweep_housing_modes(cfgs, count=n_freqs, reuse=True)
+    except (MeshingError, HousingSolveError, ArithmeticError) as exc:
+        return [{"status": "failed", "message": str(exc)} for _ in housings]
+    return [{"status": "ok", "freqs_hz": [float(f) for f in r.freqs_hz], "n_dofs": r.n_dofs, "cached": False,
+             "seconds": r.seconds, "start": r.start, "mesh": r.mesh, "criterion": r.bound} for r in res]
+
+
+def _runs(items: list, k: int) -> list[list]:
+    """``items`` in at most ``k`` runs of neighbours, as equal as may be."""
+    k = max(1, min(k, len(items)))
+    edges = np.linspace(0, len(items), k + 1).round().astype(int)
+    return [items[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
 def sweep_signature(scene) -> dict:
     """What the points depend on: the base housing (its cache key: config, data files and
     version), the swept parameter and its values, and the number of frequencies."""
@@ -61,7 +92,15 @@ def sweep_signature(scene) -> dict:
     opts = scene.housing_sweep
     return {"analysis": "housing_sweep", "physics": housing_cache_key(scene.housing, "modes"),
             "grid": [repr(float(v)) for v in opts.points()],
-            "settings": {"parameter": opts.parameter, "n_freqs": opts.n_freqs}}
+            "settings": {"parameter": opts.parameter, "n_freqs": opts.n_freqs,
+                         **({"reuse": True} if _reusing(scene) else {})}}
+
+
+def _reusing(scene) -> bool:
+    """Whether the sweep of ``scene`` solves its points from the previous ones."""
+    from ..models.housing.sweep import reusable
+
+    return bool(scene.housing_sweep.reuse) and reusable(scene.housing) is None
 
 
 def run_sweep(scene, ctx) -> AnalysisOutcome:
@@ -86,20 +125,25 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
         with cf.ProcessPoolExecutor(max_workers=min(opts.processes, max(len(todo), 1)),
                                     mp_context=mp.get_context("spawn")) as pool:
             futs = {}
-            for v, c in todo:
-                d = as_data(c)
-                d["modes"] = {**d["modes"], "count": max(n, c.modes.count)}
-                futs[pool.submit(sweep_point, d, n)] = v
+            if _reusing(scene):
+                for run in _runs(todo, opts.processes):
+                    futs[pool.submit(sweep_chain, [as_data(c) for _, c in run], n)] = [v for v, _ in run]
+            else:
+                for v, c in todo:
+                    d = as_data(c)
+                    d["modes"] = {**d["modes"], "count": max(n, c.modes.count)}
+                    futs[pool.submit(sweep_point, d, n)] = [v]
             for fut in cf.as_completed(futs):
-                v = futs[fut]
-                row = {"value": float(v), **fut.result()}
-                if row["status"] != "ok":
-                    failures.append(row)
-                    continue
-                if store is not None:
-                    store.append(row)
-                done[float(v)] = row
-                bar.update(1, f"{opts.parameter}={v:g}")
+                out = fut.result()
+                for v, res in zip(futs[fut], out if isinstance(out, list) else [out]):
+                    row = {"value": float(v), **res}
+                    if row["status"] != "ok":
+                        failures.append(row)
+                        continue
+                    if store is not None:
+                        store.append(row)
+                    done[float(v)] = row
+                    bar.update(1, f"{opts.parameter}={v:g}")
     rows = [done[float(v)] for v in values if float(v) in done]
     freqs = np.full((len(rows), n), np.nan)
     for i, r in enumerate(rows):

@@ -7,6 +7,8 @@
   h_b + gradient (b - x)), integrated: N = round(int dx / s) cells at equal steps of that integral.
   Consecutive cells then differ by a factor ~exp(gradient) (1.65 for 0.5), and the first cell is
   ~h_a (exp(gradient) - 1) / gradient (1.30 h_a for 0.5).
+- :class:`CellCounts`: the cell counts a grid was generated with, recorded and replayed, so that
+  another value of a parameter (a wall thickness) gives the same topology with moved nodes.
 - :func:`merge_hexes`: hexahedra given by their corner coordinates -> shared nodes and cells in
   dolfinx's tensor-product vertex order (vertex ``i + 2 j + 4 k`` at local (i, j, k)), each with a
   positive Jacobian at its first corner.
@@ -18,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["graded_fill", "axis_lines", "merge_hexes", "boundary_quads", "hex_volumes",
+__all__ = ["graded_fill", "axis_lines", "CellCounts", "TopologyChange", "merge_hexes", "boundary_quads", "hex_volumes",
            "min_corner_jacobian", "HEX_FACES"]
 
 #: the six faces of a hexahedron in dolfinx's vertex order, each a quad in tensor order
@@ -27,9 +29,45 @@ HEX_FACES = np.array([[0, 2, 4, 6], [1, 3, 5, 7], [0, 1, 4, 5], [2, 3, 6, 7], [0
 _SAMPLES = 2001
 
 
-def graded_fill(a: float, b: float, ha: float, hb: float, h: float, gradient: float) -> np.ndarray:
+class TopologyChange(ValueError):
+    """Replayed cell counts do not fit the grid of the new parameter value (another number of
+    intervals or lines); the grid must be generated afresh."""
+
+
+class CellCounts:
+    """Cell counts of a generated grid, in the order the generator asks for them.
+
+    ``CellCounts()`` records: :meth:`take` returns the count it is given and stores it.
+    ``CellCounts(recorded.values)`` replays: :meth:`take` returns the stored counts in turn, so the
+    generator lays the same number of cells into every interval (the same topology, with the lines
+    at the new parameter's positions); :meth:`finish` raises TopologyChange where the generator asked
+    for more or fewer counts than were recorded."""
+
+    def __init__(self, values=None):
+        self.replay = values is not None
+        self.values = [int(v) for v in values] if values is not None else []
+        self._next = 0
+
+    def take(self, n: int) -> int:
+        if not self.replay:
+            self.values.append(int(n))
+            return int(n)
+        if self._next >= len(self.values):
+            raise TopologyChange("the grid has more intervals than the one whose counts are replayed")
+        n = self.values[self._next]
+        self._next += 1
+        return n
+
+    def finish(self) -> None:
+        if self.replay and self._next != len(self.values):
+            raise TopologyChange(f"the grid has {self._next} intervals, the replayed one {len(self.values)}")
+
+
+def graded_fill(a: float, b: float, ha: float, hb: float, h: float, gradient: float,
+                n: int | None = None) -> np.ndarray:
     """Interior grid points of [a, b] (a < b): the size function ha + gradient x distance from a
-    (hb from b), capped at ``h``, integrated (module docstring)."""
+    (hb from b), capped at ``h``, integrated (module docstring); ``n``: that many cells instead
+    (the points at equal steps of the same integral)."""
     length = b - a
     g = gradient
     x = np.linspace(a, b, _SAMPLES)
@@ -37,15 +75,22 @@ def graded_fill(a: float, b: float, ha: float, hb: float, h: float, gradient: fl
     s = np.maximum(s, 1e-12)
     inv = 1.0 / s
     cum = np.concatenate([[0.0], np.cumsum(0.5 * (inv[1:] + inv[:-1]) * np.diff(x))])
-    n = max(1, int(round(cum[-1])))
+    n = max(1, int(round(cum[-1]))) if n is None else int(n)
     if n == 1 or length <= 0:
         return np.zeros(0)
     return np.interp(np.arange(1, n) * cum[-1] / n, cum, x)
 
 
-def axis_lines(essential: dict[float, float], h: float, gradient: float) -> np.ndarray:
+def _fill_count(a: float, b: float, ha: float, hb: float, h: float, gradient: float) -> int:
+    """The number of cells :func:`graded_fill` lays into [a, b]."""
+    return len(graded_fill(a, b, ha, hb, h, gradient)) + 1
+
+
+def axis_lines(essential: dict[float, float], h: float, gradient: float,
+               counts: CellCounts | None = None) -> np.ndarray:
     """Sorted grid lines: the keys of ``essential`` (line -> cell size wanted next to it; lines
-    closer than 1e-9 merged, the smaller size kept) and the graded fill between neighbours."""
+    closer than 1e-9 merged, the smaller size kept) and the graded fill between neighbours;
+    ``counts`` records (or replays) the number of cells of each interval."""
     keys = sorted(essential)
     lines, sizes = [], []
     for v in keys:
@@ -56,7 +101,8 @@ def axis_lines(essential: dict[float, float], h: float, gradient: float) -> np.n
         sizes.append(essential[v])
     out = [lines[0]]
     for (a, ha), (b, hb) in zip(zip(lines[:-1], sizes[:-1]), zip(lines[1:], sizes[1:])):
-        out.extend(graded_fill(a, b, ha, hb, h, gradient))
+        n = None if counts is None else counts.take(_fill_count(a, b, ha, hb, h, gradient))
+        out.extend(graded_fill(a, b, ha, hb, h, gradient, n))
         out.append(b)
     return np.array(out)
 

@@ -34,37 +34,46 @@ import numpy as np
 from ..config.base import ConfigError
 from ..config.model.housing import HousingConfig
 from ..config.model.housing_mesh import HexBlock, hex_blocks
-from .hex_grid import axis_lines, boundary_quads, merge_hexes
+from .hex_grid import CellCounts, TopologyChange, axis_lines, boundary_quads, merge_hexes
 from .housing import BASE_TAG, BORE_TAG0, VOLUME_TAG, HousingMesh, bore_layout
 
-__all__ = ["build_hex_housing_mesh", "build_hex_beam_mesh", "hex_housing_arrays", "read_hex_mesh", "HEX_CELL_TYPE"]
+__all__ = ["build_hex_housing_mesh", "build_hex_beam_mesh", "hex_housing_arrays", "moved_hex_nodes", "read_hex_mesh",
+           "HEX_CELL_TYPE"]
 
 HEX_CELL_TYPE = "hexahedron"
 
 
+def _take(counts: CellCounts | None, n: int) -> int:
+    return n if counts is None else counts.take(n)
+
+
 def _block_lines(a: float, b: float, h: float, centre: float | None = None,
-                 rib: float = 0.0) -> np.ndarray:
+                 rib: float = 0.0, counts: CellCounts | None = None) -> np.ndarray:
     """Uniform lines over [a, b] with spacing <= h; with a rib, the lines centre +- rib / 2 and
-    no line between them."""
+    no line between them (``counts``: the numbers of cells recorded or replayed)."""
     if not rib:
-        return np.linspace(a, b, max(2, math.ceil((b - a) / h - 1e-9)) + 1)
+        return np.linspace(a, b, _take(counts, max(2, math.ceil((b - a) / h - 1e-9))) + 1)
     lo, hi = centre - 0.5 * rib, centre + 0.5 * rib
-    left = np.linspace(a, lo, max(1, math.ceil((lo - a) / h - 1e-9)) + 1)
-    right = np.linspace(hi, b, max(1, math.ceil((b - hi) / h - 1e-9)) + 1)
+    left = np.linspace(a, lo, _take(counts, max(1, math.ceil((lo - a) / h - 1e-9))) + 1)
+    right = np.linspace(hi, b, _take(counts, max(1, math.ceil((b - hi) / h - 1e-9))) + 1)
     return np.concatenate([left, right])
 
 
-def _grid(cfg: HousingConfig, blocks: list[HexBlock]):
+def _grid(cfg: HousingConfig, blocks: list[HexBlock], counts: CellCounts | None = None):
     L, W, H, t = cfg.length, cfg.width, cfg.height, cfg.wall_thickness
     rule = cfg.hex_mesh
-    e, hb, out_size = rule.edge, rule.bore, 2.5 * t
-    ex = {0.0: t, t: e, L - t: e, L: t}
-    ey = {0.0: t, t: e, W - t: e, W: t}
-    ez = {0.0: t, t: e, H - t: e, H: t}
+    # the outer faces and the parts outside the box (overhang, base plate, bosses) are sized from
+    # the junction size ``edge`` (by default the wall thickness), so that a sweep that fixes the
+    # mesh sizes (the reusing housing sweep) keeps one grid while the wall changes
+    e, hb = rule.edge, rule.bore
+    out_size = 2.5 * e
+    ex = {0.0: e, t: e, L - t: e, L: e}
+    ey = {0.0: e, t: e, W - t: e, W: e}
+    ez = {0.0: e, t: e, H - t: e, H: e}
     for blk in blocks:
-        for v in _block_lines(blk.x0, blk.x1, hb, blk.bx, blk.rib):
+        for v in _block_lines(blk.x0, blk.x1, hb, blk.bx, blk.rib, counts):
             ex[float(v)] = hb
-        for v in _block_lines(blk.z0, blk.z1, hb):
+        for v in _block_lines(blk.z0, blk.z1, hb, counts=counts):
             ez[float(v)] = hb
         if blk.lb > 0:
             ey[-blk.lb] = ey[W + blk.lb] = out_size
@@ -78,7 +87,7 @@ def _grid(cfg: HousingConfig, blocks: list[HexBlock]):
         ex[f] = ex[L - f] = e
         ey[f] = ey[W - f] = e
         ez[-cfg.base_thickness] = out_size
-    return tuple(axis_lines(d, rule.size, rule.gradient) for d in (ex, ey, ez))
+    return tuple(axis_lines(d, rule.size, rule.gradient, counts) for d in (ex, ey, ez))
 
 
 def _tensor_cells(cfg, blocks, xs, ys, zs) -> np.ndarray:
@@ -109,7 +118,7 @@ def _tensor_cells(cfg, blocks, xs, ys, zs) -> np.ndarray:
                      for dk in (0, 1) for dj in (0, 1) for di in (0, 1)], axis=1)
 
 
-def _ring_cells(cfg, blk: HexBlock, xs, ys, zs, rule) -> list[np.ndarray]:
+def _ring_cells(cfg, blk: HexBlock, xs, ys, zs, rule, counts: CellCounts | None = None) -> list[np.ndarray]:
     """Corner coordinates of the O-grid cells of one block in both walls and its two bosses."""
     W, t = cfg.width, cfg.wall_thickness
     bxl = xs[(xs >= blk.x0 - 1e-12) & (xs <= blk.x1 + 1e-12)]
@@ -126,7 +135,7 @@ def _ring_cells(cfg, blk: HexBlock, xs, ys, zs, rule) -> list[np.ndarray]:
         rib_nodes = (np.abs(np.abs(P[:, 0] - blk.bx) - 0.5 * blk.rib) < 1e-9) & (np.abs(P[:, 1] - blk.z0) < 1e-12)
         dx = P[rib_nodes, 0] - blk.bx
         CR[rib_nodes] = np.c_[P[rib_nodes, 0], blk.bz - np.sqrt(blk.R ** 2 - dx ** 2)]
-    n_in = max(1, math.ceil((blk.R - blk.r) / (2.0 * rule.edge) - 1e-9))   # rings bore -> boss circle
+    n_in = _take(counts, max(1, math.ceil((blk.R - blk.r) / (2.0 * rule.edge) - 1e-9)))  # rings bore -> boss
     rings = [Cr + (q / n_in) * (CR - Cr) for q in range(n_in)] + [CR, P]
     m = len(P)
     seg = np.arange(m)
@@ -154,13 +163,21 @@ def _ring_cells(cfg, blk: HexBlock, xs, ys, zs, rule) -> list[np.ndarray]:
     return cells
 
 
-def hex_housing_arrays(cfg: HousingConfig):
-    """(x (N, 3), cells (n, 8), facets (k, 4), facet tags (k,)) of the parametric housing."""
+def hex_housing_arrays(cfg: HousingConfig, counts: CellCounts | None = None):
+    """(x (N, 3), cells (n, 8), facets (k, 4), facet tags (k,)) of the parametric housing.
+
+    ``counts``: a recording :class:`.hex_grid.CellCounts` stores the number of cells of every
+    interval and ring; a replaying one lays those numbers instead of the ones the mesh rule asks for
+    (TopologyChange where the intervals differ), so that another parameter value (a wall thickness)
+    gives the mesh of the recorded one with moved nodes (the housing sweep's reuse, see
+    :func:`moved_hex_nodes`)."""
     blocks = hex_blocks(cfg)
-    xs, ys, zs = _grid(cfg, blocks)
+    xs, ys, zs = _grid(cfg, blocks, counts)
     parts = [_tensor_cells(cfg, blocks, xs, ys, zs)]
     for blk in blocks:
-        parts += _ring_cells(cfg, blk, xs, ys, zs, cfg.hex_mesh)
+        parts += _ring_cells(cfg, blk, xs, ys, zs, cfg.hex_mesh, counts)
+    if counts is not None:
+        counts.finish()
     x, cells = merge_hexes(np.concatenate(parts, axis=0))
     faces = boundary_quads(cells)
     fx = x[faces]                                           # (k, 4, 3)
@@ -177,6 +194,29 @@ def hex_housing_arrays(cfg: HousingConfig):
     facets = np.concatenate([faces[m] for _, m in tags])
     values = np.concatenate([np.full(int(m.sum()), tag, np.int32) for tag, m in tags])
     return x, cells, facets, values
+
+
+def moved_hex_nodes(cfg: HousingConfig, counts: CellCounts, cells: np.ndarray, facets: np.ndarray,
+                    values: np.ndarray) -> np.ndarray:
+    """Node coordinates (N, 3) of housing ``cfg`` on the mesh ``cells`` / ``facets`` (tags ``values``)
+    generated with the recorded ``counts``: the grid of ``cfg`` with those cell counts, its nodes
+    renumbered to the given mesh's numbering.  Raises :class:`.hex_grid.TopologyChange` where the
+    new grid's cells, facets or tags are not those of the given mesh (then mesh afresh)."""
+    x2, c2, f2, v2 = hex_housing_arrays(cfg, CellCounts(counts.values))
+    if c2.shape != cells.shape or len(x2) != int(cells.max()) + 1 or f2.shape != facets.shape:
+        raise TopologyChange(f"{len(c2)} cells and {len(x2)} nodes against {len(cells)} and {int(cells.max()) + 1}")
+    # the cells come out in the same order (the same grid indices); their node numbers may differ
+    # where moved nodes sort differently: perm[old node] = new node, one-to-one and consistent
+    perm = np.full(len(x2), -1, np.int64)
+    perm[cells.ravel()] = c2.ravel()
+    if np.any(perm < 0) or np.any(perm[cells] != c2) or len(np.unique(perm)) != len(perm):
+        raise TopologyChange("the cells of the new grid do not map one-to-one onto the given mesh")
+    key = lambda f, v: np.lexsort(np.c_[np.sort(f, axis=1), v].T)   # noqa: E731
+    a = np.c_[np.sort(perm[facets], axis=1), values][key(perm[facets], values)]
+    b = np.c_[np.sort(f2, axis=1), v2][key(f2, v2)]
+    if not np.array_equal(a, b):
+        raise TopologyChange("the new grid's base or bore facets differ from the given mesh's")
+    return x2[perm]
 
 
 def build_hex_housing_mesh(cfg: HousingConfig, path: str | Path) -> HousingMesh:

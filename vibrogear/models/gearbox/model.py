@@ -312,9 +312,13 @@ def mesh_geometry(cfg, i, axes, gear_p):
         r_a, r_b = scale * r_a, scale * r_b
         beta = math.atan(math.tan(beta) * scale)             # same lead, radius r_w
         alpha_n = math.atan(math.tan(alpha_wt) * math.cos(beta))
+    # the axial thrust of a helical tooth reverses with the torque: ``hand`` is the helix
+    # hand of gear_a, while the couplings' ``hand`` signs the normal's axial component
+    # relative to +z, so a gear_a turning about -z (an intermediate shaft) flips it
+    sense = 1 if gear_p[ka] > 0 else -1
     try:
-        geom = gear_mesh_geometry(ca, cb, r_a, r_b, alpha_n, helix_angle=beta, hand=m.hand,
-                                  drive_sense=1 if gear_p[ka] > 0 else -1)
+        geom = gear_mesh_geometry(ca, cb, r_a, r_b, alpha_n, helix_angle=beta,
+                                  hand=m.hand * sense, drive_sense=sense)
     except ValueError as exc:
         raise ConfigError(path, str(exc) + ("" if not shift else " (profile-shifted pair: "
                           "the working pitch radii)")) from None

@@ -21,7 +21,7 @@ class Breakdown(RuntimeError):
 
 
 def block_lanczos(n: int, *, solve, mmul, gram, want, max_dim: int, tol: float, block: int = 16,
-                  smooth: int = 2, seed: int = 20261122):
+                  smooth: int = 2, seed: int = 20261122, start: np.ndarray | None = None, extra: int = 0):
     """Block Lanczos for A = K^-1 M (self-adjoint in the M inner product), full two-pass block
     Gram-Schmidt reorthogonalisation, no restarts: the basis grows by one block per step until
     ``want(theta)`` says enough leading Ritz values theta = 1/lambda have converged, with SLEPc's
@@ -32,6 +32,11 @@ def block_lanczos(n: int, *, solve, mmul, gram, want, max_dim: int, tol: float, 
     The operators come as callables on local rows (n of them): ``solve(Y)`` = K^-1 Y,
     ``mmul(W)`` = M W, ``gram(A, B)`` = A^T B summed over all processes.  ``seed`` seeds
     the random start block (add the process rank under MPI).
+
+    ``start`` (local rows, n x b): the start block instead of a smoothed random one, e.g. the modes of
+    a neighbouring problem (the housing sweep's previous variant); the block size is then its column
+    count.  ``extra``: that many Ritz vectors beyond the ``want``-ed ones come back as well (not
+    checked for convergence: a start block for the next problem).
 
     Returns (lam ascending, X local rows, statistics).  Raises Breakdown when the basis would
     exceed ``max_dim`` columns or loses rank."""
@@ -68,16 +73,19 @@ def block_lanczos(n: int, *, solve, mmul, gram, want, max_dim: int, tol: float, 
             W, Z, R = W @ Li.T, Z @ Li.T, L.T @ R
         return W, Z, R
 
-    b = block
+    b = block if start is None else start.shape[1]
     cap = b * (max_dim // b + 1)
     alloc = min(cap, 4 * b * 8)
     V = np.zeros((n, alloc + b), order="F")
     MV = np.zeros_like(V)
     H = np.zeros((cap + b, cap))
-    rng = np.random.default_rng(seed)
-    W = rng.standard_normal((n, b))
-    for _ in range(max(1, smooth)):            # into the range of A, and smoother
-        W = solve(mmul(W))
+    if start is None:
+        rng = np.random.default_rng(seed)
+        W = rng.standard_normal((n, b))
+        for _ in range(max(1, smooth)):        # into the range of A, and smoother
+            W = solve(mmul(W))
+    else:
+        W = np.array(start, dtype=float, order="F")
     t = time.perf_counter()
     W, Z, _ = orthonormalize(W, mmul(W))
     stats["t_orth"] += time.perf_counter() - t
@@ -117,6 +125,7 @@ def block_lanczos(n: int, *, solve, mmul, gram, want, max_dim: int, tol: float, 
     stats["basis"] = j
     if k == 0:
         return np.zeros(0), np.zeros((n, 0), order="F"), stats
+    k = min(k + extra, j)
     t = time.perf_counter()
     X = V[:, :j] @ Y[:, :k]
     del V, MV

@@ -112,19 +112,29 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
               foundation_stiffness: float, comm):
     """(dolfinx mesh, V, K, M, bcs, mass, timings, facet tags): Dirichlet rows 1 in K, 0 in M."""
     os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
-    from mpi4py import MPI
-    import dolfinx
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    dmesh, facet_tags = _read_mesh(mesh.path, comm)
+    timings["mesh_read"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    forms = _forms(dmesh, facet_tags, mesh.base_tag, material, degree, support, foundation_stiffness)
+    timings["form_compilation"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    K, M, mass = _assemble_forms(forms, comm)
+    timings["assembly"] = time.perf_counter() - t0
+    return dmesh, forms["V"], K, M, forms["bcs"], mass, timings, facet_tags
+
+
+def _forms(dmesh, facet_tags, base_tag: int, material: MaterialConfig, degree: int, support: str,
+           foundation_stiffness: float) -> dict:
+    """The compiled stiffness, mass and volume forms on ``dmesh`` (dict: V, a, m, mass, bcs, hexes);
+    they follow the mesh's node coordinates, so a moved mesh is re-assembled with the same forms."""
+    os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
     import dolfinx.fem.petsc  # noqa: F401  (explicit import needed in 0.5.2)
     import ufl
     from dolfinx import fem
     from petsc4py import PETSc
 
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    dmesh, facet_tags = _read_mesh(mesh.path, comm)
-    timings["mesh_read"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
     V = fem.VectorFunctionSpace(dmesh, ("Lagrange", degree))
     E, nu, rho = material.E, material.nu, material.rho
     mu, lmbda = E / (2 * (1 + nu)), E * nu / ((1 + nu) * (1 - 2 * nu))
@@ -137,29 +147,40 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
     a_ufl = ufl.inner(sig(u), eps(v)) * ufl.dx(metadata={"quadrature_degree": 2 * degree} if hexes else {})
     fdim = dmesh.topology.dim - 1
     dmesh.topology.create_connectivity(fdim, dmesh.topology.dim)
-    base_facets = facet_tags.indices[facet_tags.values == mesh.base_tag]
+    base_facets = facet_tags.indices[facet_tags.values == base_tag]
     bcs = []
     if support == "elastic":
         ds = ufl.Measure("ds", domain=dmesh, subdomain_data=facet_tags)
-        a_ufl = a_ufl + foundation_stiffness * ufl.inner(u, v) * ds(mesh.base_tag)
+        a_ufl = a_ufl + foundation_stiffness * ufl.inner(u, v) * ds(base_tag)
     else:
         dofs = fem.locate_dofs_topological(V, fdim, base_facets)
         bcs = [fem.dirichletbc(np.zeros(3, dtype=PETSc.ScalarType), dofs, V)]
     rho_c = fem.Constant(dmesh, PETSc.ScalarType(rho))
-    a = fem.form(a_ufl)
     # hexahedra: Gauss-Lobatto-Legendre quadrature on the element's own nodes lumps the mass
     # exactly onto the diagonal (spectral-element lumping; docs/housing.md, "Hexahedra")
     md = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1} if hexes else {}
-    m = fem.form(rho_c * ufl.inner(u, v) * ufl.dx(metadata=md))
-    mass_form = fem.form(rho_c * ufl.dx)
-    timings["form_compilation"] = time.perf_counter() - t0
+    return {"V": V, "a": fem.form(a_ufl), "m": fem.form(rho_c * ufl.inner(u, v) * ufl.dx(metadata=md)),
+            "mass": fem.form(rho_c * ufl.dx), "bcs": bcs, "hexes": hexes, "rho": rho_c}
 
-    t0 = time.perf_counter()
-    K = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
+
+def _assemble_forms(forms: dict, comm, K=None):
+    """(K, M, mass) of :func:`_forms`; ``K``: a matrix of the same forms to assemble into (its
+    sparsity pattern, and so a factor's symbolic analysis, stays)."""
+    from mpi4py import MPI
+    import dolfinx.fem.petsc
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    a, m, bcs = forms["a"], forms["m"], forms["bcs"]
+    if K is None:
+        K = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs, diagonal=1.0)
+    else:
+        K.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(K, a, bcs=bcs, diagonal=1.0)
     K.assemble()
     M = dolfinx.fem.petsc.assemble_matrix(m, bcs=bcs, diagonal=0.0)
     M.assemble()
-    if hexes:                                 # keep the diagonal only: the rest is exactly zero
+    if forms["hexes"]:                        # keep the diagonal only: the rest is exactly zero
         diag = M.getDiagonal()
         full, on_diag = M.norm(PETSc.NormType.FROBENIUS), diag.norm()
         if full ** 2 - on_diag ** 2 > 1e-10 * on_diag ** 2:     # round-off of the two sums: ~1e-16
@@ -171,9 +192,8 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
         M.setDiagonal(diag)
         M.assemble()
         diag.destroy()
-    mass = comm.allreduce(fem.assemble_scalar(mass_form), op=MPI.SUM)
-    timings["assembly"] = time.perf_counter() - t0
-    return dmesh, V, K, M, bcs, mass, timings, facet_tags
+    mass = comm.allreduce(fem.assemble_scalar(forms["mass"]), op=MPI.SUM)
+    return K, M, mass
 
 
 def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degree: int = 2,

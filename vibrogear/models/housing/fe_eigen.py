@@ -78,16 +78,17 @@ def _matsolve(F, Y, comm):
     return out
 
 
-def _block_lanczos(K, M, F, comm, *, want, max_dim, tol):
-    """Block Lanczos (:mod:`.block_lanczos`) with PETSc operators: the factor F of K, M."""
+def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, start=None, extra=0, mmul=None):
+    """Block Lanczos (:mod:`.block_lanczos`) with PETSc operators: the factor F of K, M (``mmul``:
+    M's product instead, e.g. a diagonal M's; ``start``, ``extra``: see :func:`.block_lanczos`)."""
     from mpi4py import MPI
 
     return block_lanczos(
         K.getLocalSize()[0], solve=lambda Y: _matsolve(F, Y, comm),
-        mmul=lambda W: _matmul(M, W),
+        mmul=(lambda W: _matmul(M, W)) if mmul is None else mmul,
         gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
         want=want, max_dim=max_dim, tol=tol, block=_BLOCK, smooth=_SMOOTH,
-        seed=20261122 + comm.rank)
+        seed=20261122 + comm.rank, start=start, extra=extra)
 
 
 def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block", coords=None):

@@ -242,8 +242,11 @@ def _scale_bar(ax, length_mm: float) -> None:
                 textcoords="offset points", ha="center", fontsize=7)
 
 
-def figure_of(scene):
-    """The matplotlib Figure of the drawing (each patch's gid: ``kind:name:view``)."""
+def figure_of(scene, load_path: dict | None = None):
+    """The matplotlib Figure of the drawing (each patch's gid: ``kind:name:view``);
+    ``load_path``: ``summary["load_path"]``, drawn on the side view as the power flow (each
+    mesh a line between its gears' centres at its axial position, with its tooth force and
+    power; idle meshes dashed)."""
     lay = gearbox_layout(scene)
     views = {v: [s for s in lay.shapes if s.view == v] for v in ("side", "end")}
     box = {}
@@ -291,6 +294,8 @@ def figure_of(scene):
             _label(end, f"{g.name}: {g.teeth} teeth, m {g.module * _MM:g} mm{helix}", cx,
                    cy - s.radius if g.free else cy + s.radius, xytext=(0, 3 if g.free else -10),
                    textcoords="offset points")
+    if load_path:
+        _power_flow(side, views["side"], scene, load_path)
     side.set_xlabel("y along the shafts [mm] (front wall at 0)", fontsize=8)
     seen_from = "from above" if lay.across == "x" else "from the side"
     side.set_ylabel(f"{lay.across} [mm] (seen {seen_from})", fontsize=8)
@@ -307,9 +312,34 @@ def figure_of(scene):
     return fig
 
 
-def draw_gearbox(scene_config, path) -> Path:
+def _power_flow(ax, shapes, scene, load_path: dict) -> None:
+    """Per mesh of the load path: a line between the two gears' centres in the side view
+    (across the shafts at the mesh's axial position), labelled with the static tooth force
+    and the power (loaded, solid) or "idle" (dashed)."""
+    centre = {s.name: s.centre for s in shapes if s.kind == "gear"}
+    gears = {m.name: (m.gear_a, m.gear_b) for m in scene.gearbox.meshes}
+    for m in load_path.get("meshes", []) or []:
+        a, b = gears.get(m.get("name"), (None, None))
+        if a not in centre or b not in centre:
+            continue
+        (xa, ya), (xb, yb) = centre[a], centre[b]
+        idle = m.get("role") == "idle"
+        ax.plot([xa, xb], [ya, yb], color="tab:red", lw=1.2, ls="--" if idle else "-",
+                zorder=8, gid=f"power:{m['name']}")
+        force, power = m.get("normal_force_N"), m.get("power_kW")
+        text = f"{m['name']}: idle" if idle else f"{m['name']}: " + ", ".join(
+            t for t in (f"F_n {force / 1e3:.3g} kN" if force is not None else "",
+                        f"{power:.3g} kW" if power is not None else "") if t)
+        ax.annotate(text, (0.5 * (xa + xb), 0.5 * (ya + yb)), xytext=(4, 0),
+                    textcoords="offset points", fontsize=7, ha="left", va="center",
+                    zorder=8.5, color="tab:red", rotation=90,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
+
+
+def draw_gearbox(scene_config, path, load_path: dict | None = None) -> Path:
     """Draw ``scene_config`` (a loaded scene with a ``[gearbox]``) to scale as a PNG at
-    ``path`` (suffix .png added when missing); returns the path written."""
+    ``path`` (suffix .png added when missing), with the power flow of ``load_path``
+    (``summary["load_path"]``) where given; returns the path written."""
     path = Path(path)
-    fig = figure_of(scene_config)
+    fig = figure_of(scene_config, load_path)
     return save_figure(fig, path.with_suffix(".png"), formats=("png",))[0]

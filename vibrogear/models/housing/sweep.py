@@ -1,0 +1,362 @@
+"""Housing geometry sweep that reuses the previous variant (serial; dolfinx/PETSc inside functions).
+
+A sweep of the parametric all-hex housing (``[housing.mesh] element = "hex"``) over a geometric
+parameter (a wall thickness) solves the variants in order, each from what the one before left:
+
+- **mesh**: the first variant's grid records its cell counts (:class:`..geometry.hex_grid.CellCounts`);
+  a further variant whose own grid has the same counts gets the previous mesh with its nodes moved
+  (:func:`..geometry.housing_hex.moved_hex_nodes`: the same cells and DOF numbering, the node
+  coordinates of the variant's own fresh mesh).  The dolfinx mesh, function space, compiled forms,
+  the stiffness matrix's sparsity and the factor's symbolic analysis (ordering) stay.  Where the
+  counts differ (a grid line appears or merges, e.g. a bore block's edge, 0.25 x wall from the
+  inner face) the variant is meshed afresh and starts a new chain: replaying the old counts there
+  would solve another mesh than the variant's own (measured before the outer sizes followed
+  ``edge_size``: 35 % more cells from 10 to 11.7 mm walls, as slow as the fresh solve).  The
+  ``housing_sweep`` analysis gives every point the base housing's mesh sizes, so one grid serves
+  as long as the geometry allows.
+- **matrices**: K re-assembled into the same matrix; the GLL-lumped diagonal mass as the vector
+  int rho phi_i dx (the diagonal the fresh solve extracts from the full M, whose off-diagonal part it
+  checked to be zero on the chain's first variant).
+- **eigen-solve**: the Cholesky factor refactored numerically (the ordering reused), then
+  Rayleigh-Ritz on the block Krylov space of the previous variant's ``count + guard`` modes
+  (:func:`krylov_refine`: a few solves with ``count + guard`` right-hand sides instead of block
+  Lanczos from a random block), to the fresh solve's criterion, SLEPc's ||K^-1 M x - theta x||_M /
+  theta, at the sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved
+  afresh.  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves
+  near-zero new blocks; the previous factor as a preconditioner of LOBPCG needed 7 steps for 1e-4,
+  and its criterion, evaluated with the old factor, passed low modes 3 % off: the check needs the
+  variant's own factor.)
+
+Every variant, fresh or reused, gets the fresh solve's residual check with new products,
+max ||K x - lambda M x|| / ||K x|| over its modes.  ``reuse=False`` gives the fresh solve of each
+variant by the same stages (for the benchmark's side-by-side comparison).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ...config.model.housing import HousingConfig
+from ...geometry.hex_grid import CellCounts, TopologyChange
+from ...geometry.housing import BASE_TAG
+from ...geometry.housing_hex import hex_housing_arrays, moved_hex_nodes
+from .block_lanczos import Breakdown
+from .fe_common import HousingSolveError
+
+__all__ = ["SweepVariant", "sweep_housing_modes", "krylov_refine", "reusable", "DEFAULT_TOL"]
+
+#: the reused start's tolerance on SLEPc's criterion ||A x - theta x||_M / theta (A = K^-1 M,
+#: theta = 1 / lambda), the fresh solve's criterion: some eigenvalue lies within this relative
+#: distance of each Ritz value, so 1e-2 bounds each frequency's error by 0.5 % (the fresh solve's
+#: tolerance, housing.modes.tol = 1e-8 by default, is far below what a sweep of frequencies needs)
+DEFAULT_TOL = 1e-2
+
+
+@dataclass(frozen=True)
+class SweepVariant:
+    """One variant's lowest ``count`` frequencies and how they were computed.
+
+    ``start``: "fresh" (random block) or "previous" (the previous variant's modes); ``mesh``:
+    "generated" or "moved"; ``timings`` (s) by stage: mesh, forms, assembly, factorization,
+    iterations, check; ``residual``: max ||K x - lambda M x|| / ||K x|| over the modes."""
+    freqs_hz: np.ndarray
+    n_dofs: int
+    start: str
+    mesh: str
+    seconds: float
+    residual: float
+    steps: int
+    n_rhs: int
+    timings: dict = field(default_factory=dict)
+    note: str = ""
+    bound: float = float("nan")
+
+
+def reusable(cfg: HousingConfig) -> str | None:
+    """None where a sweep of ``cfg`` can reuse the previous variant, else why not."""
+    if cfg.source != "parametric":
+        return f"housing.source = {cfg.source!r} (only the parametric box has a structured grid)"
+    if cfg.mesh.element != "hex":
+        return "housing.mesh.element = 'tet' (gmsh meshes each variant afresh; use element = 'hex')"
+    if cfg.modes.cutoff_hz is not None:
+        return "housing.modes.cutoff_hz is set (the reused start needs a fixed mode count)"
+    if cfg.modes.solver != "block":
+        return f"housing.modes.solver = {cfg.modes.solver!r} (the reuse is built on block Lanczos)"
+    return None
+
+
+def _physics(cfg: HousingConfig) -> tuple:
+    """What the compiled forms depend on besides the node coordinates."""
+    m = cfg.material
+    return (m.E, m.nu, m.rho, cfg.mesh.degree, cfg.support, cfg.foundation_stiffness)
+
+
+class _Chain:
+    """The state one variant leaves the next: mesh, forms, K, factor, Ritz vectors."""
+
+    def __init__(self, cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X):
+        self.physics = _physics(cfg)
+        self.counts, self.cells, self.facets, self.values = counts, cells, facets, values
+        self.dmesh, self.forms, self.K, self.ksp, self.X = dmesh, forms, K, ksp, X
+
+    def destroy(self):
+        self.ksp.destroy()
+        self.K.destroy()
+
+
+def _mass_diagonal(forms, comm):
+    """The GLL-lumped mass matrix's diagonal (owned DOF, Dirichlet DOF 0) as the vector int rho phi_i dx."""
+    import dolfinx.fem.petsc
+    import ufl
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    if "lumped" not in forms:
+        V = forms["V"]
+        degree = V.ufl_element().degree()
+        forms["lumped"] = fem.form(forms["rho"] * ufl.inner(ufl.as_vector((1.0, 1.0, 1.0)), ufl.TestFunction(V))
+                                   * ufl.dx(metadata={"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1}))
+    b = dolfinx.fem.petsc.assemble_vector(forms["lumped"])
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    fem.set_bc(b, forms["bcs"], scale=0.0)
+    n = forms["V"].dofmap.index_map.size_local * forms["V"].dofmap.index_map_bs
+    out = np.array(b.array[:n])
+    b.destroy()
+    return out
+
+
+def _check(K, lam, X, mdiag, comm) -> float:
+    """max ||K x - lam M x|| / ||K x|| with fresh products, as the fresh solve's check."""
+    from mpi4py import MPI
+    from .fe_eigen import _matmul
+
+    MX = mdiag[:, None] * X
+    scale = 1.0 / np.sqrt(comm.allreduce(np.einsum("ij,ij->j", X, MX), op=MPI.SUM))
+    X = X * scale
+    MX *= scale
+    KX = _matmul(K, X)
+    R = KX - MX * lam
+    resid = np.sqrt(comm.allreduce(np.einsum("ij,ij->j", R, R), op=MPI.SUM)
+                    / comm.allreduce(np.einsum("ij,ij->j", KX, KX), op=MPI.SUM))
+    return float(resid.max()) if resid.size else 0.0
+
+
+def _lanczos(K, F, mdiag, comm, *, nev, extra, tol, start):
+    """Block Lanczos for ``nev`` modes (+ ``extra`` Ritz vectors) from a random or a given block."""
+    from .fe_eigen import _BLOCK, _block_lanczos
+
+    b = _BLOCK if start is None else start.shape[1]
+    max_dim = max(3 * nev + 100, 2 * nev + 16 * _BLOCK) if start is None else 4 * b
+    return _block_lanczos(K, None, F, comm, want=lambda th: nev if th.size >= nev else None,
+                          max_dim=max_dim, tol=tol, start=start, extra=extra,
+                          mmul=lambda W: mdiag[:, None] * W)
+
+
+def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
+    """Mesh, forms, assembly, factor and a random-start block Lanczos: a new chain."""
+    from .fe import _assemble_forms, _forms, _read_mesh
+    from .fe_eigen import _factor
+
+    t0 = time.perf_counter()
+    counts = CellCounts()
+    x, cells, facets, values = hex_housing_arrays(cfg, counts)
+    path = tmp / "mesh.npz"
+    with open(path, "wb") as fh:
+        np.savez(fh, x=x, cells=cells, facets=facets, values=values)
+    dmesh, ftags = _read_mesh(path, comm)
+    timings["mesh"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    forms = _forms(dmesh, ftags, BASE_TAG, cfg.material, cfg.mesh.degree, cfg.support,
+                   cfg.foundation_stiffness)
+    timings["forms"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    K, M, _ = _assemble_forms(forms, comm)         # the full M, checked to be diagonal
+    mdiag = np.array(M.getDiagonal().array)
+    M.destroy()
+    timings["assembly"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ksp = _factor(K, comm)
+    timings["factorization"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    try:
+        lam, X, st = _lanczos(K, ksp.getPC().getFactorMatrix(), mdiag, comm, nev=count, extra=guard,
+                              tol=cfg.modes.tol, start=None)
+    except Breakdown as exc:
+        ksp.destroy()
+        K.destroy()
+        raise HousingSolveError(f"{exc} (the sweep has no Krylov-Schur fallback: run the point as a "
+                                "'modes' scene)") from exc
+    timings["iterations"] = time.perf_counter() - t0
+    return _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X), lam, X, mdiag, st
+
+
+def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, tol: float, max_blocks: int = 4):
+    """The lowest modes of K x = lambda M x (M = diag(``mdiag``)) from approximate ones ``X0`` (n x p).
+
+    Rayleigh-Ritz on the block Krylov space span(Y_1 .. Y_k), Y_j = A^j X0 with A = K^-1 M
+    (``solve``(B) = K^-1 B, the variant's own factor), for k = 1, 2, ... up to ``max_blocks``: every
+    Gram matrix comes from the M-products G_ab = Y_a^T M Y_b, because K Y_b = M Y_(b-1), so K is never
+    multiplied.  Each Ritz pair (lambda, z = sum Y_a c_a) is checked with the next block,
+    A z = sum Y_(a+1) c_a, by the fresh solve's criterion (SLEPc's, see :mod:`.block_lanczos`)
+
+        est = ||A z - z / lambda||_M lambda <= tol   (||z||_M = 1),
+
+    which puts an eigenvalue lambda_i within |lambda - lambda_i| <= est lambda_i.  The basis is
+    M-orthonormalised by the eigen-decomposition of its Gram matrix scaled to a unit diagonal
+    (directions below 1e-12 of the largest dropped: the power basis leans towards the lowest modes).  ``gram``(A, B) = A^T B over all processes.
+
+    Returns (lam (p,) ascending, Z (n x p, M-orthonormal), est (p,), blocks k, right-hand sides)."""
+    import scipy.linalg as sla
+
+    p = X0.shape[1]
+    Y = [np.asfortranarray(X0)]
+    n_rhs = 0
+    G = {}
+
+    def add_block():
+        nonlocal n_rhs
+        MY = mdiag[:, None] * Y[-1]
+        Yn = solve(np.asfortranarray(MY))
+        n_rhs += Yn.shape[1]
+        Y.append(Yn)
+        j = len(Y) - 1
+        MYn = mdiag[:, None] * Yn
+        for a in range(j + 1):
+            G[a, j] = gram(Y[a], MYn)
+            G[j, a] = G[a, j].T
+
+    add_block()                                # Y_1
+    for k in range(1, max_blocks + 1):
+        add_block()                            # Y_(k+1): checks span(Y_1 .. Y_k)
+        Mg = np.block([[G[a, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
+        Kg = np.block([[G[a, b - 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
+        d = 1.0 / np.sqrt(np.diag(Mg))
+        ev, U = np.linalg.eigh(0.5 * (Mg + Mg.T) * d[:, None] * d[None, :])
+        keep = ev > 1e-12 * ev.max()
+        T = d[:, None] * U[:, keep] / np.sqrt(ev[keep])
+        lam, Q = sla.eigh(T.T @ (0.5 * (Kg + Kg.T)) @ T)
+        C = T @ Q[:, :p]                       # z = [Y_1 .. Y_k] C, M-orthonormal
+        # ||A z - z / lam||_M^2 from the Gram matrices: A z = [Y_2 .. Y_(k+1)] C
+        G11 = Mg
+        G22 = np.block([[G[a + 1, b + 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
+        G21 = np.block([[G[a + 1, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
+        lp = lam[:p]
+        sq = (np.einsum("ij,ij->j", C, G22 @ C) - 2.0 / lp * np.einsum("ij,ij->j", C, G21 @ C)
+              + np.einsum("ij,ij->j", C, G11 @ C) / lp ** 2)
+        est = np.sqrt(np.maximum(sq, 0.0)) * lp
+        if np.all(est[:nev] <= tol) or k == max_blocks:
+            break
+    Z = np.asfortranarray(np.hstack(Y[1:k + 1]) @ C)
+    return lp, Z, est, k, n_rhs
+
+
+def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float):
+    """The chain's mesh with moved nodes, K re-assembled into its matrix and refactored (numerically:
+    the ordering stays), the modes refined from the previous ones (:func:`krylov_refine`)."""
+    import dolfinx.fem.petsc
+    from mpi4py import MPI
+    from .fe_eigen import _matsolve
+
+    t0 = time.perf_counter()
+    own = CellCounts()                        # the grid the variant's own fresh solve would lay
+    hex_housing_arrays(cfg, own)
+    if own.values != chain.counts.values:
+        raise TopologyChange("the variant's own grid has other cell counts than the previous one's")
+    x = moved_hex_nodes(cfg, chain.counts, chain.cells, chain.facets, chain.values)
+    geo = chain.dmesh.geometry
+    geo.x[:, :] = x[np.asarray(geo.input_global_indices)]
+    timings["mesh"] = time.perf_counter() - t0
+    timings["forms"] = 0.0
+    t0 = time.perf_counter()
+    K, forms = chain.K, chain.forms
+    K.zeroEntries()
+    dolfinx.fem.petsc.assemble_matrix(K, forms["a"], bcs=forms["bcs"], diagonal=1.0)
+    K.assemble()
+    mdiag = _mass_diagonal(forms, comm)
+    timings["assembly"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    chain.ksp.setOperators(K)                 # same pattern: numeric factorization only
+    chain.ksp.setUp()
+    F = chain.ksp.getPC().getFactorMatrix()
+    timings["factorization"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lam, X, est, k, n_rhs = krylov_refine(chain.X, solve=lambda B: _matsolve(F, B, comm), mdiag=mdiag,
+                                          gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
+                                          nev=count, tol=tol)
+    timings["iterations"] = time.perf_counter() - t0
+    if np.any(est[:count] > tol):
+        raise Breakdown(f"the reused start did not converge: criterion {est[:count].max():.2g} > {tol:g} "
+                        f"after {k} blocks")
+    chain.X = X
+    return lam, X, mdiag, {"steps": k, "n_rhs": n_rhs, "est": float(est[:count].max())}
+
+
+def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: bool = True,
+                        guard: int | None = None, tol: float = DEFAULT_TOL,
+                        on_variant: Callable[[int, SweepVariant], None] | None = None) -> list[SweepVariant]:
+    """The lowest ``count`` frequencies of each housing in ``cfgs`` (in order; serial).
+
+    ``reuse``: each variant starts from the previous one (module docstring) where
+    :func:`reusable` allows and the mesh topology fits; otherwise every variant is solved
+    afresh.  ``guard``: Ritz vectors carried beyond ``count`` (default max(8, count / 8)).
+    ``on_variant(i, result)`` is called as each variant finishes."""
+    from mpi4py import MPI
+
+    os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
+    comm = MPI.COMM_WORLD
+    if comm.size > 1:
+        raise HousingSolveError("the reusing housing sweep runs on one process (start it without mpirun)")
+    for cfg in cfgs:
+        why = reusable(cfg)
+        if why is not None:
+            raise HousingSolveError(f"the reusing housing sweep needs a parametric all-hex housing: {why}")
+    guard = max(8, count // 8) if guard is None else int(guard)
+    out: list[SweepVariant] = []
+    chain: _Chain | None = None
+    with tempfile.TemporaryDirectory(prefix="vibrogear-hsweep-") as tmp:
+        for i, cfg in enumerate(cfgs):
+            t_all = time.perf_counter()
+            timings: dict[str, float] = {}
+            note = ""
+            res = None
+            if reuse and chain is not None and chain.physics == _physics(cfg):
+                try:
+                    lam, X, mdiag, st = _reused(chain, cfg, count, guard, comm, timings, tol=tol)
+                    res = ("previous", "moved")
+                except TopologyChange as exc:
+                    note = f"meshed afresh: {exc}"
+                except Breakdown as exc:
+                    note = f"solved afresh: {exc}"
+            if res is None:
+                if chain is not None:
+                    chain.destroy()
+                timings.clear()
+                sub = Path(tmp) / f"v{i}"
+                sub.mkdir()
+                chain, lam, X, mdiag, st = _fresh(cfg, count, guard if reuse else 0, comm, sub, timings)
+                res = ("fresh", "generated")
+            if len(lam) < count:
+                raise HousingSolveError(f"variant {i}: block Lanczos converged {len(lam)} of {count} modes")
+            t0 = time.perf_counter()
+            resid = _check(chain.K, lam[:count], X[:, :count], mdiag, comm)
+            bound = cfg.modes.tol if res[0] == "fresh" else st["est"]
+            timings["check"] = time.perf_counter() - t0
+            if not reuse:
+                chain.destroy()
+                chain = None
+            v = SweepVariant(freqs_hz=np.sqrt(np.maximum(lam[:count], 0.0)) / (2 * np.pi),
+                             n_dofs=int(X.shape[0]), start=res[0], mesh=res[1],
+                             seconds=time.perf_counter() - t_all, residual=resid, steps=int(st["steps"]),
+                             n_rhs=int(st["n_rhs"]), timings=timings, note=note, bound=bound)
+            out.append(v)
+            if on_variant is not None:
+                on_variant(i, v)
+        if chain is not None:
+            chain.destroy()
+    return out
