@@ -76,10 +76,10 @@ def test_gll_quadrature_makes_the_q3_mass_exactly_diagonal_on_the_housing_cells(
     from mpi4py import MPI
 
     from vibrogear.geometry.housing_hex import build_hex_housing_mesh
-    from vibrogear.models.housing.fe import _read_mesh
+    from vibrogear.models.housing.fe import read_mesh
 
     hm = build_hex_housing_mesh(_small(), tmp_path / "mesh")
-    msh, _ = _read_mesh(hm.path, MPI.COMM_WORLD)
+    msh, _ = read_mesh(hm.path, MPI.COMM_WORLD)
     V = fem.VectorFunctionSpace(msh, ("Lagrange", 3))
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     m = fem.form(ufl.inner(u, v) * ufl.dx(metadata={"quadrature_rule": "GLL", "quadrature_degree": 5}))
@@ -141,7 +141,7 @@ def test_chunked_evaluation_equals_one_mode_at_a_time():
     from mpi4py import MPI
     from dolfinx import fem, mesh
 
-    from vibrogear.models.housing.fe_post import _eval_modes, _locate
+    from vibrogear.models.housing.fe_post import _eval_modes, locate
 
     comm = MPI.COMM_WORLD
     msh = mesh.create_box(comm, [[0, 0, 0], [1, 0.5, 0.3]], [3, 2, 2], mesh.CellType.hexahedron)
@@ -151,7 +151,7 @@ def test_chunked_evaluation_equals_one_mode_at_a_time():
     rng = np.random.default_rng(1)
     Vloc = rng.standard_normal((n, 23))
     pts = rng.random((40, 3)) * [1, 0.5, 0.3]
-    cells, _, _ = _locate(msh, pts, comm)
+    cells, _, _ = locate(msh, pts, comm)
     got = _eval_modes(uh, Vloc, pts, cells)
     for i in (0, 7, 22):
         uh.x.array[:n] = Vloc[:, i]

@@ -23,8 +23,8 @@ import numpy as np
 from ...config.model.housing import MaterialConfig
 from ...geometry.housing import BoreGeometry, HousingMesh, read_msh_arrays
 from ...geometry.housing_hex import read_hex_mesh
-from .fe_eigen import HousingSolveError, _eigensolve, _matmul
-from .fe_post import _bore_values, _locate, _preview, _surface_values, _write_shapes
+from .fe_eigen import HousingSolveError, lowest_modes, matmul
+from .fe_post import bore_coupling_values, locate, mode_previews, surface_values, write_shapes
 from .result import HousingModes
 from .surface_data import outer_surface
 from .surface_mesh import boundary_surface
@@ -52,7 +52,7 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
 
     t0 = time.perf_counter()
     coords = V.tabulate_dof_coordinates()[:V.dofmap.index_map.size_local] if solver.endswith("_gamg") else None
-    lam, Vloc, reason, nconv, status, message, info = _eigensolve(
+    lam, Vloc, reason, nconv, status, message, info = lowest_modes(
         K, M, count=count, cutoff_hz=cutoff_hz, max_count=max_count, tol=tol, comm=comm, solver=solver,
         coords=coords)
     timings["eigensolve"] = time.perf_counter() - t0
@@ -63,11 +63,11 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     t0 = time.perf_counter()
     nmode = Vloc.shape[1]
     # honest checks with fresh products: ||K x - lam M x|| / ||K x||, max |V^T M V - I|
-    MVloc = _matmul(M, Vloc)
+    MVloc = matmul(M, Vloc)
     scale = 1.0 / np.sqrt(comm.allreduce(np.einsum("ij,ij->j", Vloc, MVloc), op=MPI.SUM))
     Vloc *= scale
     MVloc *= scale
-    KVloc = _matmul(K, Vloc)
+    KVloc = matmul(K, Vloc)
     R = KVloc - MVloc * lam
     resid = np.sqrt(comm.allreduce(np.einsum("ij,ij->j", R, R), op=MPI.SUM)
                     / comm.allreduce(np.einsum("ij,ij->j", KVloc, KVloc), op=MPI.SUM))
@@ -76,9 +76,9 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     del MVloc
     ortho = float(np.max(np.abs(gram - np.eye(nmode)))) if nmode else 0.0
     uh = fem.Function(V)
-    pts, pvals, cvals, n_fallback = _bore_values(dmesh, uh, Vloc, bores, comm)
-    prev_pts, prev_vals = _preview(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
-    skin = outer_surface(*_surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
+    pts, pvals, cvals, n_fallback = bore_coupling_values(dmesh, uh, Vloc, bores, comm)
+    prev_pts, prev_vals = mode_previews(dmesh, V, uh, Vloc[:, :_PREVIEW_MODES], comm)
+    skin = outer_surface(*surface_values(dmesh, ftags, (mesh.base_tag, *mesh.bore_tags), uh,
                                           Vloc, comm))
     t1 = time.perf_counter()
     shape = boundary_surface(dmesh, ftags, mesh.base_tag, mesh.bore_tags, bores, uh, Vloc,
@@ -89,7 +89,7 @@ def solve_mesh_modes(mesh: HousingMesh, *, material: MaterialConfig, degree: int
     shapes_path = None
     if shapes > 0 and shapes_dir is not None and nmode:
         t0 = time.perf_counter()
-        shapes_path = _write_shapes(dmesh, uh, Vloc[:, :shapes], Path(shapes_dir) / "shapes.xdmf", comm)
+        shapes_path = write_shapes(dmesh, uh, Vloc[:, :shapes], Path(shapes_dir) / "shapes.xdmf", comm)
         timings["xdmf"] = time.perf_counter() - t0
     for mat in (K, M):
         mat.destroy()
@@ -114,18 +114,18 @@ def _assemble(mesh: HousingMesh, material: MaterialConfig, degree: int, support:
     os.environ.setdefault("XDG_CACHE_HOME", str(Path.home() / ".cache"))
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    dmesh, facet_tags = _read_mesh(mesh.path, comm)
+    dmesh, facet_tags = read_mesh(mesh.path, comm)
     timings["mesh_read"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    forms = _forms(dmesh, facet_tags, mesh.base_tag, material, degree, support, foundation_stiffness)
+    forms = housing_forms(dmesh, facet_tags, mesh.base_tag, material, degree, support, foundation_stiffness)
     timings["form_compilation"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    K, M, mass = _assemble_forms(forms, comm)
+    K, M, mass = assemble_forms(forms, comm)
     timings["assembly"] = time.perf_counter() - t0
     return dmesh, forms["V"], K, M, forms["bcs"], mass, timings, facet_tags
 
 
-def _forms(dmesh, facet_tags, base_tag: int, material: MaterialConfig, degree: int, support: str,
+def housing_forms(dmesh, facet_tags, base_tag: int, material: MaterialConfig, degree: int, support: str,
            foundation_stiffness: float) -> dict:
     """The compiled stiffness, mass and volume forms on ``dmesh`` (dict: V, a, m, mass, bcs, hexes);
     they follow the mesh's node coordinates, so a moved mesh is re-assembled with the same forms."""
@@ -163,8 +163,8 @@ def _forms(dmesh, facet_tags, base_tag: int, material: MaterialConfig, degree: i
             "mass": fem.form(rho_c * ufl.dx), "bcs": bcs, "hexes": hexes, "rho": rho_c}
 
 
-def _assemble_forms(forms: dict, comm, K=None):
-    """(K, M, mass) of :func:`_forms`; ``K``: a matrix of the same forms to assemble into (its
+def assemble_forms(forms: dict, comm, K=None):
+    """(K, M, mass) of :func:`housing_forms`; ``K``: a matrix of the same forms to assemble into (its
     sparsity pattern, and so a factor's symbolic analysis, stays)."""
     from mpi4py import MPI
     import dolfinx.fem.petsc
@@ -223,7 +223,7 @@ def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degre
     pts, rows, cols, vals, n_fallback = np.full((nb, P, 3), np.nan), [], [], [], 0
     if nb:
         flat = np.vstack([b.points() for b in bores])
-        cells, _, n_fallback = _locate(dmesh, flat, comm)
+        cells, _, n_fallback = locate(dmesh, flat, comm)
         uh = fem.Function(V)
         arr = uh.x.array
         arr[:] = 0.0
@@ -243,7 +243,7 @@ def assemble_mesh_matrices(mesh: HousingMesh, *, material: MaterialConfig, degre
     return dict(K=Ks, M=Ms, free=np.flatnonzero(mask != 0.0), T=T, bore_points=pts, mass_kg=float(mass),
                 n_fallback_points=int(n_fallback), timings=timings)
 
-def _read_mesh(path: Path, comm):
+def read_mesh(path: Path, comm):
     """Distributed dolfinx mesh + facet tags (Debian's gmshio.read_from_msh is broken in 0.5.2)."""
     import ufl
     from dolfinx import cpp, mesh as dmesh_mod

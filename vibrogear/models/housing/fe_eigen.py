@@ -18,13 +18,13 @@ from .fe_common import PREFIX as _PREFIX, HousingSolveError, option_defaults
 #: columns per block of the block Lanczos solver: MUMPS / CHOLMOD forward-backward sweeps with 16
 #: right-hand sides cost ~ 1/5 of 16 single sweeps (the factor is read once per sweep), while the
 #: Krylov space needed for 100 modes grows only ~ 1.7x against single-vector Krylov-Schur
-_BLOCK = 16
+BLOCK = 16
 #: extra applications of (K^-1 M) to the random start block: removes the rough high-frequency part
 #: of the random vectors, which low-degree block Krylov polynomials would leave in the residuals
 _SMOOTH = 2
 
 
-def _factor(K, comm):
+def cholesky_factor(K, comm):
     """KSP (preonly, Cholesky) factored once; CHOLMOD on one process (METIS/AMD ordering: ~25 % fewer
     factor entries than MUMPS with PORD and half the time per triangular solve), MUMPS under MPI
     (ICNTL(14) = 50: INFOG(1) = -9 otherwise).  ``-vghousing_st_pc_factor_mat_solver_type``
@@ -55,7 +55,7 @@ def _dense(arr, comm):
     return PETSc.Mat().createDense(((n, N), (k, k)), array=np.asfortranarray(arr), comm=comm)
 
 
-def _matmul(A, X):
+def matmul(A, X):
     """Local rows of A @ X for a PETSc AIJ matrix A and local rows X (n_own x k)."""
     if X.shape[1] == 0:
         return np.zeros_like(X)
@@ -67,7 +67,7 @@ def _matmul(A, X):
     return out
 
 
-def _matsolve(F, Y, comm):
+def matsolve(F, Y, comm):
     """Local rows of K^-1 Y with the factor F: one forward/backward sweep for all columns."""
     B = _dense(Y, comm)
     X = _dense(np.zeros_like(Y), comm)
@@ -78,20 +78,20 @@ def _matsolve(F, Y, comm):
     return out
 
 
-def _block_lanczos(K, M, F, comm, *, want, max_dim, tol, start=None, extra=0, mmul=None):
+def petsc_block_lanczos(K, M, F, comm, *, want, max_dim, tol, start=None, extra=0, mmul=None):
     """Block Lanczos (:mod:`.block_lanczos`) with PETSc operators: the factor F of K, M (``mmul``:
     M's product instead, e.g. a diagonal M's; ``start``, ``extra``: see :func:`.block_lanczos`)."""
     from mpi4py import MPI
 
     return block_lanczos(
-        K.getLocalSize()[0], solve=lambda Y: _matsolve(F, Y, comm),
-        mmul=(lambda W: _matmul(M, W)) if mmul is None else mmul,
+        K.getLocalSize()[0], solve=lambda Y: matsolve(F, Y, comm),
+        mmul=(lambda W: matmul(M, W)) if mmul is None else mmul,
         gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
-        want=want, max_dim=max_dim, tol=tol, block=_BLOCK, smooth=_SMOOTH,
+        want=want, max_dim=max_dim, tol=tol, block=BLOCK, smooth=_SMOOTH,
         seed=20261122 + comm.rank, start=start, extra=extra)
 
 
-def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block", coords=None):
+def lowest_modes(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block", coords=None):
     """Lowest modes of K x = lambda M x.  ``solver``: ``"block"`` (block Lanczos on the Cholesky
     factor of K, falling back to SLEPc Krylov-Schur on a breakdown) or a SLEPc method of
     :data:`.fe_slepc.SLEPC_SOLVERS`, with the factor or, for the ``*_gamg`` ones, the AMG solver of
@@ -117,7 +117,7 @@ def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block",
         timings["preconditioner_setup"] = time.perf_counter() - t0
         info["package"] = ksp.getPC().getType()
     else:
-        ksp = _factor(K, comm)
+        ksp = cholesky_factor(K, comm)
         timings["factorization"] = time.perf_counter() - t0
         info["package"] = ksp.getPC().getFactorSolverType()
     if solver == "block":
@@ -138,8 +138,8 @@ def _eigensolve(K, M, *, count, cutoff_hz, max_count, tol, comm, solver="block",
 
         t0 = time.perf_counter()
         try:
-            lam, X, st = _block_lanczos(K, M, ksp.getPC().getFactorMatrix(), comm, want=want, tol=tol,
-                                        max_dim=max(3 * nev + 100, 2 * nev + 16 * _BLOCK))
+            lam, X, st = petsc_block_lanczos(K, M, ksp.getPC().getFactorMatrix(), comm, want=want, tol=tol,
+                                        max_dim=max(3 * nev + 100, 2 * nev + 16 * BLOCK))
         except Breakdown as exc:
             info["fallback"] = str(exc)
             solver = "krylovschur"

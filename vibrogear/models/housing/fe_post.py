@@ -12,7 +12,7 @@ _PREVIEW_POINTS = 4000
 _EVAL_CHUNK = 50
 
 
-def _locate(dmesh, points, comm):
+def locate(dmesh, points, comm):
     """For each point, (local cell or -1, owning rank); fallback to the closest cell."""
     from mpi4py import MPI
     import dolfinx.geometry as geo
@@ -75,7 +75,7 @@ def _eval_modes(uh, Vloc, pts, cells) -> np.ndarray:
     return out
 
 
-def _bore_values(dmesh, uh, Vloc, bores, comm):
+def bore_coupling_values(dmesh, uh, Vloc, bores, comm):
     from mpi4py import MPI
 
     nb, m = len(bores), Vloc.shape[1]
@@ -86,7 +86,7 @@ def _bore_values(dmesh, uh, Vloc, bores, comm):
     if nb == 0:
         return pts, vals, cvals, 0
     flat = np.vstack([b.points() for b in bores])
-    cells, owner, n_fallback = _locate(dmesh, flat, comm)
+    cells, owner, n_fallback = locate(dmesh, flat, comm)
     mine = np.flatnonzero(owner == comm.rank)
     local = np.zeros((len(flat), 3, m))
     if len(mine):
@@ -103,7 +103,7 @@ def _bore_values(dmesh, uh, Vloc, bores, comm):
     return pts, vals, cvals, n_fallback
 
 
-def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
+def surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     """Exterior facets not tagged ``skip_tags`` (base, bores), gathered on rank 0: their vertex
     coordinates (nf, 3, 3) (a hexahedral mesh's quads split into two triangles each), ordered so
     that (b - a) x (c - a) points out of the solid, and each
@@ -147,7 +147,7 @@ def _surface_values(dmesh, ftags, skip_tags, uh, Vloc, comm):
     return np.concatenate(tris), np.concatenate(allv)
 
 
-def _preview(dmesh, V, uh, Vloc, comm):
+def mode_previews(dmesh, V, uh, Vloc, comm):
     """Boundary dof coordinates and the first modes there, subsampled, for plots."""
     import dolfinx.mesh
     from dolfinx import fem
@@ -169,7 +169,7 @@ def _preview(dmesh, V, uh, Vloc, comm):
     return xyz[sel], vals[sel]
 
 
-def _write_shapes(dmesh, uh, Vloc, path: Path, comm) -> Path:
+def write_shapes(dmesh, uh, Vloc, path: Path, comm) -> Path:
     from dolfinx import fem
     from dolfinx.io import XDMFFile
 

@@ -53,7 +53,7 @@ class HousingSurface:
                                          self.weights, self.values)))
 
 
-def _merge_vertices(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def merge_vertices(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     pts = tri.reshape(-1, 3)
     scale = max(float(np.ptp(pts, axis=0).max()), 1e-300) if len(pts) else 1.0
     keys = np.round(pts / (1e-9 * scale)).astype(np.int64)
@@ -68,7 +68,7 @@ def outer_surface(tri, values, *, rel_tol: float = 1e-6) -> HousingSurface:
     tri = np.asarray(tri, dtype=float).reshape(-1, 3, 3)
     values = np.asarray(values, dtype=float)
     values = values.reshape(len(tri), 3, -1 if values.size else 0)
-    verts, faces = _merge_vertices(tri)
+    verts, faces = merge_vertices(tri)
     nf = len(faces)
     if nf:
         inc = sp.csr_matrix((np.ones(3 * nf), (np.repeat(np.arange(nf), 3), faces.ravel())),

@@ -314,12 +314,12 @@ def boundary_surface(dmesh, ftags, base_tag: int, bore_tags, bores, uh, Vloc, rh
     pieces = comm.gather((x[used], np.searchsorted(used, tri), ftag, vals, centroids, cell_e), root=0)
     if comm.rank != 0:
         return {**empty_shape_fields(m), "region_names": ()}
-    from .surface_data import _merge_vertices
+    from .surface_data import merge_vertices
 
     offs = np.cumsum([0] + [len(p[0]) for p in pieces])
     allx = np.vstack([p[0] for p in pieces])
     alltri = np.vstack([p[1] + o for p, o in zip(pieces, offs)])
-    verts, merged = _merge_vertices(allx[alltri])
+    verts, merged = merge_vertices(allx[alltri])
     allv = np.concatenate([p[3] for p in pieces])
     values = np.zeros((len(verts), 3, m))
     values[merged.ravel()] = allv[alltri.ravel()]

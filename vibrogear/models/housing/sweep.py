@@ -134,13 +134,13 @@ def _mass_diagonal(forms, comm):
 def _check(K, lam, X, mdiag, comm) -> float:
     """max ||K x - lam M x|| / ||K x|| with fresh products, as the fresh solve's check."""
     from mpi4py import MPI
-    from .fe_eigen import _matmul
+    from .fe_eigen import matmul
 
     MX = mdiag[:, None] * X
     scale = 1.0 / np.sqrt(comm.allreduce(np.einsum("ij,ij->j", X, MX), op=MPI.SUM))
     X = X * scale
     MX *= scale
-    KX = _matmul(K, X)
+    KX = matmul(K, X)
     R = KX - MX * lam
     resid = np.sqrt(comm.allreduce(np.einsum("ij,ij->j", R, R), op=MPI.SUM)
                     / comm.allreduce(np.einsum("ij,ij->j", KX, KX), op=MPI.SUM))
@@ -149,19 +149,19 @@ def _check(K, lam, X, mdiag, comm) -> float:
 
 def _lanczos(K, F, mdiag, comm, *, nev, extra, tol, start):
     """Block Lanczos for ``nev`` modes (+ ``extra`` Ritz vectors) from a random or a given block."""
-    from .fe_eigen import _BLOCK, _block_lanczos
+    from .fe_eigen import BLOCK, petsc_block_lanczos
 
-    b = _BLOCK if start is None else start.shape[1]
-    max_dim = max(3 * nev + 100, 2 * nev + 16 * _BLOCK) if start is None else 4 * b
-    return _block_lanczos(K, None, F, comm, want=lambda th: nev if th.size >= nev else None,
+    b = BLOCK if start is None else start.shape[1]
+    max_dim = max(3 * nev + 100, 2 * nev + 16 * BLOCK) if start is None else 4 * b
+    return petsc_block_lanczos(K, None, F, comm, want=lambda th: nev if th.size >= nev else None,
                           max_dim=max_dim, tol=tol, start=start, extra=extra,
                           mmul=lambda W: mdiag[:, None] * W)
 
 
 def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
     """Mesh, forms, assembly, factor and a random-start block Lanczos: a new chain."""
-    from .fe import _assemble_forms, _forms, _read_mesh
-    from .fe_eigen import _factor
+    from .fe import assemble_forms, housing_forms, read_mesh
+    from .fe_eigen import cholesky_factor
 
     t0 = time.perf_counter()
     counts = CellCounts()
@@ -169,19 +169,19 @@ def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
     path = tmp / "mesh.npz"
     with open(path, "wb") as fh:
         np.savez(fh, x=x, cells=cells, facets=facets, values=values)
-    dmesh, ftags = _read_mesh(path, comm)
+    dmesh, ftags = read_mesh(path, comm)
     timings["mesh"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    forms = _forms(dmesh, ftags, BASE_TAG, cfg.material, cfg.mesh.degree, cfg.support,
+    forms = housing_forms(dmesh, ftags, BASE_TAG, cfg.material, cfg.mesh.degree, cfg.support,
                    cfg.foundation_stiffness)
     timings["forms"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    K, M, _ = _assemble_forms(forms, comm)         # the full M, checked to be diagonal
+    K, M, _ = assemble_forms(forms, comm)         # the full M, checked to be diagonal
     mdiag = np.array(M.getDiagonal().array)
     M.destroy()
     timings["assembly"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ksp = _factor(K, comm)
+    ksp = cholesky_factor(K, comm)
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     try:
@@ -261,7 +261,7 @@ def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float
     the ordering stays), the modes refined from the previous ones (:func:`krylov_refine`)."""
     import dolfinx.fem.petsc
     from mpi4py import MPI
-    from .fe_eigen import _matsolve
+    from .fe_eigen import matsolve
 
     t0 = time.perf_counter()
     own = CellCounts()                        # the grid the variant's own fresh solve would lay
@@ -286,7 +286,7 @@ def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float
     F = chain.ksp.getPC().getFactorMatrix()
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lam, X, est, k, n_rhs = krylov_refine(chain.X, solve=lambda B: _matsolve(F, B, comm), mdiag=mdiag,
+    lam, X, est, k, n_rhs = krylov_refine(chain.X, solve=lambda B: matsolve(F, B, comm), mdiag=mdiag,
                                           gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
                                           nev=count, tol=tol)
     timings["iterations"] = time.perf_counter() - t0
