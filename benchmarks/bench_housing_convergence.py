@@ -75,7 +75,7 @@ def run_modes(size: float, *, count: int, n: int, sets=(), tmp: Path, timeout: f
 
 def reference(rows: list[dict], count: int) -> dict:
     """Richardson limit of the three finest levels (observed order per mode, clipped to [1, 4])."""
-    from vibrogear.analyses.housing_study import observed_order, richardson
+    from vibrogear.analyses.housing.convergence import observed_order, richardson
 
     rows = sorted(rows, key=lambda r: -r["size"])
     F = np.array([r["frequencies_hz"][:count] for r in rows])

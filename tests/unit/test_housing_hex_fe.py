@@ -127,7 +127,7 @@ def test_hex_and_p3_tet_housings_agree(small_hex):
     """Two independent discretisations of the same solid: Q3 hexahedra (structured, one element
     through the wall, lumped mass) and P3 tetrahedra (gmsh, consistent mass): the first 8 modes
     within 1.5 % (the P3 study of docs/housing.md puts P3 at 2 x wall within 1 % of converged)."""
-    from vibrogear.analyses.housing_study import with_mesh
+    from vibrogear.analyses.housing.convergence import with_mesh
     from vibrogear.models.housing.run import housing_modes
 
     _, hexres, _ = small_hex

@@ -75,7 +75,7 @@ def test_p3_converges_faster_than_p2(beam):
 
 @pytest.fixture(scope="module")
 def small_p2_p3():
-    from vibrogear.analyses.housing_study import with_mesh
+    from vibrogear.analyses.housing.convergence import with_mesh
     from vibrogear.config import load_scene
     from vibrogear.models.housing.run import housing_modes
 
@@ -109,7 +109,7 @@ def test_p3_housing_pipeline_below_p2_on_the_same_mesh(small_p2_p3):
 
 
 def test_degree_3_validates_and_keys_its_own_modes_entry():
-    from vibrogear.analyses.housing_study import with_mesh
+    from vibrogear.analyses.housing.convergence import with_mesh
     from vibrogear.config import load_scene
     from vibrogear.models.housing.run import housing_cache_key
 
@@ -131,7 +131,7 @@ def test_p3_full_matrices_reproduce_the_modes_and_bore_values(small_p2_p3):
     unity (a rigid y translation is 1 at every coupling point).  ~14 s (T is built node by node)."""
     import scipy.sparse.linalg as spla
 
-    from vibrogear.analyses.housing_study import with_mesh
+    from vibrogear.analyses.housing.convergence import with_mesh
     from vibrogear.config import load_scene
     from vibrogear.models.housing.run import housing_matrices
 

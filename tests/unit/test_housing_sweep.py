@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 
-from vibrogear.analyses.housing_sweep import sweep_signature
+from vibrogear.analyses.housing.sweep import sweep_signature
 from vibrogear.config import load_scene
 from vibrogear.pipeline.resume import PartialStore
 

@@ -55,12 +55,12 @@ LAYERS = {
 WINGS = {
     "analyses": {
         "static_load.py": 0, "mesh_loads.py": 0,
-        "study.py": 1, "invoke.py": 1, "housing_compute.py": 1,
+        "study.py": 1, "invoke.py": 1,
         "sweep/": 2,
-        "continuation.py": 3, "critical_damping.py": 3, "gearbox_modes.py": 3, "housing.py": 3,
-        "housing_study.py": 3, "housing_sweep.py": 3, "nnm.py": 3, "precision.py": 3,
-        "reduction_accuracy.py": 3, "rotor.py": 3, "time_response.py": 3, "findings/": 3,
-        "map/": 3, "nvh/": 3, "optimize/": 3, "runup/": 3, "states/": 3,
+        "continuation.py": 3, "critical_damping.py": 3, "gearbox_modes.py": 3, "nnm.py": 3,
+        "precision.py": 3, "reduction_accuracy.py": 3, "rotor.py": 3, "time_response.py": 3,
+        "findings/": 3, "housing/": 3, "map/": 3, "nvh/": 3, "optimize/": 3, "runup/": 3,
+        "states/": 3,
     },
     "config": {
         "errors.py": 0, "numbers.py": 0, "verbs.py": 0,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from vibrogear.analyses.housing_study import observed_order, richardson
+from vibrogear.analyses.housing.convergence import observed_order, richardson
 from vibrogear.config.base import build
 from vibrogear.config.model.housing import HousingConfig
 

@@ -1,14 +1,14 @@
 """Files and figures of the housing analyses.
 
-* ``write_modes`` (:mod:`vibrogear.analyses.housing`, ``modes``): ``modes.csv`` (with the
+* ``write_modes`` (:mod:`vibrogear.analyses.housing.modes`, ``modes``): ``modes.csv`` (with the
   dominant motion of each mode), ``housing_modes.npz`` (the coupling data),
   ``mode_shapes.xdmf/.h5`` (when shapes were written), ``housing_modes.png`` (the modes of
   ``[housing.modes] plot``, 6 per figure, shaded on the boundary surface; more figures
   ``housing_modes_2.png``, ...; the old point previews where the modes carry no surface) and
   ``housing_mode_<n>_anim.png`` (the first of them swinging, an animated PNG);
-* ``write_sweep`` (:mod:`vibrogear.analyses.housing_sweep`): ``housing_sweep.csv`` and
+* ``write_sweep`` (:mod:`vibrogear.analyses.housing.sweep`): ``housing_sweep.csv`` and
   ``housing_sweep.png``;
-* ``write_convergence`` (:mod:`vibrogear.analyses.housing_study`):
+* ``write_convergence`` (:mod:`vibrogear.analyses.housing.convergence`):
   ``housing_convergence.csv`` and ``housing_error_vs_time.png``.
 
 ``write_modes`` returns ``{role: file name}`` as listed in ``summary.json``.

@@ -5,16 +5,16 @@ place that neither verb's module owns.
 """
 from __future__ import annotations
 
-from ..pipeline.outcome import NumericalFailure
+from ...pipeline.outcome import NumericalFailure
 
 __all__ = ["compute_modes"]
 
 
 def compute_modes(cfg, *, cache: bool = True):
     """housing_modes with geometry/solver failures turned into NumericalFailure (exit 1)."""
-    from ..geometry.housing import MeshingError
-    from ..models.housing.fe import HousingSolveError
-    from ..models.housing.run import housing_modes
+    from ...geometry.housing import MeshingError
+    from ...models.housing.fe import HousingSolveError
+    from ...models.housing.run import housing_modes
 
     try:
         return housing_modes(cfg, cache=cache)

@@ -9,8 +9,8 @@ import resource
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome
-from .housing_compute import compute_modes
+from ...pipeline.outcome import AnalysisOutcome
+from .compute import compute_modes
 
 __all__ = ["run_modes", "modes_summary"]
 
@@ -18,7 +18,7 @@ __all__ = ["run_modes", "modes_summary"]
 def _expected_mass(res, cfg) -> float | None:
     """Independent mass: closed-form volume (parametric) or OCC's solid volume (STEP) x rho; a
     mesh file's tetrahedron volumes (same mesh, so only a consistency check); none for modes."""
-    from ..geometry.housing import housing_volume
+    from ...geometry.housing import housing_volume
 
     if cfg.source == "parametric":
         return housing_volume(cfg) * cfg.material.rho

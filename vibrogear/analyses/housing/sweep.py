@@ -24,8 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, is_root_process
-from ..pipeline.resume import PartialStore
+from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, is_root_process
+from ...pipeline.resume import PartialStore
 
 __all__ = ["run_sweep", "sweep_point", "sweep_signature", "HousingSweepResult"]
 
@@ -43,11 +43,11 @@ class HousingSweepResult:
 
 def sweep_point(housing: dict, n_freqs: int) -> dict:
     """Worker: one sweep point from a plain housing dict (picklable)."""
-    from ..config.base import build
-    from ..config.model.housing import HousingConfig
-    from ..geometry.housing import MeshingError
-    from ..models.housing.fe import HousingSolveError
-    from ..models.housing.run import HousingNumericalError, housing_modes
+    from ...config.base import build
+    from ...config.model.housing import HousingConfig
+    from ...geometry.housing import MeshingError
+    from ...models.housing.fe import HousingSolveError
+    from ...models.housing.run import HousingNumericalError, housing_modes
 
     cfg = build(HousingConfig, housing, "housing")
     t0 = time.perf_counter()
@@ -62,11 +62,11 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
 def sweep_chain(housings: list, n_freqs: int) -> list[dict]:
     """Worker: the points of one run of neighbouring values (plain housing dicts), each from the
     previous one (:func:`vibrogear.models.housing.sweep.sweep_housing_modes`)."""
-    from ..config.base import build
-    from ..config.model.housing import HousingConfig
-    from ..geometry.housing import MeshingError
-    from ..models.housing.fe import HousingSolveError
-    from ..models.housing.sweep import sweep_housing_modes
+    from ...config.base import build
+    from ...config.model.housing import HousingConfig
+    from ...geometry.housing import MeshingError
+    from ...models.housing.fe import HousingSolveError
+    from ...models.housing.sweep import sweep_housing_modes
 
     cfgs = [build(HousingConfig, h, "housing") for h in housings]
     try:
@@ -87,7 +87,7 @@ def _runs(items: list, k: int) -> list[list]:
 def sweep_signature(scene) -> dict:
     """What the points depend on: the base housing (its cache key: config, data files and
     version), the swept parameter and its values, and the number of frequencies."""
-    from ..models.housing.run import housing_cache_key
+    from ...models.housing.run import housing_cache_key
 
     opts = scene.housing_sweep
     return {"analysis": "housing_sweep", "physics": housing_cache_key(scene.housing, "modes"),
@@ -98,13 +98,13 @@ def sweep_signature(scene) -> dict:
 
 def _reusing(scene) -> bool:
     """Whether the sweep of ``scene`` solves its points from the previous ones."""
-    from ..models.housing.sweep import reusable
+    from ...models.housing.sweep import reusable
 
     return bool(scene.housing_sweep.reuse) and reusable(scene.housing) is None
 
 
 def run_sweep(scene, ctx) -> AnalysisOutcome:
-    from ..config.base import as_data
+    from ...config.base import as_data
 
     opts = scene.housing_sweep
     cfgs = opts.housing_points(scene.housing, "housing_sweep")

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..pipeline.outcome import AnalysisOutcome
-from .housing_compute import compute_modes
+from ...pipeline.outcome import AnalysisOutcome
+from .compute import compute_modes
 
 __all__ = ["observed_order", "richardson", "run_convergence", "with_mesh",
            "HousingConvergenceResult"]
@@ -71,9 +71,9 @@ def richardson(f: np.ndarray, h: np.ndarray, p: np.ndarray) -> np.ndarray:
 def with_mesh(cfg, *, size: float | None = None, degree: int | None = None, refine: int | None = None,
               count: int | None = None):
     """A copy of the housing config with other mesh settings (validated)."""
-    from ..config.base import build
-    from ..config.base import as_data
-    from ..config.model.housing import HousingConfig
+    from ...config.base import build
+    from ...config.base import as_data
+    from ...config.model.housing import HousingConfig
 
     d = as_data(cfg)
     if size is not None:
