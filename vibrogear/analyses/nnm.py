@@ -27,7 +27,7 @@ from ..solvers.periodic.nnm import nnm_branch
 from ..solvers.periodic.nnm_problem import (conservative_model, linear_modes_at,
                                             onset_amplitude)
 from ..solvers.static import static_equilibrium
-from ..status import Outcome
+from ..status import Outcome, Status
 from .study import integration_options
 
 __all__ = ["NnmStudyResult", "run", "start_mode"]
@@ -141,7 +141,10 @@ def run(study, scene, ctx: RunContext) -> AnalysisOutcome:
                             shapes=tuple(shapes), conservative=cm)
     return AnalysisOutcome(summary=_summary(result, wall, opts, cfg, rigid, notes),
                            result=result,
-                           solver=Outcome.combine((b.outcome for b in branches), wall_s=wall))
+                           # a backbone that ends at its point budget or its range has ended
+                           # well (each one's end is in branches[].status): the verb is ok
+                           solver=Outcome.combine((b.outcome for b in branches), wall_s=wall,
+                                                  status=Status.OK))
 
 
 def _energy_range(cfg, cm, phi, om, e_on, es, mon_scale, us):
