@@ -127,22 +127,27 @@ def _exists(name: str) -> bool:
     return (ROOT / rel.with_suffix(".py")).is_file() or (ROOT / rel / "__init__.py").is_file()
 
 
+def _from_target(name: str, path: Path, node: ast.ImportFrom) -> str:
+    """The module a ``from ... import`` statement of module ``name`` names, relative ones
+    resolved."""
+    if not node.level:
+        return node.module or ""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    base = package.split(".")
+    base = base[:len(base) - (node.level - 1)]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
 def _all_imports(name: str, path: Path) -> list[tuple[str, int]]:
     """(imported module, line) for every import statement of the module, at module level or
     inside a function, the relative ones resolved; ``from pkg import sub`` counts as an
     import of ``pkg.sub`` where ``sub`` is a module of the package, else of ``pkg``."""
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out = []
     for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
         if isinstance(node, ast.Import):
             out += [(a.name, node.lineno) for a in node.names]
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
+            target = _from_target(name, path, node)
             for a in node.names:
                 sub = f"{target}.{a.name}"
                 out.append((sub if _exists(sub) else target, node.lineno))
@@ -438,16 +443,10 @@ def test_architecture_doc_states_the_same_wings():
 def _private_imports(name: str, path: Path) -> list[tuple[str, str, int]]:
     """(imported module, private name, line) for each ``from M import _x`` of a vibrogear
     module M other than the importing one (inside functions included)."""
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     out = []
     for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
         if isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")
-                base = base[:len(base) - (node.level - 1)]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
+            target = _from_target(name, path, node)
             if target.split(".")[0] != "vibrogear" or target == name:
                 continue
             out += [(target, a.name, node.lineno) for a in node.names
