@@ -188,10 +188,34 @@ def test_jump_below_resolution_or_batch_error_is_not_reported():
         f = derive_findings({"sweep.npz": a}, {"sweep": {"monitored": "G1"}}, rules)
         return [e for e in f["events"] if e["kind"] == "jump"]
 
+    # a 0.3 % change of the level is a steep stretch, not a jump (jump_level_rel 5 %)
+    assert jumps(0.0, 0.0) == []
+    rules = FindingsConfig(jump_level_rel=0.0)       # the level rule off: span, res, err
     assert len(jumps(0.0, 0.0)) == 4                # old files: relative to the span only
     assert jumps(10e-9, 0.0) == []                  # 5 nm below a 10 nm resolution
     assert jumps(1e-9, 3e-9) == []                  # 5 nm below 3 + 3 nm batch-means error
     assert len(jumps(1e-9, 1e-9)) == 4              # 5 nm above both: jumps
+
+
+def test_a_few_percent_of_the_level_is_no_jump():
+    """The FVA model's full sweep: neighbouring points whose qmax goes from 8.17 to 8.32 um
+    (1.8 %) over a run spanning 8.1-8.8 um passed the span, resolution and error tests and
+    read as 21 "jumps"; under jump_level_rel (5 %) of the level they are none, while a step
+    from 8.2 to 9.0 um (9 %) still is."""
+    q = np.full(20, 8.2e-6)
+    q[[0, 19]] = 8.8e-6                            # the span: 0.6 um
+    q[[5, 14]] = 8.35e-6                           # up and down at 600 rpm: +0.15 um (1.8 %)
+    arrays = {**_sweep(np.ones(10), np.ones(10)), "qmax": q,
+              "qmax_res": np.full(20, 2e-9), "qmax_err": np.full(20, 20e-9)}
+
+    def jumps(a):
+        f = derive_findings({"sweep.npz": a}, {"sweep": {"monitored": "G1"}}, FindingsConfig())
+        return [e for e in f["events"] if e["kind"] == "jump" and 500 < e["at"] < 700]
+
+    assert jumps(arrays) == []
+    arrays["qmax"] = q.copy()
+    arrays["qmax"][[5, 14]] = 9.0e-6               # +0.8 um (9 %): a jump onto and off it
+    assert len(jumps(arrays)) == 4
 
 
 def test_no_response_over_speed_gives_no_verdict(tmp_path):
@@ -335,7 +359,9 @@ def test_summary_jumps_honour_resolution_and_errors():
 
     p = np.arange(5) * 100.0
     q = np.array([1.49, 1.49, 1.495, 1.495, 1.49]) * 1e-6
-    assert jumps(p, q) == [150.0, 350.0]
-    assert jumps(p, q, res=np.full(5, 1e-8)) == []
-    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, 3e-9)) == []
-    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, np.nan)) == [150.0, 350.0]
+    assert jumps(p, q) == []                        # 0.3 % of the level: no jump
+    assert jumps(p, q, level=0.0) == [150.0, 350.0]
+    assert jumps(p, q, res=np.full(5, 1e-8), level=0.0) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, 3e-9), level=0.0) == []
+    assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, np.nan), level=0.0) == \
+        [150.0, 350.0]

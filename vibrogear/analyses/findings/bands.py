@@ -441,8 +441,9 @@ def _hysteresis(arrays, rules, param_unit, scale, unit,
     """Jumps per direction (events) and the band where up and down differ.
 
     A jump: neighbouring points of one direction whose qmax differs by more than
-    ``jump_rel`` of its range over the run, than the resolution of either point
-    (``qmax_res``) and than the sum of their batch-means errors (``qmax_err``).  The band:
+    ``jump_rel`` of its range over the run, than ``jump_level_rel`` of the larger qmax, than
+    the resolution of either point (``qmax_res``) and than the sum of their batch-means
+    errors (``qmax_err``).  The band:
     ``hysteresis_<mesh>`` (|qmax up - qmax down| per speed, sweep.npz) above
     ``hysteresis_rel`` of the qmax range or the largest resolution, whichever is larger."""
     param = np.asarray(arrays["param"], float)
@@ -460,8 +461,9 @@ def _hysteresis(arrays, rules, param_unit, scale, unit,
             sel = sel[::-1]
         for a, b in zip(sel[:-1], sel[1:]):
             step = abs(qmax[b] - qmax[a])
+            level = rules.jump_level_rel * max(abs(qmax[a]), abs(qmax[b]))
             if span > 0 and step > rules.jump_rel * span and step > max(res[a], res[b]) \
-                    and step > err[a] + err[b]:
+                    and step > err[a] + err[b] and step > level:
                 events.append({"kind": "jump", "at": float(0.5 * (param[a] + param[b])),
                                "where": monitored, "direction": direction,
                                "evidence": f"going {direction}, qmax changes from "

@@ -70,10 +70,10 @@ class SweepStudyResult:
         return sweep_figure(self, branches, per_contact_rows=per_contact_rows)
 
 
-def jumps(param, q, rel: float = 0.15, res=None, err=None) -> list[float]:
+def jumps(param, q, rel: float = 0.15, res=None, err=None, level: float = 0.05) -> list[float]:
     """Midpoints between successive sweep points whose q differs by > rel * range, by more
-    than either point's resolution ``res`` and than the sum of their batch-means errors
-    ``err`` (NaN or absent: 0)."""
+    than ``level`` of the larger |q| of the two, than either point's resolution ``res`` and
+    than the sum of their batch-means errors ``err`` (NaN or absent: 0)."""
     q = np.asarray(q, float)
     ok = np.isfinite(q)
     span = np.ptp(q[ok]) if np.any(ok) else 0.0
@@ -82,7 +82,8 @@ def jumps(param, q, rel: float = 0.15, res=None, err=None) -> list[float]:
     err = z if err is None else np.nan_to_num(np.asarray(err, float))
     return [0.5 * (param[k] + param[k - 1]) for k in range(1, len(q))
             if ok[k] and ok[k - 1] and abs(q[k] - q[k - 1]) > rel * span > 0
-            and abs(q[k] - q[k - 1]) > max(res[k], res[k - 1], err[k] + err[k - 1])]
+            and abs(q[k] - q[k - 1]) > max(res[k], res[k - 1], err[k] + err[k - 1],
+                                           level * max(abs(q[k]), abs(q[k - 1])))]
 
 
 def resumable_sweep(model, params, out_dir, *, physics: str | None = None, callback=None,
@@ -146,6 +147,8 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     classes = {str(int(k)): int(np.sum(res.period_n == k)) for k in np.unique(res.period_n)}
     # status, message, counters, wall time, error estimate: the runner's spine, from
     # res.outcome; here the domain entries
+    rules = getattr(scene, "findings", None)
+    jump_rule = {} if rules is None else {"rel": rules.jump_rel, "level": rules.jump_level_rel}
     summary = {
         "points": int(res.param.size),
         "resumed_points": resumed, "failed_points": failed, "period_classes": classes,
@@ -153,9 +156,9 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
         "monitored": study.monitor.name or study.monitor.label,
         "point_wall_split_s": {k: round(v, 3) for k, v in res.timings.items()},
         "jumps_up": jumps(res.param[up], res.qmax[up], res=_m(res, "qmax_res", up),
-                          err=_m(res, "qmax_err", up)),
+                          err=_m(res, "qmax_err", up), **jump_rule),
         "jumps_down": jumps(res.param[~up], res.qmax[~up], res=_m(res, "qmax_res", ~up),
-                            err=_m(res, "qmax_err", ~up)),
+                            err=_m(res, "qmax_err", ~up), **jump_rule),
     }
     summary.update(motion_summary(res, cfg.transient_periods + cfg.extra_transient_periods))
     summary.update(split.summary())

@@ -91,6 +91,9 @@ class FindingsConfig:
     not_settled: str = _severity("caution", "the motion did not settle")
     jump_rel: float = spec(0.15, gt=0.0, le=1.0, doc="a jump: neighbouring sweep points whose "
                            "qmax differs by more than this fraction of its range")
+    jump_level_rel: float = spec(0.05, ge=0.0, le=1.0, doc="... and by more than this "
+                                 "fraction of the larger |qmax| of the two (a change of a few "
+                                 "percent is a steep stretch of one response, not a jump)")
     hysteresis_rel: float = spec(0.05, gt=0.0, le=10.0, doc="up and down differ where "
                                  "|qmax_up - qmax_down| exceeds this fraction of the qmax "
                                  "range")
