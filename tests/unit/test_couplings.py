@@ -310,3 +310,32 @@ def test_bearing_contact_loss_and_single_element():
     np.testing.assert_allclose(F_h[0], [k * s ** 1.5, 0, 0], rtol=1e-12, atol=0)
     assert not F_h[1:].any()
     assert K[0, 0] == pytest.approx(1.5 * k * s ** 0.5)
+
+
+@pytest.mark.parametrize("helix,hand,sense", CASES)
+def test_unequal_faces_mesh_at_the_overlap_centre_rigid_motion_deforms_nothing(helix, hand,
+                                                                               sense):
+    """Faces of unequal width whose centres differ: gear a's node at z = 0, gear b's at
+    z = 0.012 m, the mesh at the overlap centre z = 0.005 m (offsets 0.005 and -0.007).  A
+    small rigid rotation of the whole pair about a transverse axis through the origin
+    (u = theta x r at each node, the same theta) and a rigid translation give no mesh
+    deformation; without the offsets the rotation does (the contact point is then two
+    different physical points)."""
+    za, zb, zm = 0.0, 0.012, 0.005
+    theta = np.array([1.3e-4, -0.7e-4, 0.4e-4])
+    A = np.array([A_XY[0], A_XY[1], za])
+    B = np.array([B_XY[0], B_XY[1], zb])
+
+    def delta(g):
+        qa = np.concatenate([np.cross(theta, A), theta])
+        qb = np.concatenate([np.cross(theta, B), theta])
+        return g.c_a @ qa + g.c_b @ qb
+
+    g = gear_mesh_geometry(A_XY, B_XY, RA, RB, ALPHA, helix, hand, sense,
+                           axial_offset_a=zm - za, axial_offset_b=zm - zb)
+    assert abs(delta(g)) < 1e-15
+    shift = np.array([3e-5, -2e-5, 1e-5])
+    assert abs(g.c_a @ np.concatenate([shift, 0 * shift])
+               + g.c_b @ np.concatenate([shift, 0 * shift])) < 1e-18
+    plain = gear_mesh_geometry(A_XY, B_XY, RA, RB, ALPHA, helix, hand, sense)
+    assert abs(delta(plain)) > 1e-7 * abs(theta).max()

@@ -95,8 +95,8 @@ class GearMeshGeometry:
     """Geometry of one gear mesh; ``delta = c_a . q_a + c_b . q_b`` (module docstring)."""
     point: np.ndarray                   # (3,) contact point P (z = 0)
     normal: np.ndarray                  # (3,) unit normal n, direction of the force on gear b
-    c_a: np.ndarray                     # (6,) [n, (P - A) x n]
-    c_b: np.ndarray                     # (6,) -[n, (P - B) x n]
+    c_a: np.ndarray                     # (6,) [n, (P + offset_a z - A) x n]
+    c_b: np.ndarray                     # (6,) -[n, (P + offset_b z - B) x n]
     base_radius_a: float
     base_radius_b: float
     transverse_pressure_angle: float    # alpha_t [rad]
@@ -111,8 +111,14 @@ class GearMeshGeometry:
 
 def gear_mesh_geometry(center_a, center_b, pitch_radius_a, pitch_radius_b,
                        normal_pressure_angle, helix_angle=0.0, hand=+1,
-                       drive_sense=+1) -> GearMeshGeometry:
-    """Contact point, normal and coupling vectors of an external spur/helical pair."""
+                       drive_sense=+1, axial_offset_a=0.0,
+                       axial_offset_b=0.0) -> GearMeshGeometry:
+    """Contact point, normal and coupling vectors of an external spur/helical pair.
+    ``axial_offset_a`` / ``_b``: where the mesh acts along z from each gear's node (the
+    centre of the faces' overlap minus the gear's centre, for faces of unequal width that
+    do not share a centre; 0: the mesh acts in the gears' common plane): the lever arm
+    enters the coupling vectors' rotational part, so that a rigid motion of the pair still
+    deforms nothing."""
     a2 = _vector("center_a", center_a, 2)
     b2 = _vector("center_b", center_b, 2)
     ra = _finite("pitch_radius_a", pitch_radius_a)
@@ -140,8 +146,10 @@ def gear_mesh_geometry(center_a, center_b, pitch_radius_a, pitch_radius_b,
     beta_b = float(np.arcsin(np.sin(beta) * np.cos(alpha_n)))
     n = (np.cos(beta_b) * (np.cos(alpha_t) * t + np.sin(alpha_t) * e)
          + hand * np.sin(beta_b) * _Z)
-    c_a = np.concatenate([n, np.cross(P - A, n)])
-    c_b = -np.concatenate([n, np.cross(P - B, n)])
+    off_a = _finite("axial_offset_a", axial_offset_a) * _Z
+    off_b = _finite("axial_offset_b", axial_offset_b) * _Z
+    c_a = np.concatenate([n, np.cross(P + off_a - A, n)])
+    c_b = -np.concatenate([n, np.cross(P + off_b - B, n)])
     return GearMeshGeometry(point=_frozen(P), normal=_frozen(n), c_a=_frozen(c_a),
                             c_b=_frozen(c_b), base_radius_a=ra * float(np.cos(alpha_t)),
                             base_radius_b=rb * float(np.cos(alpha_t)),

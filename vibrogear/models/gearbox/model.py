@@ -316,9 +316,14 @@ def mesh_geometry(cfg, i, axes, gear_p):
     # hand of gear_a, while the couplings' ``hand`` signs the normal's axial component
     # relative to +z, so a gear_a turning about -z (an intermediate shaft) flips it
     sense = 1 if gear_p[ka] > 0 else -1
+    # faces of unequal width: the mesh acts at the centre of their overlap (rotor z =
+    # housing y), each gear's node at its own centre
+    y_mesh = 0.5 * (max(ya - ga.width / 2, yb - gb.width / 2)
+                    + min(ya + ga.width / 2, yb + gb.width / 2)) if ya != yb else ya
     try:
         geom = gear_mesh_geometry(ca, cb, r_a, r_b, alpha_n, helix_angle=beta,
-                                  hand=m.hand * sense, drive_sense=sense)
+                                  hand=m.hand * sense, drive_sense=sense,
+                                  axial_offset_a=y_mesh - ya, axial_offset_b=y_mesh - yb)
     except ValueError as exc:
         raise ConfigError(path, str(exc) + ("" if not shift else " (profile-shifted pair: "
                           "the working pitch radii)")) from None
