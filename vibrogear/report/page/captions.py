@@ -15,8 +15,9 @@ from ..figure import mode_count_note
 __all__ = ["CAPTIONS", "caption"]
 
 _MOTION = ("Motion classes: period 1 / 2 / 3+ (the motion repeats every 1, 2, 3 or more "
-           "excitation periods), quasi-periodic (two incommensurate frequencies, a torus; "
-           "NS), chaotic (positive Lyapunov exponent).")
+           "excitation periods, at engineering resolution), multi-frequency forced (follows "
+           "several meshes' frequencies), quasi-periodic (two incommensurate frequencies, a "
+           "torus; NS), chaotic (a positive Lyapunov exponent, reproduced ten times tighter).")
 _POINTS = ("LP: a fold (limit point), where the response jumps; PD: period doubling; NS: "
            "Neimark-Sacker, the onset of quasi-periodic motion; each named with its speed.")
 

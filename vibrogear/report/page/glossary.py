@@ -42,10 +42,17 @@ GLOSSARY = (
      "of a free, unloaded gear)."),
     ("mesh period", "The time between two tooth engagements: 60 / (speed in rpm x teeth). "
      "Impacts are counted per mesh period of the first mesh."),
-    ("motion classes", "periodic (the response repeats every n mesh periods: period-n; n >= 2 "
-     "is a subharmonic), quasi-periodic (two incommensurate frequencies, a torus: the "
-     "largest Lyapunov exponent's 95 % interval contains 0), chaotic (the interval lies "
-     "above 0), not settled (no verdict within the transient budget)."),
+    ("motion classes", "Claims at engineering resolution: periodic (every mesh deformation "
+     "and force repeats every n excitation periods within 1e-3 of its range or 1 nm / 1 N: "
+     "period-n; n >= 2 is a subharmonic), multi-frequency forced (the response follows a "
+     "forcing of several mesh frequencies), quasi-periodic (no period; the largest Lyapunov "
+     "exponent's 95 % interval reaches 0), chaotic (no period; that interval lies above 0, "
+     "also on the record integrated ten times tighter), not settled (no verdict within the "
+     "transient budget)."),
+    ("loaded / idle mesh", "From the static load path: a loaded mesh carries the torque from "
+     "motor to load and is judged by its dynamic factor kv (largest tooth force / static "
+     "tooth force) and contact loss; an idle mesh drives a free gear held only by its drag "
+     "and is judged by its rattle level (impact power in dB re 1 pW)."),
     ("sweep up / down (sequential continuation)", "Each speed starts from the settled state "
      "of the previous speed, going up and then down; where the two differ, two responses "
      "coexist (hysteresis) and the response jumps."),
