@@ -58,11 +58,9 @@ class ImpactPairConfig:
     PARAMETER: ClassVar[Parameter] = OMEGA
 
 
-@dataclass(frozen=True, kw_only=True)
-class SweepSettings(SweepOptions):
-    """[sweep]: the solver's settings (:class:`SweepOptions`), the number of grid points and
-    the parameter range (see :func:`with_parameter`)."""
-    n_points: int = spec(200, ge=2, le=1_000_000)
+class _ParameterRange:
+    """The parameter range of a section whose range keys :func:`with_parameter` names
+    (``range_keys``: rpm_min / rpm_max or omega_min / omega_max), checked and read alike."""
     range_keys: ClassVar[tuple[str, ...]] = ()
 
     def validate(self, path: str) -> None:
@@ -75,7 +73,14 @@ class SweepSettings(SweepOptions):
 
 
 @dataclass(frozen=True, kw_only=True)
-class ContinuationSettings(ContinuationSteps):
+class SweepSettings(_ParameterRange, SweepOptions):
+    """[sweep]: the solver's settings (:class:`SweepOptions`), the number of grid points and
+    the parameter range (see :func:`with_parameter`)."""
+    n_points: int = spec(200, ge=2, le=1_000_000)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ContinuationSettings(_ParameterRange, ContinuationSteps):
     """[continuation]: the solver's steps (:class:`ContinuationSteps`, ds in the parameter's
     unit), where to start, and the parameter range (see :func:`with_parameter`)."""
     start: str = spec("max", choices=("min", "max"), doc="end of the range to start from")
@@ -87,15 +92,6 @@ class ContinuationSettings(ContinuationSteps):
                                       "started from a sweep window")
     rtol: float | None = spec(None, gt=0.0, lt=1.0, doc="the integrator's rtol for shooting and continuation "
                               "(atol = 1e-6 rtol); default: [integration] as written")
-    range_keys: ClassVar[tuple[str, ...]] = ()
-
-    def validate(self, path: str) -> None:
-        if len(self.range_keys) == 2:
-            check_range(self, path, *self.range_keys)
-
-    def param_range(self) -> tuple[float, float]:
-        """(min, max) of the parameter range, in the parameter's unit, whatever its keys."""
-        return float(self.param_min), float(self.param_max)
 
     def options(self) -> ContinuationOptions:
         """The solver's options: this section's steps over [param_min, param_max]."""
