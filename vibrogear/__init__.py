@@ -21,6 +21,7 @@ import os as _os
 # Set before any library that reads it is loaded; a value the user sets is kept.
 _os.environ.setdefault("OMP_NUM_THREADS", "1")
 
+from .lazy import lazy_exports  # noqa: E402
 from .version import __version__  # noqa: E402
 
 #: the public API, re-exported from vibrogear.api on first access
@@ -28,13 +29,4 @@ _API = ("load", "run", "check", "import_rexs", "compare", "Run", "ConfigError",
         "NumericalFailure")
 __all__ = ["__version__", *_API]
 
-
-def __getattr__(name: str):
-    if name in _API:
-        from . import api
-        return getattr(api, name)
-    raise AttributeError(f"module 'vibrogear' has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_API))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(_API, "api"))

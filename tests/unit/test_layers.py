@@ -27,6 +27,7 @@ ARCH = ROOT / "docs" / "architecture.md"
 #: first.  Equal numbers share a layer.  docs/architecture.md, section "Layers", has this table.
 LAYERS = {
     "version.py": 0,        # the version
+    "lazy.py": 0,           # lazy_exports: first-use re-export of a package's names
     "status.py": 0,         # the one status enumeration and Outcome (solvers, analyses, runner)
     "verification/": 0,     # exact references: share no code with what they check
     "config/": 1,

@@ -18,16 +18,9 @@ helper of the wing does not load the whole wing).  Its modules:
   in plain words.
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["derive_findings", "run_findings", "read_sources", "SOURCE_FILES", "Band", "mesh_roles",
            "windows", "mesh_summary"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import findings
-        return getattr(findings, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "findings"))

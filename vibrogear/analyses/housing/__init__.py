@@ -11,18 +11,11 @@ The verb registry names each verb's module (``housing.modes:run_modes``, ...); t
 functions are also names of the wing, imported on first use.
 """
 
+from ...lazy import lazy_exports
+
 #: public name -> the module of the wing that defines it
 _NAMES = {"run_modes": "modes", "modes_summary": "modes", "run_convergence": "convergence",
           "run_sweep": "sweep", "HousingSweepResult": "sweep", "compute_modes": "compute"}
 __all__ = list(_NAMES)
 
-
-def __getattr__(name: str):
-    if name in _NAMES:
-        from importlib import import_module
-        return getattr(import_module(f"{__name__}.{_NAMES[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _NAMES)

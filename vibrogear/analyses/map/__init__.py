@@ -9,16 +9,9 @@ helper of the wing does not load the whole wing).  Its modules:
 - ``load_scaling``: The static load of a gearbox as one number: the transmitted input torque.
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["OperatingMap", "run", "compute_map", "PARTIAL_NAME", "grid_array", "map_arrays",
            "METRICS_PER_MESH"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import map
-        return getattr(map, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "map"))

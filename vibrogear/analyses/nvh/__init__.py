@@ -11,16 +11,9 @@ helper of the wing does not load the whole wing).  Its modules:
   and evidence.
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["NvhResult", "BranchSpectra", "run", "steady_points", "order_lines", "branch_spectra",
            "operating_shape"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import nvh
-        return getattr(nvh, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "nvh"))

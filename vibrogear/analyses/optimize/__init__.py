@@ -12,15 +12,8 @@ helper of the wing does not load the whole wing).  Its modules:
   (each variable's range, or log range, mapped to [0, 1]; :class:`Space`).
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["OptimizeResult", "run", "PARTIAL_NAME", "penalised", "violation"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import optimize
-        return getattr(optimize, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "optimize"))

@@ -8,16 +8,9 @@ helper of the wing does not load the whole wing).  Its modules:
   speed.
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["RunupResult", "RunupRun", "run", "shaft_orders", "period_table", "jump_speed",
            "run_key", "inertia_effect", "MAX_RUNUP_BYTES", "runup_arrays"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import runup
-        return getattr(runup, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "runup"))

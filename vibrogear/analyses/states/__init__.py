@@ -16,15 +16,8 @@ helper of the wing does not load the whole wing).  Its modules:
   in plain records the findings engine reads.
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import states
-        return getattr(states, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "states"))

@@ -7,15 +7,8 @@ helper of the wing does not load the whole wing).  Its modules:
 - ``branches``: Period-n branches started from a sweep (``[continuation] from_sweep = true``).
 """
 
+from ...lazy import lazy_exports
+
 __all__ = ["SweepStudyResult", "run", "resumable_sweep", "jumps", "PARTIAL_NAME", "motion_summary"]
 
-
-def __getattr__(name: str):
-    if name in __all__:
-        from . import sweep
-        return getattr(sweep, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "sweep"))
