@@ -11,7 +11,7 @@ export XDG_CACHE_HOME ?= $(HOME)/.cache
 .PHONY: two-stage two-stage-helical two-stage-iso6336 single-stage gear-pair fva three-stage gearboxes housing-dynamics housing-step bench-gearbox bench-rhs nvh map map-gear-pair runup runup-gear-pair bench-runup
 .PHONY: nnm nnm-impact-pair
 .PHONY: states states-impact-pair bench-states bench-parallel
-.PHONY: rotor setup demo test test-slow test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
+.PHONY: rotor setup demo test test-slow test-system test-mpi golden bench figures fig2 fig4 fig5 fig7 critical-zeta report clean housing housing-sweep housing-convergence housing-bench
 .PHONY: optimize-damping optimize-two-stage reduction-accuracy
 
 setup: $(STAMP)
@@ -22,7 +22,8 @@ $(STAMP): pyproject.toml constraints.txt scripts/setup.sh
 ## main job on the default scene: the two-stage gearbox (paper Figs 1-2; docs/gearbox.md)
 demo: two-stage
 
-## the CI test suite (fast; slow cases: make test-slow), one worker process per core
+## the CI test suite (fast; slow cases: make test-slow; whole runs across processes beyond one
+## of each kind: make test-system), one worker process per core
 ## (pytest-xdist; a test file stays on one worker, so its module fixtures are built once)
 test: $(STAMP) $(VENV)/.browser
 	$(PY) -m pytest -n auto --dist loadfile
@@ -35,7 +36,12 @@ $(VENV)/.browser: $(STAMP)
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow -n auto --dist loadfile
 
-## only the tests that start mpirun themselves (2 ranks; also part of `make test`)
+## whole runs across processes (mpirun ranks, signals, kills, locks, resumes) that the CI tier
+## keeps one of each kind of
+test-system: $(STAMP)
+	$(PY) -m pytest -m "system and not slow" -n auto --dist loadfile
+
+## every test that starts mpirun itself (2 ranks; `make test` keeps one of each kind)
 test-mpi: $(STAMP)
 	$(PY) -m pytest -m mpi
 

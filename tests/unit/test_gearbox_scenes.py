@@ -184,6 +184,7 @@ def test_gear_pair_modes_and_time_response(gear_pair_run):
     assert np.sum(gap > 0.01) >= 8 and np.all(mac[gap > 0.01] > 0.9)
 
 
+@pytest.mark.system
 def test_single_stage_small_housing_reduction_accuracy(tmp_path):
     """single_stage at a small reduction level (8 shaft modes, 10 housing modes; levels
     8/5 and 12/10): modes, time response and the reduced-vs-full comparison below 5 kHz.

@@ -159,6 +159,7 @@ def test_chunked_evaluation_equals_one_mode_at_a_time():
         assert np.array_equal(got[:, :, i], uh.eval(pts, cells))
 
 
+@pytest.mark.system
 @pytest.mark.mpi
 @pytest.mark.skipif(shutil.which("mpirun") is None, reason="no mpirun")
 def test_mpirun_two_ranks_match_one_rank(tmp_path):

@@ -44,6 +44,7 @@ def _signfix(v):
     return np.nan_to_num(v) * s
 
 
+@pytest.mark.system
 def test_mpirun_two_ranks_match_serial(tmp_path):
     ser, par = tmp_path / "serial", tmp_path / "mpi"
     r1 = subprocess.run([str(VG), "modes", str(SMALL), "--out", str(ser), "--quiet"], env=_env(tmp_path / "c1"),

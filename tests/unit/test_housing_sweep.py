@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 
 from vibrogear.analyses.housing.sweep import sweep_signature
 from vibrogear.config import load_scene
@@ -19,6 +21,7 @@ VG = Path(sys.executable).parent / "vibrogear"
 SCENE = str(ROOT / "configs" / "housing_sweep.toml")
 
 
+@pytest.mark.system
 def test_wall_thickness_sweep_resumes(tmp_path):
     out = tmp_path / "sweep"
     out.mkdir()

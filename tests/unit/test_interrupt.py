@@ -19,6 +19,7 @@ SLOW_POINTS = ["--set", "sweep.n_points=24", "--set", "sweep.transient_periods=3
                "--set", 'sweep.directions=["up"]']
 
 
+@pytest.mark.system
 def test_ctrl_c_stops_cleanly_and_a_changed_model_does_not_resume(tmp_path):
     out = tmp_path / "o"
     partial = out / "sweep.partial.jsonl"

@@ -125,6 +125,7 @@ def test_a_map_that_loses_a_rank_names_the_unit_and_the_same_command_completes(t
     assert rec["points"] == 12
 
 
+@pytest.mark.system
 def test_losing_rank_0_ends_the_others_without_a_hang_and_resumes(tmp_path):
     """Rank 0 writes the files: the others cannot go on; they exit 1 at once (no hang), the
     partial file keeps what rank 0 received, and the same command completes."""

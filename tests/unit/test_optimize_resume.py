@@ -38,6 +38,7 @@ def _values(out: Path) -> list[str]:
         return [row["impact_pair.kappa"] for row in csv.DictReader(fh)]
 
 
+@pytest.mark.system
 def test_kill_and_resume_loses_and_repeats_no_evaluation(tmp_path):
     scene = tmp_path / "s.toml"
     scene.write_text(LINEAR)
@@ -72,6 +73,7 @@ def test_kill_and_resume_loses_and_repeats_no_evaluation(tmp_path):
 MPIRUN = shutil.which("mpirun")
 
 
+@pytest.mark.system
 @pytest.mark.mpi
 @pytest.mark.skipif(MPIRUN is None, reason="no mpirun")
 def test_batches_on_mpi_ranks_give_the_serial_evaluations(tmp_path):

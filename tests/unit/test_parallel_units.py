@@ -216,6 +216,7 @@ json.dump({"points": [list(map(list, ld.points)) for ld in loads],
 """
 
 
+@pytest.mark.system
 @pytest.mark.mpi
 @pytest.mark.skipif(__import__("shutil").which("mpirun") is None, reason="no mpirun")
 def test_mpirun_map_curves_run_their_windows_on_every_rank_and_match_one_process(tmp_path):

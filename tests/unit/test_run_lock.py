@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 from vibrogear.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -50,6 +52,7 @@ def test_second_run_into_a_held_folder_exits_2_naming_the_holder(tmp_path, capsy
     assert first.returncode == 143
 
 
+@pytest.mark.system
 def test_wait_takes_the_folder_when_the_holder_ends_and_resumes_its_points(tmp_path):
     out = tmp_path / "o"
     first = _start(out)

@@ -56,6 +56,7 @@ def test_continuation_alone_overlays_the_sweep_already_in_the_folder(tmp_path):
     assert code == 0 and not (out / "bifurcation_branches.png").exists()
 
 
+@pytest.mark.system
 def test_branches_from_the_saved_sweep_equal_those_from_this_runs_sweep(tmp_path):
     """``from_sweep`` gets the sweep from the runner: this run's outcome, or the sweep.npz an
     earlier run left in the folder (loaded by the runner, not by the analysis). Both give the

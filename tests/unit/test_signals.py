@@ -53,6 +53,7 @@ def _interrupted(out: Path, analysis: str, sig_name: str) -> dict:
     return summary
 
 
+@pytest.mark.system
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGHUP, 129)])
 def test_sweep_stopped_by_a_signal_keeps_its_points_and_resumes(tmp_path, sig, code):
     out = tmp_path / "o"
@@ -69,6 +70,7 @@ def test_sweep_stopped_by_a_signal_keeps_its_points_and_resumes(tmp_path, sig, c
     assert res["resumed_points"] == kept and res["points"] == 24
 
 
+@pytest.mark.system
 def test_map_stopped_by_sigterm_keeps_its_partial_file(tmp_path):
     out = tmp_path / "m"
     partial = out / "map.partial.jsonl"
