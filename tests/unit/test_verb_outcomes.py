@@ -128,6 +128,8 @@ def test_critical_damping_counts_every_scan(monkeypatch, tmp_path):
     n = len(e["scans"]) + len(e["curve_scans"])
     assert n == len(spies["continuation"].outcomes) == e["continuations"] + 1
     assert e["counters"] == _sum(*spies.values())
+    # the continuations' points: those of the scans' period-1 branches
+    assert e["counters"]["points"] == sum(s["points"] for s in e["scans"] + e["curve_scans"])
     assert e["status"] == "ok"
     # one wall time, the spine's (the scans' own clocks summed), not a second by hand
     assert e["solver_wall_s"] == pytest.approx(
