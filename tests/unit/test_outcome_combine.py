@@ -34,11 +34,16 @@ def test_status_ok_partial_or_the_one_shared_failure():
     assert (given.status, given.message) == (Status.OK, "the map's own")
 
 def test_analyses_that_run_several_solves_hand_one_outcome_to_the_runner():
-    """runup (its runs), states (its starts), nnm (its backbones) and nvh (its steady points'
-    records) combine their solves' outcomes and pass them as ``solver=``; the map's result
-    combines its rows' sweeps."""
+    """runup (its runs), states (its starts), nnm (its backbones), nvh (its steady points'
+    records), critical_damping (its scans), report (its integrations and shootings),
+    reduction_accuracy (its levels' integrations), optimize (its evaluations) and the housing
+    convergence and sweep (their meshes, points) combine their solves' outcomes and pass them
+    as ``solver=``; the map's result combines its rows' sweeps."""
     for rel in ("analyses/runup/runup.py", "analyses/states/states.py", "analyses/nnm.py",
-                "analyses/nvh/nvh.py", "analyses/map/map.py"):
+                "analyses/nvh/nvh.py", "analyses/map/map.py", "analyses/critical_damping.py",
+                "analyses/precision.py", "analyses/reduction_accuracy.py",
+                "analyses/optimize/optimize.py", "analyses/housing/convergence.py",
+                "analyses/housing/sweep.py"):
         src = (ROOT / "vibrogear" / rel).read_text()
         calls = [n for n in ast.walk(ast.parse(src)) if isinstance(n, ast.Call)
                  and isinstance(n.func, ast.Attribute) and n.func.attr == "combine"

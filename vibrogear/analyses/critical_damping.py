@@ -30,7 +30,7 @@ from ..solvers.periodic.continuation import (ContinuationOptions, PeriodicOrbitP
                                     continuation)
 from ..solvers.integrator.integrate import IntegrationOptions, integrate
 from ..solvers.static import static_equilibrium
-from ..status import Status
+from ..status import Outcome, Status
 
 __all__ = ["FoldScan", "CriticalDampingResult", "CriticalDampingFigures", "fold_scan",
            "critical_zeta", "run_critical_damping"]
@@ -45,6 +45,9 @@ class FoldScan:
     status: Status
     message: str
     wall_time: float
+    #: the scan's solves (static state, transient, continuation) as one outcome, with the
+    #: period-1 branch's status
+    outcome: Outcome | None = None
 
     @property
     def has_fold_pair(self) -> bool:
@@ -76,14 +79,16 @@ class CriticalDampingFigures:
     title: str
 
 
-def _start_state(model, omega: float, periods: int, options: IntegrationOptions) -> np.ndarray:
+def _start_state(model, omega: float, periods: int,
+                 options: IntegrationOptions) -> tuple[np.ndarray, list]:
+    """(the state after the transient, the outcomes of the static solve and the transient)."""
     st = static_equilibrium(model)
     u = st.u0 if st.converged else np.zeros(model.n_states)
     tr = integrate(model, omega, u, 0.0, periods * model.excitation_period(omega), options=options)
     if not tr.ok:
         raise NumericalFailure(f"critical damping: transient at Omega = {omega:g} failed: "
                                f"{tr.message}")
-    return tr.u_end
+    return tr.u_end, [st.outcome, tr.outcome]
 
 
 def fold_scan(cfg_impact_pair, zeta: float, options: ContinuationOptions,
@@ -94,16 +99,18 @@ def fold_scan(cfg_impact_pair, zeta: float, options: ContinuationOptions,
     wall = time.perf_counter()
     model = impact_pair_from_config(dataclasses.replace(cfg_impact_pair, zeta=float(zeta)))
     lo, hi = options.param_min, options.param_max
-    u0 = _start_state(model, hi, transient_periods, method.integration)
+    u0, solves = _start_state(model, hi, transient_periods, method.integration)
     if options.period_doubling_branch:
         options = dataclasses.replace(options, period_doubling_branch=False)
     res = continuation(PeriodicOrbitProblem(model, u0, hi, direction=-1), method, options)
     branch = res.branches[0]
     folds = tuple(sorted(s.param for s in res.special_points
                          if s.branch == 0 and s.label == "LP" and lo <= s.param <= hi))
+    wall = time.perf_counter() - wall
     return FoldScan(zeta=float(zeta), folds=folds, points=len(branch.points),
-                    status=branch.status, message=branch.message,
-                    wall_time=time.perf_counter() - wall)
+                    status=branch.status, message=branch.message, wall_time=wall,
+                    outcome=Outcome.combine([*solves, res.outcome], status=branch.status,
+                                            message=branch.message, wall_s=wall))
 
 
 def _extrapolate(scans) -> float:
@@ -185,14 +192,14 @@ def run_critical_damping(scene, ctx: RunContext) -> AnalysisOutcome:
             transient_periods=cfg.transient_periods,
             callback=lambda s: bar.update(1, f"zeta={s.zeta:.5g} LP={len(s.folds)}"))
     # extra zetas between zeta_lo and the cusp, only to draw the two fold curves
-    extra = []
-    for z in np.linspace(cfg.zeta_lo, res.bracket[0], cfg.curve_points + 2)[1:-1]:
-        s = fold_scan(c, float(z), options, method, transient_periods=cfg.transient_periods)
-        if s.status.success:
-            extra.append(s)
+    tried = [fold_scan(c, float(z), options, method, transient_periods=cfg.transient_periods)
+             for z in np.linspace(cfg.zeta_lo, res.bracket[0], cfg.curve_points + 2)[1:-1]]
+    extra = [s for s in tried if s.status.success]
 
     def as_json(s: FoldScan) -> dict:
-        return dataclasses.asdict(s) | {"status": s.status.text, "has_fold_pair": s.has_fold_pair}
+        return {f.name: getattr(s, f.name) for f in dataclasses.fields(s)
+                if f.name != "outcome"} | {"folds": list(s.folds), "status": s.status.text,
+                                           "has_fold_pair": s.has_fold_pair}
 
     scans = [as_json(s) for s in res.scans]
     out = {
@@ -206,12 +213,14 @@ def run_critical_damping(scene, ctx: RunContext) -> AnalysisOutcome:
         "window": [cfg.omega_min, cfg.omega_max],
         "scans": scans,
         "curve_scans": [as_json(s) for s in extra],
-        "solver_wall_s": res.wall_time,
         "error_estimate": {"zeta_half_bracket": 0.5 * (res.bracket[1] - res.bracket[0]),
                            "extrapolation_minus_bisection": res.zeta_extrapolated
                            - res.zeta_critical},
     }
     title = (f"{scene.scene.name}: kappa={c.kappa:g}, f_m={c.f_m:g}, f_p={c.f_p:g}, "
              f"b_r={c.b_r:g}")
+    # the runner's solver entries: every scan's solves, those of the bisection and of the
+    # curves (a curve scan that stopped early is left out of the figure, not of the count)
     return AnalysisOutcome(summary=out, result=CriticalDampingFigures(
-        result=res, extra_scans=tuple(extra), title=title))
+        result=res, extra_scans=tuple(extra), title=title),
+        solver=Outcome.combine(s.outcome for s in (*res.scans, *tried)))

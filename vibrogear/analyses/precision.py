@@ -32,6 +32,7 @@ from ..solvers.static import static_equilibrium
 from ..verification.impact_exact import ImpactParams, exact_dense, exact_flow
 from ..verification.impact_orbits import periodic_orbit
 from ..config.options import ShootingOptions
+from ..status import Outcome
 from .study import ATOL_PER_RTOL_BY_MODEL
 
 __all__ = ["run_report", "work_precision", "shooting_precision", "fit_slope",
@@ -76,16 +77,21 @@ def _options(rtol: float) -> IntegrationOptions:
     return IntegrationOptions(rtol=rtol, atol=rtol * ATOL_PER_RTOL)
 
 
-def _warm_jit(model, omega: float, u0) -> None:
-    """Compile (or load) both integrator variants so that no timing includes the JIT."""
+def _warm_jit(model, omega: float, u0) -> list:
+    """Compile (or load) both integrator variants so that no timing includes the JIT;
+    returns the two integrations' outcomes."""
     T = model.excitation_period(omega)
-    integrate(model, omega, u0, 0.0, T, t_eval=np.linspace(0.0, T, 5), options=_options(1e-6))
-    integrate(model, omega, u0, 0.0, T, options=_options(1e-6), variational=True)
+    return [integrate(model, omega, u0, 0.0, T, t_eval=np.linspace(0.0, T, 5),
+                      options=_options(1e-6)).outcome,
+            integrate(model, omega, u0, 0.0, T, options=_options(1e-6),
+                      variational=True).outcome]
 
 
 def work_precision(model, params: ImpactParams, omega: float, u0, t1: float, rtols, *,
-                   t_eval, repeats: int = 3) -> dict[str, np.ndarray]:
-    """Integrator error against the exact flow for each rtol: a table of columns."""
+                   t_eval, repeats: int = 3, solves: list | None = None) -> dict[str, np.ndarray]:
+    """Integrator error against the exact flow for each rtol: a table of columns.
+    ``solves``: a list that gets every integration's :class:`~vibrogear.status.Outcome`
+    (the repeats included)."""
     u0 = np.asarray(u0, float)
     flow = exact_flow(params, omega, u0, 0.0, t1)
     exact = exact_dense(params, omega, u0, 0.0, t_eval, flow=flow)
@@ -96,6 +102,8 @@ def work_precision(model, params: ImpactParams, omega: float, u0, t1: float, rto
         tr = None
         for _ in range(repeats):
             tr = integrate(model, omega, u0, 0.0, t1, t_eval=t_eval, options=opts)
+            if solves is not None:
+                solves.append(tr.outcome)
             if not tr.ok:
                 raise NumericalFailure(f"report: integration at rtol = {rtol:g}, "
                                        f"Omega = {omega:g} failed: {tr.message}")
@@ -120,15 +128,19 @@ def _multiplier_error(mu, mu_ref) -> float:
     return float(np.max(np.abs(a - b)))
 
 
-def shooting_precision(model, omega: float, guess, orbit, tols, *,
-                       repeats: int = 3, max_iter: int = 25) -> dict[str, np.ndarray]:
-    """Shooting from ``guess`` at each tol (integrator rtol = tol) against the exact ``orbit``."""
+def shooting_precision(model, omega: float, guess, orbit, tols, *, repeats: int = 3,
+                       max_iter: int = 25, solves: list | None = None) -> dict[str, np.ndarray]:
+    """Shooting from ``guess`` at each tol (integrator rtol = tol) against the exact
+    ``orbit``.  ``solves``: a list that gets every shooting's
+    :class:`~vibrogear.status.Outcome` (the repeats included)."""
     rows = []
     for tol in tols:
         best = np.inf
         sh = None
         for _ in range(repeats):
             sh = shoot(model, omega, guess, options=_options(tol), shooting=ShootingOptions(tol=tol, max_iter=max_iter))
+            if solves is not None:
+                solves.append(sh.outcome)
             best = min(best, sh.wall_time)
         rows.append((tol, tol, sh.residual, float(np.max(np.abs(sh.u0 - orbit.u0))),
                      _multiplier_error(sh.floquet, orbit.floquet), sh.iterations,
@@ -149,7 +161,9 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
     T = model.excitation_period(omega)
     st = static_equilibrium(model)
     u_start = st.u0 if st.converged else np.zeros(model.n_states)
-    _warm_jit(model, omega, u_start)
+    # every solve this analysis runs, for the runner's solver entries (the exact references
+    # of vibrogear.verification are closed forms, not solves)
+    solves = [st.outcome, *_warm_jit(model, omega, u_start)]
 
     # ---- integrator tolerance -> error -> work
     t1 = cfg.periods * T
@@ -157,7 +171,7 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
     t_eval = np.linspace(0.0, t1, n + 1)
     rtols = sorted(cfg.rtols, reverse=True)
     wp = work_precision(model, params, omega, u_start, t1, rtols, t_eval=t_eval,
-                        repeats=cfg.repeats)
+                        repeats=cfg.repeats, solves=solves)
     slopes = {
         "error_vs_rtol": fit_slope(wp["rtol"], wp["error"]),
         "error_vs_steps": fit_slope(wp["steps"], wp["error"]),
@@ -168,6 +182,7 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
 
     # ---- shooting residual -> error -> work
     warm = integrate(model, omega, u_start, 0.0, TRANSIENT_PERIODS * T, options=_options(1e-10))
+    solves.append(warm.outcome)
     if not warm.ok:
         raise NumericalFailure(f"report: transient at Omega = {omega:g} failed: {warm.message}")
     orbit = periodic_orbit(params, omega, warm.u_end)
@@ -178,7 +193,8 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
     sign = np.where(np.arange(model.n_states) % 2 == 0, 1.0, -1.0)
     guess = orbit.u0 + GUESS_PERTURBATION * scale * sign
     tols = sorted(cfg.shooting_tols, reverse=True)
-    sh = shooting_precision(model, omega, guess, orbit, tols, repeats=cfg.repeats)
+    sh = shooting_precision(model, omega, guess, orbit, tols, repeats=cfg.repeats,
+                            solves=solves)
 
     title = (f"{scene.scene.name}: zeta={c.zeta:g}, kappa={c.kappa:g}, f_m={c.f_m:g}, "
              f"f_p={c.f_p:g}, b_r={c.b_r:g}, Omega={omega:g}")
@@ -203,4 +219,4 @@ def run_report(scene, ctx: RunContext) -> AnalysisOutcome:
                            "shooting_u0_error_at_min_tol": float(sh["u0_error"][-1]),
                            "reference": "closed-form exact flow (vibrogear.verification)"},
     }
-    return AnalysisOutcome(summary=summary, result=result)
+    return AnalysisOutcome(summary=summary, result=result, solver=Outcome.combine(solves))

@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
+from ..status import Outcome
 from .study import integration_options
 from .study import start_state as _model_start
 
@@ -144,8 +145,9 @@ STATISTICS = ("rms", "line_1x", "line_2x", "line_3x", "impacts", "rattle")
 
 def _response(gm, scene, cfg):
     """(mesh deformation of meshes[0] at 32 samples per period over the record window,
-    the record's trajectory, its statistics with batch-means errors, period_n): the
-    record starts after ``transient_periods`` at phase 0."""
+    the record's trajectory, its statistics with batch-means errors, period_n, the
+    outcomes of the integrations run: transient, record): the record starts after
+    ``transient_periods`` at phase 0."""
     from ..solvers.integrator.contact_eval import contact_history
     from ..solvers.integrator.integrate import integrate
     from ..solvers.sequential.motion import classify_period, deformation_statistics
@@ -158,13 +160,13 @@ def _response(gm, scene, cfg):
     opts = integration_options(scene, section=scene.reduction_accuracy)
     warm = integrate(r, rpm, _start(gm, rpm), 0.0, cfg.transient_periods * T, options=opts)
     if not warm.ok:
-        return None, warm, {}, 0
+        return None, warm, {}, 0, [warm.outcome]
     R = -(-cfg.record_periods // P) * P
     t_eval = np.arange(1, _SAMPLES * R + 1) * (T / _SAMPLES)
     t_eval[-1] = R * T
     tr = integrate(r, rpm, warm.u_end, 0.0, R * T, t_eval=t_eval, options=opts)
     if not tr.ok:
-        return None, tr, {}, 0
+        return None, tr, {}, 0, [warm.outcome, tr.outcome]
     u = np.vstack([warm.u_end, tr.u])
     delta = contact_history(r, rpm, np.concatenate([[0.0], t_eval]), u)[0]
     n, _ = classify_period(tr.u[_SAMPLES - 1::_SAMPLES], min(8, R // 2), 1e-4,
@@ -173,8 +175,7 @@ def _response(gm, scene, cfg):
     # the metrics count per base period of a window given in excitation periods P T
     stats.update(_contact_statistics(r, rpm, warm.u_end, tr, t_eval, P * T,
                                      n // P if n % P == 0 else n, opts))
-    tr = _with_wall(tr, warm)
-    return delta[0], tr, stats, int(n)
+    return delta[0], tr, stats, int(n), [warm.outcome, tr.outcome]
 
 
 def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
@@ -203,13 +204,6 @@ def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
             "rattle": m[f"rattle_{key}"], "rattle_err": m[f"rattle_{key}_err"]}
 
 
-def _with_wall(tr, warm):
-    """The record's trajectory with the transient's wall time and steps added."""
-    import dataclasses
-    return dataclasses.replace(tr, wall_time=tr.wall_time + warm.wall_time,
-                               steps=tr.steps + warm.steps)
-
-
 def _statistics_error(stats: dict, ref: dict) -> tuple[float, float, dict]:
     """(largest normalised difference of a statistic from the reference level's, its
     combined batch-means error bar, {statistic: (difference, error bar)}): the RMS
@@ -233,12 +227,13 @@ def _statistics_error(stats: dict, ref: dict) -> tuple[float, float, dict]:
     return each[k][0], each[k][1], each
 
 
-def _warm_up(gm, scene, cfg) -> None:
+def _warm_up(gm, scene, cfg) -> Outcome:
+    """One excitation period, to compile the integrator first; its outcome."""
     from ..solvers.integrator.integrate import integrate
 
     r = gm.reduced
-    integrate(r, cfg.rpm, _start(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
-              options=integration_options(scene, section=scene.reduction_accuracy))
+    return integrate(r, cfg.rpm, _start(gm, cfg.rpm), 0.0, r.excitation_period(cfg.rpm),
+                     options=integration_options(scene, section=scene.reduction_accuracy)).outcome
 
 
 def _full_reference(gm, scene, x0, f_max_hz):
@@ -275,7 +270,8 @@ def _full_reference(gm, scene, x0, f_max_hz):
 
 
 def _level_row(gm, scene, cfg, f_full, v_full, row):
-    """Frequency error and MAC against the full model, and the nonlinear response."""
+    """Frequency error and MAC against the full model, and the nonlinear response; (row,
+    response, the outcomes of the response's integrations)."""
     x0 = _start(gm, cfg.rpm)[:gm.reduced.n_modes]
     row["m"] = gm.reduced.n_modes
     row["f_top_hz"] = float(max(s.freqs_hz.max() for s in gm.subsystems))
@@ -287,13 +283,14 @@ def _level_row(gm, scene, cfg, f_full, v_full, row):
         row["max_freq_error"] = max((abs(c["rel_error"]) for c in cmp), default=np.nan)
         row["min_mac"] = min((c["mac"] for c in cmp), default=np.nan)
         row["pairs"] = cmp
-    delta, tr, stats, n = _response(gm, scene, cfg)
-    row["sim_wall_s"] = tr.wall_time
-    row["steps"] = tr.steps
+    delta, tr, stats, n, solves = _response(gm, scene, cfg)
+    sim = Outcome.combine(solves)                 # transient + record
+    row["sim_wall_s"] = sim.wall_s
+    row["steps"] = sim.counters["steps"]
     row["status"] = tr.message
     row["period_n"] = n
     row["statistics"] = stats
-    return row, delta
+    return row, delta, solves
 
 
 def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
@@ -322,10 +319,12 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
         full = {"dofs": dofs, "modes_below_f_max": int(np.sum(f_full <= cfg.f_max_hz)),
                 "wall_s": full_wall, "from_cache": cached}
     rows, responses = [], []
-    _warm_up(models[0], scene, cfg)           # compile first: the times compare solvers, not JIT
+    # every integration run, for the runner's solver entries
+    solves = [_warm_up(models[0], scene, cfg)]   # compile first: the times compare solvers
     for (s, h), gm in zip(levels, models):
-        row, delta = _level_row(gm, scene, cfg, f_full, v_full,
+        row, delta, ran = _level_row(gm, scene, cfg, f_full, v_full,
                                 {"level": "count", "shaft_modes": s, "housing_modes": h})
+        solves += ran
         responses.append(delta)
         rows.append(row)
     extra = []
@@ -334,10 +333,11 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
         for corr, name in ((True, "frequency"), (False, "frequency_no_static")):
             gm = loaded(build_gearbox(scene, housing_count=h or None, master_level="frequency",
                                       static_correction=corr))
-            row, delta = _level_row(gm, scene, cfg, f_full, v_full, {
+            row, delta, ran = _level_row(gm, scene, cfg, f_full, v_full, {
                 "level": name, "housing_modes": h,
                 "shaft_modes": "+".join(str(sub.n_modes) for sub in gm.subsystems
                                         if sub.kind == "shaft")})
+            solves += ran
             extra.append(row)
             responses.append(delta)
     ref_row = rows[-1]
@@ -383,4 +383,4 @@ def run_reduction_accuracy(study, scene, ctx: RunContext) -> AnalysisOutcome:
                                "statistics_error_bar_second_largest":
                                    rows[-2]["statistics_error_bar"] if len(rows) > 1
                                    else None}}
-    return AnalysisOutcome(summary=summary, result=result)
+    return AnalysisOutcome(summary=summary, result=result, solver=Outcome.combine(solves))

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...pipeline.outcome import AnalysisOutcome
+from ...status import Outcome
 from .compute import compute_modes
 
 __all__ = ["observed_order", "richardson", "run_convergence", "with_mesh",
@@ -102,10 +103,11 @@ def run_convergence(scene, ctx) -> AnalysisOutcome:
     h0 = cfg.mesh_size
     runs = [(2, s) for s in sorted(opts.size_factors, reverse=True)] + \
            [(1, s) for s in sorted(opts.p1_size_factors, reverse=True)]
-    rows = []
+    rows, solves = [], []
     with ctx.progress(len(runs), "convergence") as bar:
         for degree, s in runs:
             res = compute_modes(with_mesh(cfg, size=s * h0, degree=degree, count=n))
+            solves.append(res.outcome)
             rows.append({"degree": degree, "size": s * h0, "n_dofs": res.n_dofs, "freqs": res.freqs_hz[:n],
                          "fe_seconds": _fe_seconds(res), "compile_seconds": res.timings.get("form_compilation", 0.0),
                          "peak_memory_mb": res.peak_memory_mb})
@@ -138,4 +140,5 @@ def run_convergence(scene, ctx) -> AnalysisOutcome:
         "target_error": opts.target_error,
     }
     return AnalysisOutcome(summary=summary, result=HousingConvergenceResult(
-        rows=tuple(rows), n_freqs=n, target_error=opts.target_error))
+        rows=tuple(rows), n_freqs=n, target_error=opts.target_error),
+        solver=Outcome.combine(solves))

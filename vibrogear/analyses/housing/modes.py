@@ -61,4 +61,6 @@ def run_modes(scene, ctx) -> AnalysisOutcome:
     """``modes`` analysis of a housing scene (its result: the housing modes)."""
     cfg = scene.housing
     res = compute_modes(cfg, cache=True)
-    return AnalysisOutcome(summary=modes_summary(res, cfg), result=res)
+    # one eigen-solve: its own outcome (the summary's status "truncated" and the solver's
+    # message stay the housing's words)
+    return AnalysisOutcome(summary=modes_summary(res, cfg), result=res, solver=res.outcome)

@@ -26,6 +26,7 @@ import numpy as np
 
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, is_root_process
 from ...pipeline.resume import PartialStore
+from ...status import Outcome, Status
 
 __all__ = ["run_sweep", "sweep_point", "sweep_signature", "HousingSweepResult"]
 
@@ -56,7 +57,8 @@ def sweep_point(housing: dict, n_freqs: int) -> dict:
     except (MeshingError, HousingSolveError, HousingNumericalError) as exc:
         return {"status": "failed", "message": str(exc)}
     return {"status": "ok", "freqs_hz": [float(f) for f in res.freqs_hz[:n_freqs]], "n_dofs": res.n_dofs,
-            "cached": res.cached, "seconds": time.perf_counter() - t0}
+            "cached": res.cached, "seconds": time.perf_counter() - t0,
+            "counters": res.outcome.counters}
 
 
 def sweep_chain(housings: list, n_freqs: int) -> list[dict]:
@@ -74,7 +76,9 @@ def sweep_chain(housings: list, n_freqs: int) -> list[dict]:
     except (MeshingError, HousingSolveError, ArithmeticError) as exc:
         return [{"status": "failed", "message": str(exc)} for _ in housings]
     return [{"status": "ok", "freqs_hz": [float(f) for f in r.freqs_hz], "n_dofs": r.n_dofs, "cached": False,
-             "seconds": r.seconds, "start": r.start, "mesh": r.mesh, "criterion": r.bound} for r in res]
+             "seconds": r.seconds, "start": r.start, "mesh": r.mesh, "criterion": r.bound,
+             "counters": {"dofs": r.n_dofs, "modes": int(np.size(r.freqs_hz)),
+                          "lanczos_steps": r.steps, "rhs_solves": r.n_rhs}} for r in res]
 
 
 def _runs(items: list, k: int) -> list[list]:
@@ -82,6 +86,12 @@ def _runs(items: list, k: int) -> list[list]:
     k = max(1, min(k, len(items)))
     edges = np.linspace(0, len(items), k + 1).round().astype(int)
     return [items[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def point_outcome(row: dict) -> Outcome:
+    """A finished point's solve (a row of the points file) as an
+    :class:`~vibrogear.status.Outcome`."""
+    return Outcome(Status.OK, Status.OK.message, row.get("counters", {}), row["seconds"], {})
 
 
 def sweep_signature(scene) -> dict:
@@ -120,7 +130,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     n = opts.n_freqs
     t0 = time.perf_counter()
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    failures = []
+    failures, solves = [], []
     with ctx.progress(len(todo), "housing sweep") as bar:
         with cf.ProcessPoolExecutor(max_workers=min(opts.processes, max(len(todo), 1)),
                                     mp_context=mp.get_context("spawn")) as pool:
@@ -143,6 +153,7 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
                     if store is not None:
                         store.append(row)
                     done[float(v)] = row
+                    solves.append(point_outcome(row))
                     bar.update(1, f"{opts.parameter}={v:g}")
     rows = [done[float(v)] for v in values if float(v) in done]
     freqs = np.full((len(rows), n), np.nan)
@@ -154,7 +165,9 @@ def run_sweep(scene, ctx) -> AnalysisOutcome:
     summary = {"parameter": opts.parameter, "values": [r["value"] for r in rows],
                "frequencies_hz": freqs.tolist(), "n_dofs": [r["n_dofs"] for r in rows],
                "points_computed": len(todo), "points_resumed": len(values) - len(todo),
-               "resume": store.note if store is not None else "",
-               "seconds": time.perf_counter() - t0}
+               "resume": store.note if store is not None else ""}
+    # the points computed in this run (resumed ones were solved before), over the sweep's
+    # own clock (they run side by side)
     return AnalysisOutcome(summary=summary, result=HousingSweepResult(
-        parameter=opts.parameter, rows=tuple(rows), freqs=freqs))
+        parameter=opts.parameter, rows=tuple(rows), freqs=freqs),
+        solver=Outcome.combine(solves, wall_s=time.perf_counter() - t0))

@@ -31,9 +31,11 @@ from ...config.base import ConfigError
 from ...config.sections.optimize import data_with
 from ...config.verbs import VERBS
 from ...pipeline.outcome import AnalysisOutcome, RunContext
+from ...status import Outcome
 from ..invoke import invoke, load, with_needs
 
-__all__ = ["Evaluation", "MetricError", "metric_values", "reduce_values", "scene_with", "evaluate"]
+__all__ = ["Evaluation", "MetricError", "metric_values", "reduce_values", "scene_with", "evaluate",
+           "solver_record", "solver_outcome"]
 
 
 class MetricError(Exception):
@@ -56,9 +58,10 @@ def scene_with(base: dict, config, values: dict):
     return scene_from_dict(data_with(base, {v.key: values[v.key] for v in config.variables}))
 
 
-def _run_analyses(scene, ctx: RunContext) -> dict[str, AnalysisOutcome]:
+def _run_analyses(scene, ctx: RunContext,
+                  outcomes: dict[str, AnalysisOutcome]) -> dict[str, AnalysisOutcome]:
+    """The scene's analyses run in order into ``outcomes`` (those before a failure stay)."""
     kind = scene.model_kind
-    outcomes: dict[str, AnalysisOutcome] = {}
     study = None
     for name in scene.scene.analyses:
         run = VERBS[name].runs[kind]
@@ -193,19 +196,22 @@ def _read(cfg, item, values: dict, outcomes: dict) -> float:
 
 def evaluate(task: Evaluation, index: int, values: dict) -> dict:
     """Run one evaluation; returns its record (JSON-able): the values, objective,
-    constraint values, status ("ok" | "failed"), reason and wall time."""
+    constraint values, status ("ok" | "failed"), reason, wall time and ``solver``: the
+    outcome of the solves its analyses ran (:func:`solver_record`; those of the analyses
+    that finished where one failed)."""
     cfg = task.config
     t0, c0 = time.perf_counter(), time.process_time()
     record = {"index": int(index), "values": dict(values), "objective": None,
               "constraints": [], "status": "failed", "reason": ""}
     scratch = None if task.scratch is None else Path(task.scratch) / f"eval-{index}"
+    outcomes: dict[str, AnalysisOutcome] = {}
     try:
         scene = scene_with(task.base, cfg, values)
         from ...models.validate import validate_scene
         validate_scene(scene)
         if scratch is not None:
             scratch.mkdir(parents=True, exist_ok=True)
-        outcomes = _run_analyses(scene, RunContext(out=scratch, quiet=True))
+        _run_analyses(scene, RunContext(out=scratch, quiet=True), outcomes)
         record["objective"] = _read(cfg, cfg.objective, values, outcomes)
         record["constraints"] = [_read(cfg, c, values, outcomes) for c in cfg.constraints]
         record["status"] = "ok"
@@ -223,4 +229,22 @@ def evaluate(task: Evaluation, index: int, values: dict) -> dict:
             shutil.rmtree(scratch, ignore_errors=True)
     record["wall_s"] = time.perf_counter() - t0
     record["cpu_s"] = time.process_time() - c0
+    record["solver"] = solver_record(Outcome.combine(
+        o.solver for o in outcomes.values() if o.solver is not None))
     return record
+
+
+def solver_record(outcome: Outcome) -> dict:
+    """An :class:`~vibrogear.status.Outcome` as JSON-able data (status code, message,
+    counters, wall time; an evaluation's record travels between processes and to the
+    partial file); :func:`solver_outcome` reads it back."""
+    return {"status": int(outcome.status), "message": outcome.message,
+            "counters": dict(outcome.counters), "wall_s": outcome.wall_s}
+
+
+def solver_outcome(record: dict) -> Outcome:
+    """The outcome of an evaluation's solves from its record (no solves: a record written
+    before records carried them, or an evaluation that failed before any analysis ran)."""
+    s = record.get("solver") or {}
+    return Outcome(s.get("status", 0), s.get("message", "ok"), s.get("counters", {}),
+                   s.get("wall_s", 0.0), {})

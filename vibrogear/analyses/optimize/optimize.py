@@ -35,7 +35,8 @@ from ...config.sections.optimize import evaluation_data
 from ...pipeline.executors import broadcast, run_units
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ...pipeline.resume import PartialStore, fingerprint
-from .evaluate import Evaluation, evaluate
+from ...status import Outcome, Status
+from .evaluate import Evaluation, evaluate, solver_outcome
 from .methods import BudgetSpent, Space, choose_method, search
 
 __all__ = ["OptimizeResult", "run", "PARTIAL_NAME", "penalised", "violation"]
@@ -194,8 +195,12 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
     if best is None:
         raise NumericalFailure(f"optimize: all {len(history)} evaluations failed (kept in "
                                f"{PARTIAL_NAME}); first: {failed[0]['reason'] if failed else stop}")
+    solver = _solver(history, wall)
     summary = {
-        "status": "ok" if best["feasible"] else "no feasible evaluation",
+        **({} if best["feasible"] else {
+            "status": "no feasible evaluation",
+            "message": "no evaluation met every constraint"
+                       + ("" if solver.ok else f"; {solver.message}")}),
         "method": method, "stop": stop, "evaluations": len(history),
         "resumed_evaluations": len({_key(r["values"]) for r in resumed}
                                    & {_key(h["values"]) for h in history}),
@@ -209,7 +214,6 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
                       "reduce": cfg.objective.reduce, "sense": cfg.objective.sense},
         "evaluation_wall_s": float(sum(h.get("wall_s", 0.0) for h in history)),
         "evaluation_cpu_s": float(sum(h.get("cpu_s", 0.0) for h in history)),
-        "solver_wall_s": wall,
         **({"resume": note} if note else {}),
         **({"first_failure": failed[0]["reason"]} if failed else {}),
     }
@@ -219,7 +223,22 @@ def run(scene, ctx: RunContext) -> AnalysisOutcome:
                             title=f"{scene.scene.name}: {cfg.objective.sense} "
                                   f"{_objective_text(cfg)}")
     return AnalysisOutcome(summary=summary, result=result,
-                           partial_files=() if store is None else (store.path,))
+                           partial_files=() if store is None else (store.path,), solver=solver)
+
+
+def _solver(history: list, wall: float) -> Outcome:
+    """The optimisation's solver outcome: every evaluation's solves combined (counters
+    summed; resumed evaluations included, as they are in the history), over the run's own
+    clock (evaluations run side by side).  Status: partial where an evaluation failed (its
+    reason the message: a failed evaluation is penalised, it does not stop the run), else
+    that of the solves (:meth:`~vibrogear.status.Outcome.combine`)."""
+    solves = [solver_outcome(h) for h in history]
+    failed = [h for h in history if h["status"] != "ok"]
+    if failed:
+        return Outcome.combine(solves, status=Status.PARTIAL, wall_s=wall, message=(
+            f"{len(failed)} of {len(history)} evaluations failed; the first: "
+            f"{failed[0]['reason']}"))
+    return Outcome.combine(solves, wall_s=wall)
 
 
 def _objective_text(cfg) -> str:

@@ -26,10 +26,16 @@ from typing import Mapping
 
 import numpy as np
 
+from ...status import Outcome, Status
 from .surface_data import SURFACE_FIELDS, empty_surface_fields
 from .surface_mesh import SHAPE_FIELDS, empty_shape_fields
 
-__all__ = ["HousingModes", "save_modes", "load_modes"]
+__all__ = ["HousingModes", "save_modes", "load_modes", "WALL_STAGES"]
+
+#: the top-level stages of ``HousingModes.timings`` (the others are parts of these):
+#: meshing to post-processing of an FE solve, ``read`` of another program's modes
+WALL_STAGES = ("meshing", "mesh_read", "form_compilation", "assembly", "eigensolve",
+               "postprocess", "xdmf", "read")
 
 _ARRAYS = ("freqs_hz", "bore_values", "bore_points", "bore_centers", "bore_axes",
            "bore_center_values", "residuals", "preview_points", "preview_values") + SURFACE_FIELDS + SHAPE_FIELDS
@@ -91,6 +97,23 @@ class HousingModes:
     @property
     def n_modes(self) -> int:
         return int(self.freqs_hz.size)
+
+    @property
+    def outcome(self) -> Outcome:
+        """The modal solve as an :class:`~vibrogear.status.Outcome`: status ok, or
+        ``max_points`` with the housing's message where it is ``truncated`` (max_count modes
+        all below the cut-off: the set is incomplete); counters ``dofs``, ``modes``,
+        ``converged``; wall time of this run's work (the FE stages, or the cache load, or the
+        read of another program's modes); error estimate: the largest eigen residual and the
+        mass-orthonormality error."""
+        t = self.timings
+        wall = t["cache_load"] if "cache_load" in t else sum(t.get(k, 0.0) for k in WALL_STAGES)
+        st = Status.OK if self.status == "ok" else Status.MAX_POINTS
+        return Outcome(st, self.message or st.message,
+                       {"dofs": self.n_dofs, "modes": self.n_modes, "converged": self.n_converged},
+                       wall, {"max_eigen_residual": float(np.max(self.residuals, initial=0.0))
+                              if self.n_modes else None,
+                              "mass_orthonormality_error": self.orthogonality_error})
 
     @property
     def omegas(self) -> np.ndarray:

@@ -111,7 +111,7 @@ def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
     out = Path(out)
     files = {"csv": str(_csv(r, out))}
-    doc = {**outcome.summary, "variables": [
+    doc = {**outcome.record(), "variables": [
         {"key": v.key, "min": v.min, "max": v.max, "log": v.log, "integer": v.integer}
         for v in r.variables], "history": [
         {k: h.get(k) for k in ("evaluation", "values", "objective", "constraints", "feasible",
