@@ -24,7 +24,7 @@ from vibrogear.pipeline.outcome import RunContext
 
 GEAR_PAIR = str(Path(__file__).resolve().parents[2] / "configs" / "gear_pair.toml")
 
-SMALL = ["map.n_speeds=2", "map.n_loads=1", "map.torque_min=62.5", "map.torque_max=62.5",
+SMALL = ["map.n_speeds=2", "map.n_loads=1", "map.torque_min=91", "map.torque_max=91",
          "map.curves=false", "map.transient_periods=20", "map.extra_transient_periods=0",
          "map.record_periods=4", "map.max_period=2", "map.workers=1", 'map.directions=["up"]',
          "map.force_periods=1", "map.force_samples=16", "map.lyapunov=false"]
@@ -111,12 +111,14 @@ def _deformation(lo, hi):
 def _no_load(s, z, rows):
     """Zero torque: the loads in both units are 0; the transmission error alone moves the
     gears, within the 0.1 mm backlash and a few um of tooth deformation."""
-    assert s["loads"]["torque_N_m"] == [0.0] and s["loads"]["twist_rad"] == [0.0]
+    assert s["loads"]["torque_N_m"] == pytest.approx([0.0], abs=1e-9)
+    assert s["loads"]["twist_rad"] == pytest.approx([0.0], abs=1e-12)
     assert np.all(z["qmin"] > -1e-4 - 1e-5) and np.all(z["qmax"] < 1e-5)
 
 
 def _from_zero(s, z, rows):
-    assert s["loads"]["torque_N_m"] == [0.0, 62.5]
+    """torque_min = 0 up to torque_max (SMALL: 91 N m)."""
+    assert s["loads"]["torque_N_m"] == pytest.approx([0.0, 91.0], abs=1e-9)
 
 
 def _stiff(s, z, rows):
@@ -129,7 +131,9 @@ def _stiff(s, z, rows):
 
 def _twists(s, z, rows):
     assert s["loads"]["given_as"] == "twist" and s["loads"]["twist_rad"] == [0.0, 10.0]
-    assert s["loads"]["torque_N_m"] == pytest.approx([0.0, 2.5e4])      # 2.5e3 N m/rad x 10
+    # the carried torque, linear in the twist on gear_pair: 400 x the nominal 90.98 N m
+    T1 = s["loads"]["nominal_torque_N_m"]
+    assert s["loads"]["torque_N_m"] == pytest.approx([0.0, 400.0 * T1], abs=1e-9)
 
 
 def _tolerance(rtol):
@@ -186,8 +190,8 @@ def test_extreme_input_gives_a_status_per_point(tmp_path, overrides, check):
 def _twist_scene(tmp_path) -> str:
     """gear_pair with its [map] load range removed (given as twists by the case)."""
     text = Path(GEAR_PAIR).read_text()
-    assert "torque_min = 37.5\n" in text and "torque_max = 75.0\n" in text
-    text = text.replace("torque_min = 37.5\n", "").replace("torque_max = 75.0\n", "")
+    assert "torque_min = 55.0\n" in text and "torque_max = 110.0\n" in text
+    text = text.replace("torque_min = 55.0\n", "").replace("torque_max = 110.0\n", "")
     p = tmp_path / "twist.toml"
     p.write_text(text)
     return str(p)

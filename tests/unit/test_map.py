@@ -8,7 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vibrogear.analyses.map.load_scaling import input_torque, load_scaling
+from vibrogear.analyses.map.load_scaling import load_scaling
+from vibrogear.analyses.static_load import static_load
 from vibrogear.analyses.map.map import PARTIAL_NAME, compute_map
 from vibrogear.analyses.study import build_study
 from vibrogear.cli import main
@@ -34,15 +35,27 @@ def nominal():
     return scene, study, load_scaling(study.gearbox, scene.gearbox)
 
 
-def test_torque_and_twist_convert_by_the_hand_formula(nominal):
-    """Input torque = motor stiffness x motor twist: 2.5e3 N m/rad x 0.025 rad = 62.5 N m."""
+def _carried(overrides=()) -> float:
+    """The motor coupling's torque [N m] in the load path of the scene rebuilt with
+    ``overrides`` (the full scene's static state: vibrogear.analyses.static_load)."""
+    lp = static_load(load_scene(GEAR_PAIR, overrides)).load_path
+    return next(c["torque_Nm"] for c in lp.couplings if c["role"] == "motor")
+
+
+def test_the_torque_is_the_one_the_static_state_carries(nominal):
+    """The map's torque is the load path's, not stiffness x twist (62.5 N m at the motor's
+    spring, 250 N m at the load's: the gear ratio 2 balances neither, the static state carries
+    90.98 N m): at the nominal twists and at 0.6 and 1.6 x them, against the load path of the
+    scene rebuilt with those twists; the twist scales the motor coupling's."""
     scene, _, ls = nominal
-    assert input_torque(scene.gearbox) == pytest.approx(2.5e3 * 0.025, rel=1e-15)
-    assert ls.torque_nominal == pytest.approx(62.5, rel=1e-15)
+    assert ls.torque_nominal == pytest.approx(_carried(), rel=1e-9)
+    assert 80.0 < ls.torque_nominal < 93.75     # rigid shafts and teeth would carry 93.75
     assert ls.twist_nominal == 0.025
-    s = ls.scale_of_torque(100.0)
-    assert ls.twist(s) == pytest.approx(100.0 / 2.5e3, rel=1e-14)        # T / k
-    assert ls.torque(ls.scale_of_twist(0.01)) == pytest.approx(2.5e3 * 0.01, rel=1e-14)
+    for s in (0.6, 1.6):
+        assert ls.torque(s) == pytest.approx(_carried(_twists(s * 0.025)), rel=1e-9)
+        assert ls.scale_of_torque(ls.torque(s)) == pytest.approx(s, rel=1e-12)
+        assert ls.twist(s) == pytest.approx(s * 0.025, rel=1e-15)
+    assert ls.torque_law_error_rel < 1e-9
 
 
 def test_f0_of_the_decomposition_equals_a_model_built_with_the_twists(nominal):
@@ -60,12 +73,12 @@ def test_f0_of_the_decomposition_equals_a_model_built_with_the_twists(nominal):
 
 
 def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
-    """Row at 70 N m (twist 0.028 rad) against `sweep` of the scene rebuilt with twist 0.028
+    """Row at twist 0.028 rad against `sweep` of the scene rebuilt with twist 0.028
     (speeds below the jump region, where the loaded mesh settles on period-1 orbits): same
     period at every point, extrema of the periodic points within 1e-6 relative."""
     scene, study, ls = nominal
     rpm = np.array([4850.0, 4900.0, 4950.0, 5000.0])
-    s = float(ls.scale_of_torque(70.0))
+    s = float(ls.scale_of_twist(0.028))
     m = compute_map(study, ls, rpm, [s], SETTINGS, scene.integration, force_periods=1,
                     force_samples=32)
     row = m.rows[0]
@@ -95,7 +108,7 @@ def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
 
 @pytest.mark.parametrize("override, field", [
     (("map.twist_min=0.01", "map.twist_max=0.03"), "map.twist_min"),       # both given
-    (("map.torque_min=80.0",), "map.torque_max"),                          # empty range
+    (("map.torque_min=120.0",), "map.torque_max"),                         # empty range
     (("map.n_speeds=0",), "map.n_speeds"),
     (("map.n_loads=0",), "map.n_loads"),
     (("map.n_loads=-3",), "map.n_loads"),
@@ -175,15 +188,18 @@ def test_the_map_verb_writes_both_load_units_and_the_grids(tmp_path):
                  "--set", "map.workers=1"])
     assert code == 0
     with np.load(out / "map.npz") as z:
-        assert np.allclose(z["torque"], [37.5, 75.0])
-        assert np.allclose(z["twist"], z["torque"] / 2.5e3)
+        assert np.allclose(z["torque"], [55.0, 110.0])
+        # the twist at which the static state carries that torque (gear_pair: linear)
+        assert np.allclose(z["twist"], 0.025 * z["torque"] / _carried(), rtol=1e-9)
+        z_twist = z["twist"].copy()
         shape = (2, 2, 3)                       # directions x loads x speeds
         for key in ("motion_class", "impacts_G1", "rattle_G1", "max_force_G1", "status",
                     "wall_time", "contact_fraction_G1"):
             assert z[key].shape == shape, key
         assert np.array_equal(z["impacts_G1"], z["impacts_drive_G1"] + z["impacts_back_G1"])
     summary = json.loads((out / "summary.json").read_text())["results"]["map"]
-    assert summary["loads"]["twist_rad"] == pytest.approx([0.015, 0.03])
+    assert summary["loads"]["twist_rad"] == pytest.approx(list(z_twist), rel=1e-15)
+    assert summary["loads"]["torque_law_error_rel"] < 1e-9
     assert summary["points"] == 12 and summary["cost"]["point_wall_s_mean"] > 0
     (walks,) = summary["parallel_phases"]           # 2 loads x 2 directions, one unit each
     assert walks["units"] == 4 and summary["serial_wall_s"] >= 0 and summary["serial_part"]

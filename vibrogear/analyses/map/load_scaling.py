@@ -16,20 +16,27 @@ modes by count, no static correction) it equals a model built with the scaled tw
 the static correction (which adds the static deflection under the nominal load to the
 basis) every load is computed in the nominal load's basis.
 
-The transmitted input torque is the sum over the motor couplings of stiffness x twist; the
-map's twist is the first motor coupling's.  (two_stage: 2.5e3 N m/rad x 0.025 rad =
-62.5 N m.)
+The map's twist is the first motor coupling's disc angle (the scene's twist x s).  Its torque is
+the transmitted input torque the static state carries: the sum over the motor couplings of
+stiffness x (s x disc angle - the shaft's static angle there), in the drive's sense, as the
+load path states it.  Not stiffness x twist: where the motor and load couplings' twists do not
+match the gear ratio (gear_pair: 2.5e3 N m/rad x 0.025 rad = 62.5 N m at the motor, 1e4 x
+0.025 = 250 N m at the load, ratio 2), the static state settles between them and carries
+90.98 N m.  The carried torque is affine in s (a constant part from gravity and free-gear
+drag, which do not scale): T(s) = T(1) + (s - 1) (T(1) - T(1/2)) from the static states at
+s = 1/2 and 1; a third at s = 3/2 checks it (``torque_law_error_rel``; gear_pair 3e-16).
 """
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...config.base import ConfigError
 
-__all__ = ["LoadScaling", "load_scaling", "input_torque", "motor_couplings"]
+__all__ = ["LoadScaling", "load_scaling", "carried_torque", "motor_couplings"]
 
 
 def motor_couplings(gearbox_cfg) -> list[int]:
@@ -37,31 +44,36 @@ def motor_couplings(gearbox_cfg) -> list[int]:
     return [i for i, c in enumerate(gearbox_cfg.couplings) if c.role == "motor"]
 
 
-def input_torque(gearbox_cfg, scale: float = 1.0) -> float:
-    """Transmitted input torque [N m] with every twist scaled by ``scale``: sum over the
-    motor couplings of stiffness x twist."""
-    return float(scale * sum(gearbox_cfg.couplings[i].stiffness * gearbox_cfg.couplings[i].static_twist
-                             for i in motor_couplings(gearbox_cfg)))
+#: the load scales whose static states fix the carried torque's affine law, and the one that
+#: checks it
+LAW_SCALES = (0.5, 1.0)
+CHECK_SCALE = 1.5
 
 
 @dataclass(frozen=True, eq=False)
 class LoadScaling:
-    """F0(s) = f0_rest + s * f0_couplings (model units); ``torque_nominal`` [N m] and
-    ``twist_nominal`` [rad, the first motor coupling's] at s = 1 (the scene's twists)."""
+    """F0(s) = f0_rest + s * f0_couplings (model units); ``torque_nominal`` [N m, carried by
+    the static state] and ``twist_nominal`` [rad, the first motor coupling's] at s = 1 (the
+    scene's twists); ``torque_zero`` [N m]: the carried torque's constant part (T(0) of its
+    affine law); ``torque_law_error_rel``: the law against the static state at s = 3/2."""
     f0_rest: np.ndarray
     f0_couplings: np.ndarray
     torque_nominal: float
     twist_nominal: float
     motor: str                      # name of the first motor coupling
+    torque_zero: float = 0.0
+    torque_law_error_rel: float = 0.0
 
     def scale_of_torque(self, torque) -> np.ndarray:
-        return np.asarray(torque, dtype=float) / self.torque_nominal
+        return (np.asarray(torque, dtype=float) - self.torque_zero) / \
+            (self.torque_nominal - self.torque_zero)
 
     def scale_of_twist(self, twist) -> np.ndarray:
         return np.asarray(twist, dtype=float) / self.twist_nominal
 
     def torque(self, scale) -> np.ndarray:
-        return np.asarray(scale, dtype=float) * self.torque_nominal
+        return self.torque_zero + np.asarray(scale, dtype=float) * (self.torque_nominal
+                                                                    - self.torque_zero)
 
     def twist(self, scale) -> np.ndarray:
         return np.asarray(scale, dtype=float) * self.twist_nominal
@@ -87,8 +99,7 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
         raise ConfigError("gearbox.couplings", f"[{path}] scales the load of the motor "
                           "coupling: the scene needs a coupling with role = \"motor\"")
     first = gearbox_cfg.couplings[motors[0]]
-    torque = input_torque(gearbox_cfg)
-    if not (first.static_twist > 0 and torque > 0):
+    if not (first.static_twist > 0 and first.stiffness > 0):
         raise ConfigError(f"gearbox.couplings[{motors[0]}].twist", f"[{path}] scales the "
                           "scene's twists: the motor coupling needs twist > 0 and stiffness > "
                           f"0, got twist = {first.static_twist:g} rad, stiffness = {first.stiffness:g}")
@@ -102,5 +113,30 @@ def load_scaling(gearbox_model, gearbox_cfg, path: str = "map") -> LoadScaling:
                                                           gm.shaft_ratios)[1])
     f0_c = modal_vector(couplings, gm.subsystems) / gm.omega_ref ** 2
     f0 = np.asarray(gm.reduced.forcing.F0, dtype=float)
-    return LoadScaling(f0_rest=f0 - f0_c, f0_couplings=f0_c, torque_nominal=torque,
-                       twist_nominal=float(first.static_twist), motor=first.name)
+    scaling = LoadScaling(f0_rest=f0 - f0_c, f0_couplings=f0_c, torque_nominal=math.nan,
+                          twist_nominal=float(first.static_twist), motor=first.name)
+    half, one = (carried_torque(gm, gearbox_cfg, scaling, s, path) for s in LAW_SCALES)
+    slope = (one - half) / (LAW_SCALES[1] - LAW_SCALES[0])
+    scaling = dataclasses.replace(scaling, torque_nominal=one, torque_zero=one - slope)
+    check = carried_torque(gm, gearbox_cfg, scaling, CHECK_SCALE, path)
+    return dataclasses.replace(scaling, torque_law_error_rel=float(
+        abs(scaling.torque(CHECK_SCALE) - check) / max(abs(check), 1e-300)))
+
+
+def carried_torque(gearbox_model, gearbox_cfg, scaling: LoadScaling, scale: float,
+                   path: str = "map") -> float:
+    """The transmitted input torque [N m] the static state carries with the load scaled by
+    ``scale``: the sum over the motor couplings of stiffness x (scale x disc angle - the
+    shaft's static angle), each in its drive's sense.  NumericalFailure naming the scale where
+    the static state is not found."""
+    from ...models.gearbox.load_path import coupling_signs, coupling_torques
+    from ...pipeline.outcome import NumericalFailure
+    from ...solvers.static import static_equilibrium
+
+    st = static_equilibrium(scaling.model_at(gearbox_model.reduced, scale))
+    if not st.converged:
+        raise NumericalFailure(f"{path}: no static state at {scale:g} x the scene's load "
+                               f"(the carried torque's law): {st.message}")
+    torques = coupling_torques(gearbox_model, gearbox_cfg, st.x, scale)
+    signs = coupling_signs(gearbox_cfg)
+    return float(sum(signs[i] * torques[i] for i in motor_couplings(gearbox_cfg)))

@@ -315,7 +315,11 @@ def map_summary(res: OperatingMap, scaling: LoadScaling) -> dict:
         "loads": {"given_as": res.load_kind, "torque_N_m": [float(x) for x in res.torque],
                   "twist_rad": [float(x) for x in res.twist], "scale": [float(x) for x in res.scale],
                   "nominal_torque_N_m": scaling.torque_nominal,
-                  "nominal_twist_rad": scaling.twist_nominal, "motor_coupling": scaling.motor},
+                  "nominal_twist_rad": scaling.twist_nominal, "motor_coupling": scaling.motor,
+                  "torque": "carried by the static state at the motor coupling (the load "
+                            "path's), affine in the scale: T(0) + s (T(1) - T(0))",
+                  "torque_at_zero_scale_N_m": scaling.torque_zero,
+                  "torque_law_error_rel": scaling.torque_law_error_rel},
         "directions": list(res.directions), "points": n, "resumed_points": res.resumed,
         "failed_points": int(sum(int(np.sum(r.status != 0)) for r in res.rows)),
         "motion_classes": {c: names.count(c) for c in MOTION_LEGEND if c in names},

@@ -2,7 +2,7 @@
 
 The grid is ``n_speeds`` driving speeds from ``rpm_min`` to ``rpm_max`` times ``n_loads``
 static loads.  The load is given either as the transmitted input torque (``torque_min`` /
-``torque_max``, N m: the torque of the motor couplings, stiffness x twist) or as the twist
+``torque_max``, N m: the torque the static state carries at the motor couplings) or as the twist
 of the motor coupling (``twist_min`` / ``twist_max``, rad), exactly one of the two; every
 coupling's twist is scaled by the same factor, so the scene's load pattern (motor and load
 side) is kept.  Each load row is a sweep over speed with this section's sweep settings

@@ -171,10 +171,11 @@ def _angles_of(gm, cfg) -> np.ndarray:
     return np.asarray(a, dtype=float) if len(a) == len(cfg.couplings) else coupling_angles(cfg)
 
 
-def coupling_torques(gm, cfg, x) -> np.ndarray:
+def coupling_torques(gm, cfg, x, scale: float = 1.0) -> np.ndarray:
     """Static torque of each coupling on its shaft (signed on its DOF) [N m]:
-    stiffness x (disc angle - DOF angle)."""
-    angles = _angles_of(gm, cfg)
+    stiffness x (disc angle - DOF angle); ``scale``: every disc angle scaled by it (the
+    operating map's load rows, :mod:`vibrogear.analyses.map.load_scaling`)."""
+    angles = scale * _angles_of(gm, cfg)
     out = []
     for i, (c, (s, dof)) in enumerate(zip(cfg.couplings, coupling_dofs(cfg, gm))):
         psi = modal_vector(PhysicalVector.of((s, [dof], [1.0])), gm.subsystems) @ x
