@@ -130,11 +130,16 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
                                                f"P{rec.period_n}"),
             settings=SweepOptions.of(cfg), options=opts, u0=study.start(params[0]))
     failed = int(np.sum(res.status != 0))
-    if res.motion_class is not None and study.model.contacts.count:   # kv_, rattle_db_
-        from ..mesh_loads import mesh_judgement_arrays, static_mesh_forces
+    if res.motion_class is not None and study.model.contacts.count:
+        # kv_, rattle_db_, rattle_threshold_ (the linear model at each point's speed)
+        from ..mesh_loads import mesh_judgement_arrays, rattle_threshold, static_mesh_forces
         from ...solvers.sequential.motion import contact_groups
+        groups, start = contact_groups(study.model), study.start(params[0])
         res.metrics.update(mesh_judgement_arrays(res.metrics, static_mesh_forces(
-            study.model, study.start(params[0]), contact_groups(study.model))))
+            study.model, start, groups)))
+        speeds, at = np.unique(res.param, return_inverse=True)
+        res.metrics.update({k: v[at] for k, v in rattle_threshold(
+            study.model, start, groups, speeds).items()})
     if failed == res.param.size:
         raise NumericalFailure(f"sweep: all {failed} points failed; first: "
                                f"{study.param_name} = {res.param[0]:g}: {res.message[0]}")
