@@ -216,3 +216,17 @@ def test_compare_refuses_a_folder_without_findings(tmp_path):
     from vibrogear.cli import main
     (tmp_path / "a").mkdir()
     assert main(["compare", str(tmp_path / "a"), str(tmp_path / "a")]) == 2
+
+
+def test_an_idle_meshs_rattle_band_states_its_rattle_threshold_ratio_there():
+    """The rattle band of G2 at 500-900 rpm quotes the ratio's values at those speeds only
+    (5 ... 9, not the run's 1 ... 10); findings.meshes holds the run's range."""
+    db = np.array([100.0, 101, 102, 103, 105, 106, 107, 110, 104.5, 100.5])
+    arrays = _loaded_idle(np.full(10, 1.1), np.ones(10), db)
+    arrays.update(_sweep(rattle_threshold_G2=np.arange(1.0, 11.0)))
+    f = derive_findings({"sweep.npz": arrays}, {}, FindingsConfig(), load_path=LOAD_PATH)
+    rb, = [b for b in f["bands"] if b["quantity"] == "rattle"]
+    assert "inertia torque to follow the mesh is 5.0-9.0 x its drag torque there" in rb["evidence"]
+    g2 = f["meshes"][1]
+    assert (g2["rattle_threshold_min"], g2["rattle_threshold_max"]) == (1.0, 10.0)
+    assert "rattle_threshold_max" not in f["meshes"][0]         # loaded: judged by kv

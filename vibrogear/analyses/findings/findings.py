@@ -194,6 +194,12 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
         if b["source"] == "iso6336" and m is not None and "kv_peak" in m:
             b["evidence"] += (f"; the simulated dynamic factor peaks at kv = "
                               f"{fmt(m['kv_peak'], 3)} at {fmt_param(m['kv_peak_at'])} rpm")
+        ratio = _within(sweep, f"rattle_threshold_{_key(b['where'])}", b)
+        if str(b.get("metric", "")).startswith("rattle_db_") and ratio is not None:
+            b["evidence"] += (f"; its inertia torque to follow the mesh is "
+                              f"{_span_text(ratio)} x its drag torque there (the rattle "
+                              "threshold ratio, linear model: above 1 the drag cannot hold "
+                              "it on its drive flank)")
     return {"verdict": verdict_text(out_bands, checked, span, partial, param_unit, win),
             "windows": win, "meshes": judged,
             "bands": out_bands, "events": events, "rules": rules.rules(),
@@ -201,10 +207,27 @@ def derive_findings(sources: dict[str, dict[str, np.ndarray]], records: dict, ru
             "range": None if span is None else [span[0], span[1]], "param_unit": param_unit}
 
 
+def _within(sweep, key: str, band: dict):
+    """The finite values of the sweep array ``key`` at the points of ``band``'s speed range
+    (None where there are none)."""
+    if sweep is None or key not in sweep or band.get("from") is None:
+        return None
+    p = np.asarray(sweep["param"], float)
+    v = np.asarray(sweep[key], float)
+    lo, hi = band["from"], band.get("to", band["from"])
+    v = v[(p >= lo - 1e-9 * abs(lo)) & (p <= hi + 1e-9 * abs(hi)) & np.isfinite(v)]
+    return v if v.size else None
+
+
+def _span_text(v) -> str:
+    lo, hi = float(np.min(v)), float(np.max(v))
+    return fmt(lo, 2) if fmt(lo, 2) == fmt(hi, 2) else f"{fmt(lo, 2)}-{fmt(hi, 2)}"
+
+
 def mesh_summary(meshes: list[dict], sweep, iso) -> list[dict]:
     """``findings.meshes``: each mesh's name, role and static force, with what it was
     judged by: a loaded mesh's kv peak (and the ISO 6336-1 resonance speed), an idle
-    mesh's loudest and quietest rattle level."""
+    mesh's loudest and quietest rattle level and the range of its rattle threshold ratio."""
     by_name = {m["name"]: m for m in (iso or {}).get("meshes", [])}
     out = []
     for m in meshes:
@@ -227,6 +250,12 @@ def mesh_summary(meshes: list[dict], sweep, iso) -> list[dict]:
                 i, j = int(np.argmax(v)), int(np.argmin(v))
                 row.update(rattle_db_max=float(v[i]), rattle_db_max_at=float(p[i]),
                            rattle_db_min=float(v[j]), rattle_db_min_at=float(p[j]))
+            ratio = sweep.get(f"rattle_threshold_{k}")
+            if m["role"] == "idle" and ratio is not None and p.size:
+                # the inertia torque to follow the mesh over the drag torque (linear model)
+                v = np.asarray(ratio, float)[ok]
+                row.update(rattle_threshold_min=float(np.min(v)),
+                           rattle_threshold_max=float(np.max(v)))
         if m["name"] in by_name and m["role"] == "loaded":
             row["iso6336"] = by_name[m["name"]]
         out.append(row)
