@@ -52,7 +52,9 @@ GLOSSARY = (
     ("loaded / idle mesh", "From the static load path: a loaded mesh carries the torque from "
      "motor to load and is judged by its dynamic factor kv (largest tooth force / static "
      "tooth force) and contact loss; an idle mesh drives a free gear held only by its drag "
-     "and is judged by its rattle level (impact power in dB re 1 pW)."),
+     "and is judged by its rattle level (impact power in dB re 1 pW); its rattle threshold "
+     "ratio, the inertia torque the gear needs to follow the mesh over its drag torque "
+     "(linearised model), says why: above 1 the drag cannot hold it on its drive flank."),
     ("sweep up / down (sequential continuation)", "Each speed starts from the settled state "
      "of the previous speed, going up and then down; where the two differ, two responses "
      "coexist (hysteresis) and the response jumps."),
