@@ -1,16 +1,16 @@
 """Right-hand side and integration cost on the real two-stage gearbox reduced model.
 
-Loads ``(model, u0)`` from a pickle (default /work/two_stage_reduced.pkl: 160 modes,
-P 72 x 160 with 60 identity rows, 40 contacts; u0 the static equilibrium) and prints
+Builds the reduced model of ``--scene`` (default configs/two_stage.toml) and its static
+equilibrium u0, or loads ``(model, u0)`` from ``--pickle``, and prints
 
 * us per call of the compiled ``kernels.accel``, called from a compiled driver on states
   sampled along a trajectory (best of ``--repeats``, CPU time of this process);
 * the integration of ``--periods`` excitation periods from u0 at each ``--rtol``
   (atol ``--atol``): wall time (best of ``--repeats``), steps, RHS calls, us per RHS.
 
-Skips with a message (exit 0) when the pickle is missing.  Never run by the tests.
+Never run by the tests.
 
-Run:  .venv/bin/python benchmarks/bench_gearbox_rhs.py [--pickle PATH] [--param 2400]
+Run:  .venv/bin/python benchmarks/bench_gearbox_rhs.py [--scene FILE | --pickle PATH] [--param 2400]
 """
 from __future__ import annotations
 
@@ -58,7 +58,9 @@ def _drive(A, Om, Y, n_calls):
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pickle", default="/work/two_stage_reduced.pkl")
+    ap.add_argument("--scene", default=str(Path(__file__).resolve().parents[1] / "configs"
+                                           / "two_stage.toml"))
+    ap.add_argument("--pickle", default=None, help="(model, u0) pickled, instead of --scene")
     ap.add_argument("--param", type=float, default=2400.0)
     ap.add_argument("--periods", type=float, default=200.0)
     ap.add_argument("--rtol", type=float, nargs="+", default=[1e-5, 1e-6])
@@ -66,12 +68,14 @@ def main() -> int:
     ap.add_argument("--calls", type=int, default=50_000)
     ap.add_argument("--repeats", type=int, default=5)
     a = ap.parse_args()
-    path = Path(a.pickle)
-    if not path.is_file():
-        print(f"bench_gearbox_rhs: {path} not found, skipped")
-        return 0
-    with open(path, "rb") as fh:
-        model, u0 = pickle.load(fh)
+    if a.pickle:
+        with open(a.pickle, "rb") as fh:
+            model, u0 = pickle.load(fh)
+    else:
+        from vibrogear.analyses.study import build_study
+        from vibrogear.config import load_scene
+        study = build_study(load_scene(a.scene))
+        model, u0 = study.model, study.start(a.param)
     u0 = np.ascontiguousarray(u0, dtype=float)
     p = a.param
     T = model.excitation_period(p)
