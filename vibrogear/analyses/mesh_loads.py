@@ -24,10 +24,9 @@ These are what the findings judge a loaded mesh (``kv``) and an idle one (``ratt
 """
 from __future__ import annotations
 
-import numpy as np
-
 import math
 
+import numpy as np
 import scipy.linalg as sla
 
 from ..models.contact_law import evaluate, evaluate_set
