@@ -104,7 +104,7 @@ def run_findings(scene, results: dict, sources: dict | None = None,
 
 
 def _key(name: str) -> str:
-    """A mesh name as the sweep's array names spell it (motion.contact_groups)."""
+    """A mesh name as the sweep's array names spell it (record_metrics.contact_groups)."""
     import re
     return re.sub(r"[^0-9A-Za-z]+", "_", str(name)).strip("_") or "contact"
 

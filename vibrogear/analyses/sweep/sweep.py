@@ -132,7 +132,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     failed = int(np.sum(res.status != 0))
     if res.motion_class is not None and study.model.contacts.count:   # kv_, rattle_db_
         from ..mesh_loads import mesh_judgement_arrays, static_mesh_forces
-        from ...solvers.sequential.motion import contact_groups
+        from ...solvers.sequential.record_metrics import contact_groups
         res.metrics.update(mesh_judgement_arrays(res.metrics, static_mesh_forces(
             study.model, study.start(params[0]), contact_groups(study.model))))
     if failed == res.param.size:

@@ -40,7 +40,7 @@ periods T, so its end state is again at phase 0.
   state (periods 1 and 2).  A stable orbit makes it periodic
   (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
-* **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
+* **Metrics** (:func:`~.record_metrics.metrics_with_errors`): impacts, approach speeds at onset
   (the switching function's rate where the integrator located the onset),
   contact fractions, rattle energy and power, unloaded rolling elements, each with a
   batch-means error over blocks of the record window; the largest force of each mesh
@@ -69,10 +69,10 @@ from ..integrator.integrate import integrate
 from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
 from .orbit_check import check_orbit, near_periods
 from .record_window import RecordWindow, record_extrema, record_window
-from .motion import (CHAOTIC, FAILED, batch_blocks, best_defect, monitored_name,
-                     classify_period, contact_groups, count_clusters, metrics_with_errors,
-                     monitored_deformation, monitored_quantities, motion_class, period_defect,
-                     resolutions, resolved_period)
+from .motion import (CHAOTIC, FAILED, best_defect, monitored_name, classify_period,
+                     count_clusters, monitored_deformation, monitored_quantities,
+                     motion_class, period_defect, resolutions, resolved_period)
+from .record_metrics import batch_blocks, contact_groups, metrics_with_errors
 from ...status import Outcome, Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
