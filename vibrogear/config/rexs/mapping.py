@@ -1,5 +1,5 @@
 """REXS components -> scene tables: shafts, cylindrical gears, cylindrical stages (meshes),
-and the analysis sections; bearings and loads in :mod:`.mapping_supports`.
+and the analysis sections; bearings in :mod:`.mapping_supports`, loads in :mod:`.mapping_loads`.
 
 Frames.  A REXS model places every part by its ``support_vector`` and ``u_axis_vector`` in
 the gear unit's frame.  All shafts must be parallel with the same u direction a (else exit
@@ -151,7 +151,8 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
     "max"} in m).  ``load_case``: the load case to take (1-based; default the one with the
     largest duration share)."""
     from ..base import ErrorList
-    from .mapping_supports import analysis_sections, bearings, loads
+    from .mapping_loads import analysis_sections, loads
+    from .mapping_supports import bearings
     model = read_rexs(path)
     src = model.source
     errs = ErrorList()
