@@ -65,7 +65,7 @@ WINGS = {
     },
     "config": {
         "errors.py": 0, "numbers.py": 0, "verbs.py": 0,
-        "base.py": 1,
+        "base.py": 1, "overrides.py": 1,
         "options.py": 2,
         "model/": 3,
         "sections/": 4, "rexs/": 4,

@@ -96,7 +96,7 @@ def test_a_map_row_equals_a_sweep_of_the_model_built_at_that_load(nominal):
     # the largest mesh force, sampled 32 times per period: from below, within 2 %, of the
     # same period sampled 1024 times (the orbit is periodic: one period is all of it)
     from vibrogear.analyses.map.map import _max_mesh_force
-    from vibrogear.solvers.sequential.motion import contact_groups
+    from vibrogear.solvers.sequential.record_metrics import contact_groups
     model = ls.model_at(study.model, s)
     mesh = {"G1": contact_groups(model)["G1"][1]}
     for k in np.flatnonzero(per):

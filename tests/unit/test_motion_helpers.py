@@ -8,8 +8,8 @@ import numpy as np
 
 from pathlib import Path
 
-from vibrogear.solvers.sequential.motion import (_fractions, block_scaled, count_clusters,
-                                                 monitored_deformation)
+from vibrogear.solvers.sequential.motion import block_scaled, count_clusters, monitored_deformation
+from vibrogear.solvers.sequential.record_metrics import _fractions
 
 
 def _fraction(mode0: int, times, modes, t0: float, t1: float) -> float:

@@ -70,7 +70,7 @@ def test_no_drag_nothing_holds_the_teeth():
 def test_shipped_gearboxes_idle_mesh_above_one_loaded_meshes_below():
     from vibrogear.analyses.study import build_study
     from vibrogear.config import load_scene
-    from vibrogear.solvers.sequential.motion import contact_groups
+    from vibrogear.solvers.sequential.record_metrics import contact_groups
 
     sc = load_scene("configs/two_stage.toml")
     st = build_study(sc)

@@ -1,12 +1,12 @@
-"""Converging statistics of a record (solvers/sequential/motion.py: deformation_statistics) against
-closed forms: the RMS and the spectral lines of a trigonometric polynomial, a zero
+"""Converging statistics of a record (solvers/sequential/record_metrics.py:
+deformation_statistics) against closed forms: the RMS and the spectral lines of a trigonometric polynomial, a zero
 batch-means error on a periodic record, and on a random record an error bar that agrees
 with the spread of independent repetitions."""
 from __future__ import annotations
 
 import numpy as np
 
-from vibrogear.solvers.sequential.motion import batch_blocks, deformation_statistics
+from vibrogear.solvers.sequential.record_metrics import batch_blocks, deformation_statistics
 
 
 def test_trigonometric_polynomial_exact():

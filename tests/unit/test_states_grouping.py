@@ -19,8 +19,8 @@ import pytest
 
 from vibrogear.analyses.states.cluster import cluster_point, group_class
 from vibrogear.analyses.states.gaps import gap_ratio, gap_threshold, split_by_extrema
-from vibrogear.solvers.sequential.motion import (CHAOTIC, NOT_SETTLED, QUASI_PERIODIC,
-                                                 batch_blocks)
+from vibrogear.solvers.sequential.motion import CHAOTIC, NOT_SETTLED, QUASI_PERIODIC
+from vibrogear.solvers.sequential.record_metrics import batch_blocks
 from vibrogear.solvers.sequential.sweep_point import PointRecord
 
 P, S = 32, 8          # record periods, samples per period

@@ -1,4 +1,5 @@
-"""Mesh stiffness in the terms people have it (config/model/gearbox.py, models/gearbox/mesh_law.py).
+"""Mesh stiffness in the terms people have it (config/model/gearbox_meshes.py,
+models/gearbox/mesh_law.py).
 
 Independent references:
 * a Fourier series' actual minimum over a mesh period, by brute force on a fine grid, and
@@ -22,7 +23,7 @@ import pytest
 
 from vibrogear.cli import main
 from vibrogear.config import ConfigError, load_scene
-from vibrogear.config.model.gearbox import stiffness_wave_minimum
+from vibrogear.config.model.gearbox_meshes import stiffness_wave_minimum
 from vibrogear.models.gearbox.mesh_law import level_harmonics, mesh_law
 from vibrogear.models.reduced import ContactSet, Forcing, LinearCoupling, ReducedModel
 from vibrogear.solvers.integrator.integrate import IntegrationOptions, integrate

@@ -334,7 +334,7 @@ def test_motion_class_rules():
 def test_contact_groups_and_window_metrics_by_hand():
     """Two meshes and a two-element bearing; switch times chosen so every metric is
     known by hand."""
-    from vibrogear.solvers.sequential.motion import contact_groups, metrics_with_errors
+    from vibrogear.solvers.sequential.record_metrics import contact_groups, metrics_with_errors
     inf = math.inf
     ct = ContactSet(directions=np.array([[1.0, 0, 0], [0, 2.0, 0], [0, 0, 1.0], [0, 0, -1.0]]),
                     k_hi=np.ones(4), k_lo=np.ones(4), gap_hi=np.zeros(4),

@@ -14,7 +14,7 @@
    largest normalised difference of the RMS of the dynamic deformation, its spectral lines
    at 1x-3x the mesh frequency, impacts per period and the rattle intensity of
    ``meshes[0]``), with an error bar from batch means over blocks of the record
-   (``statistics_error_bar``; :func:`~vibrogear.solvers.sequential.motion.deformation_statistics`).
+   (``statistics_error_bar``; :func:`~vibrogear.solvers.sequential.record_metrics.deformation_statistics`).
    ``judged_by`` says which.
 3. With ``frequency_level``: the same for the level of the paper's frequency criterion, with
    and without the static correction (:mod:`vibrogear.models.gearbox.master_level`).
@@ -150,7 +150,8 @@ def _response(gm, scene, cfg):
     ``transient_periods`` at phase 0."""
     from ..solvers.integrator.contact_eval import contact_history
     from ..solvers.integrator.integrate import integrate
-    from ..solvers.sequential.motion import classify_period, deformation_statistics
+    from ..solvers.sequential.motion import classify_period
+    from ..solvers.sequential.record_metrics import deformation_statistics
 
     r, rpm = gm.reduced, cfg.rpm
     # mesh periods of meshes[0] (the documented unit), the record rounded up to whole
@@ -180,10 +181,10 @@ def _response(gm, scene, cfg):
 
 def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
     """Impacts per period (both flanks) and rattle intensity of meshes[0], with their
-    batch-means errors (:func:`~vibrogear.solvers.sequential.motion.metrics_with_errors`)."""
+    batch-means errors (:func:`~vibrogear.solvers.sequential.record_metrics.metrics_with_errors`)."""
     from ..models.contact_law import flank
     from ..solvers.integrator.contact_eval import contact_kinematics
-    from ..solvers.sequential.motion import contact_groups, metrics_with_errors
+    from ..solvers.sequential.record_metrics import contact_groups, metrics_with_errors
     from ..solvers.sequential.record_window import onset_speeds
 
     groups = contact_groups(r)

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .base import (ConfigError, ErrorList, as_data, build, parse_key, parse_override,
-                   read_toml_file, set_path, spec)
+from .base import ConfigError, ErrorList, as_data, build, read_toml_file, spec
+from .overrides import parse_key, parse_override, set_path
 from .sections.findings import FindingsConfig
 from .model.gearbox import GearboxConfig
 from .model.housing import HousingConfig, resolve_file

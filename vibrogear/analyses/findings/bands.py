@@ -2,89 +2,22 @@
 motion classes, hysteresis (:mod:`vibrogear.analyses.findings.findings` explains the band).
 
 The test of a band is evaluated per grid point and per direction on the arrays of
-``sweep.npz`` exactly as the band states it (:func:`test_mask`); failed points
+``sweep.npz`` exactly as the band states it (:mod:`.band_rule`); failed points
 (``ok = False``) never belong to a band.
 """
 from __future__ import annotations
-
-import operator
-from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...config.numbers import fmt, fmt_param
 from ...solvers.sequential.motion import (APERIODIC, CHAOTIC, MULTI_FREQUENCY, NOT_SETTLED,
     QUASI_PERIODIC)
+from .band_rule import Band, band_points, grid_masks, rule_bands, segments, stat_text
 
-__all__ = ["Band", "OPS", "test_mask", "grid_masks", "segments", "sweep_bands", "map_bands",
-           "mesh_and_bearing_names", "PARAM_UNITS"]
+__all__ = ["sweep_bands", "map_bands", "mesh_and_bearing_names", "PARAM_UNITS"]
 
-#: the comparison operators a band may state
-OPS = {">": operator.gt, ">=": operator.ge, "<": operator.lt, "<=": operator.le,
-       "==": operator.eq}
 #: parameter -> unit text
 PARAM_UNITS = {"rpm": "rpm", "Omega": ""}
-
-
-@dataclass(frozen=True)
-class Band:
-    quantity: str
-    where: str
-    direction: str
-    start: float
-    stop: float
-    severity: str
-    metric: str
-    op: str
-    threshold: float
-    evidence: str
-    source: str = "sweep.npz"
-    edge_err: float = 0.0
-    points: int = 0
-    extra: dict = field(default_factory=dict)
-
-    def as_dict(self) -> dict:
-        return {"quantity": self.quantity, "where": self.where, "direction": self.direction,
-                "from": self.start, "to": self.stop, "severity": self.severity,
-                "metric": self.metric, "op": self.op, "threshold": self.threshold,
-                "evidence": self.evidence, "source": self.source, "edge_err": self.edge_err,
-                "points": self.points, **self.extra}
-
-
-def test_mask(values, op: str, threshold: float) -> np.ndarray:
-    return OPS[op](np.asarray(values, float), float(threshold))
-
-
-def grid_masks(arrays: dict, metric: str, op: str, threshold: float):
-    """(grid, {direction: mask on the grid}) of ``metric op threshold`` per direction."""
-    param = np.asarray(arrays["param"], float)
-    direction = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
-    ok = np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
-    grid = np.unique(param)
-    passed = test_mask(arrays[metric], op, threshold) & ok
-    masks = {}
-    for d in ("up", "down"):
-        sel = direction == d
-        if not np.any(sel):
-            continue
-        m = np.zeros(grid.size, bool)
-        m[np.searchsorted(grid, param[sel])] = passed[sel]
-        masks[d] = m
-    return grid, masks
-
-
-def segments(mask) -> list[tuple[int, int]]:
-    """(first, last) index of each run of True in ``mask``."""
-    m = np.concatenate(([False], np.asarray(mask, bool), [False])).astype(np.int8)
-    d = np.diff(m)
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1) - 1))
-
-
-def _split_directions(masks: dict) -> dict[str, np.ndarray]:
-    if len(masks) == 1:
-        return dict(masks)
-    up, down = masks["up"], masks["down"]
-    return {"both": up & down, "up": up & ~down, "down": down & ~up}
 
 
 def mesh_and_bearing_names(arrays: dict) -> tuple[list[str], list[str]]:
@@ -93,67 +26,6 @@ def mesh_and_bearing_names(arrays: dict) -> tuple[list[str], list[str]]:
     bearings = sorted(k[len("unloaded_"):] for k in arrays
                       if k.startswith("unloaded_") and not k.endswith("err"))
     return meshes, bearings
-
-
-def _select(arrays, grid, direction: str, i0: int, i1: int) -> np.ndarray:
-    """Indices into the file's points of the band [grid[i0], grid[i1]] in ``direction``."""
-    param = np.asarray(arrays["param"], float)
-    d = np.asarray(arrays.get("direction", np.full(param.size, "up")), str)
-    sel = (param >= grid[i0]) & (param <= grid[i1]) & \
-        np.asarray(arrays.get("ok", np.ones(param.size, bool)), bool)
-    if direction in ("up", "down"):
-        sel &= d == direction
-    return np.flatnonzero(sel)
-
-
-def _stat(arrays, key, idx, digits=2, scale=1.0, unit="") -> str:
-    """'lo–hi unit (± err)' of ``key`` over ``idx`` with its batch-means error."""
-    v = np.asarray(arrays[key], float)[idx] * scale
-    err = arrays.get(f"{key}_err")
-    e = f" (± {fmt(float(np.max(np.asarray(err, float)[idx])) * scale, 1)})" \
-        if err is not None and np.any(np.asarray(err, float)[idx] > 0) else ""
-    u = f" {unit}" if unit else ""
-    lo, hi = float(v.min()), float(v.max())
-    txt = fmt(lo, digits) if np.isclose(lo, hi) else f"{fmt(lo, digits)}–{fmt(hi, digits)}"
-    return f"{txt}{u}{e}"
-
-
-def margin_of(values, op: str, threshold: float, kind: str = "relative") -> float:
-    """How far the worst of ``values`` lies past ``threshold``: relative to the threshold
-    (``(worst - t) / |t|`` for > and >=, ``(t - worst) / |t|`` for < and <=), or the plain
-    difference for ``kind = "dB"`` (and a zero threshold); 0 for ==."""
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    if v.size == 0 or op == "==":
-        return 0.0
-    d = float(np.max(v)) - threshold if op in (">", ">=") else threshold - float(np.min(v))
-    return d if kind == "dB" or threshold == 0 else d / abs(threshold)
-
-
-def _bands(arrays, rule: dict, evidence, *, param_unit: str) -> list[Band]:
-    """The bands of one rule: ``rule`` has quantity, where, metric, op, threshold,
-    severity (and optionally ``margin``: "relative" or "dB"); ``evidence(idx) -> str``
-    describes the file's points ``idx`` of a band.  Each band carries its ``margin``
-    (:func:`margin_of`) over its points."""
-    if rule["metric"] not in arrays:
-        return []
-    grid, masks = grid_masks(arrays, rule["metric"], rule["op"], rule["threshold"])
-    step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
-    kind = rule.get("margin", "relative")
-    out = []
-    for direction, mask in _split_directions(masks).items():
-        for i0, i1 in segments(mask):
-            idx = _select(arrays, grid, direction, i0, i1)
-            # a class or a period has no distance past its threshold: no margin
-            extra = {} if rule["metric"].startswith(("period_n", "motion_class")) else {
-                "margin": margin_of(np.asarray(arrays[rule["metric"]], float)[idx],
-                                    rule["op"], float(rule["threshold"]), kind),
-                "margin_unit": "dB" if kind == "dB" else "relative"}
-            out.append(Band(rule["quantity"], rule["where"], direction, float(grid[i0]),
-                            float(grid[i1]), rule["severity"], rule["metric"], rule["op"],
-                            float(rule["threshold"]), evidence(idx), edge_err=step,
-                            points=int(i1 - i0 + 1), extra={**extra, **rule.get("extra", {})}))
-    return out
 
 
 def sweep_bands(arrays: dict, rules, *, param_unit: str, length_scale: float,
@@ -202,13 +74,13 @@ def _kv_bands(arrays, m, rules, kw) -> list[Band]:
 
     def ev(idx):
         f0 = float(np.asarray(arrays.get(f"static_force_{m}", [np.nan]), float).ravel()[0])
-        text = f"{m} dynamic factor kv {_stat(arrays, kv, idx, 3)}"
+        text = f"{m} dynamic factor kv {stat_text(arrays, kv, idx, 3)}"
         if f"max_force_{m}" in arrays and np.isfinite(f0):
-            text += f" (largest mesh force {_stat(arrays, f'max_force_{m}', idx, 3, 1e-3, 'kN')}" \
+            text += f" (largest mesh force {stat_text(arrays, f'max_force_{m}', idx, 3, 1e-3, 'kN')}" \
                     f" over the static {fmt(f0 * 1e-3, 3)} kN)"
         return text
 
-    return _bands(arrays, dict(quantity="dynamic factor", where=m, metric=kv, op=">",
+    return rule_bands(arrays, dict(quantity="dynamic factor", where=m, metric=kv, op=">",
                                threshold=rules.kv_caution, severity=rules.dynamic_factor),
                   ev, **kw)
 
@@ -227,25 +99,25 @@ def _idle_bands(arrays, m, rules, kw, per) -> list[Band]:
     loudest, quietest = float(db.max()), float(db.min())
 
     def ev(idx):
-        text = f"{m} rattle {_stat(arrays, key, idx, 3, unit='dB')} re 1 pW"
+        text = f"{m} rattle {stat_text(arrays, key, idx, 3, unit='dB')} re 1 pW"
         if f"rattle_power_{m}" in arrays:
-            text += f" ({_stat(arrays, f'rattle_power_{m}', idx, 2, 1e3, 'mW')})"
+            text += f" ({stat_text(arrays, f'rattle_power_{m}', idx, 2, 1e3, 'mW')})"
         if f"impact_velocity_rms_{m}" in arrays:
-            rms = _stat(arrays, f"impact_velocity_rms_{m}", idx, 2, 1e3, "mm/s")
+            rms = stat_text(arrays, f"impact_velocity_rms_{m}", idx, 2, 1e3, "mm/s")
             text += f", rms impact velocity {rms}"
         if f"impacts_back_{m}" in arrays:
-            text += f", {_stat(arrays, f'impacts_back_{m}', idx)} back-flank impacts {per}"
+            text += f", {stat_text(arrays, f'impacts_back_{m}', idx)} back-flank impacts {per}"
         return text + f"; loudest over the run {fmt(loudest, 3)} dB"
 
     out = []
     if rules.rattle_limit_db is not None:
-        out += _bands(arrays, dict(quantity="rattle above the limit", where=m, metric=key,
+        out += rule_bands(arrays, dict(quantity="rattle above the limit", where=m, metric=key,
                                    op=">", threshold=float(rules.rattle_limit_db),
                                    severity="avoid", margin="dB"), ev, **kw)
-    out += _bands(arrays, dict(quantity="rattle", where=m, metric=key, op=">",
+    out += rule_bands(arrays, dict(quantity="rattle", where=m, metric=key, op=">",
                                threshold=loudest - rules.rattle_caution_db,
                                severity=rules.idle_rattle, margin="dB"), ev, **kw)
-    out += _bands(arrays, dict(quantity="quietest rattle", where=m, metric=key, op="<=",
+    out += rule_bands(arrays, dict(quantity="quietest rattle", where=m, metric=key, op="<=",
                                threshold=quietest + QUIET_DB, severity="fine", margin="dB"),
                   ev, **kw)
     return out
@@ -272,20 +144,20 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit, roles=None) -> l
             out = {"out": 1.0 - np.asarray(arrays[cf], float)}
             if f"{cf}_err" in arrays:
                 out["out_err"] = arrays[f"{cf}_err"]
-            return (f"{m} out of contact {_stat(out, 'out', idx, 2, 100, '%')} of the time, "
-                    f"{_stat(arrays, drive, idx)} drive-flank re-impacts {per}")
+            return (f"{m} out of contact {stat_text(out, 'out', idx, 2, 100, '%')} of the time, "
+                    f"{stat_text(arrays, drive, idx)} drive-flank re-impacts {per}")
 
         def rattle(idx, m=m, back=back):
-            text = f"{m}: {_stat(arrays, back, idx)} back-flank impacts {per}"
+            text = f"{m}: {stat_text(arrays, back, idx)} back-flank impacts {per}"
             if f"rattle_{m}" in arrays:
-                text += f", impact energy {_stat(arrays, f'rattle_{m}', idx, 2, 1e3, 'mJ')} " \
+                text += f", impact energy {stat_text(arrays, f'rattle_{m}', idx, 2, 1e3, 'mJ')} " \
                         f"{per}"
             return text
 
-        bands += _bands(arrays, dict(quantity="contact loss", where=m, metric=cf, op="<",
+        bands += rule_bands(arrays, dict(quantity="contact loss", where=m, metric=cf, op="<",
                                      threshold=1.0 - rules.loss_share_avoid,
                                      severity=rules.contact_loss), loss, **kw)
-        bands += _bands(arrays, dict(quantity="rattle", where=m, metric=back, op=">",
+        bands += rule_bands(arrays, dict(quantity="rattle", where=m, metric=back, op=">",
                                      threshold=rules.back_impacts_above,
                                      severity=rules.rattle), rattle, **kw)
         if back in arrays and drive in arrays:
@@ -297,13 +169,13 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit, roles=None) -> l
             rattling = {(b.direction, b.start, b.stop) for b in bands
                         if b.quantity == "rattle" and b.where == m}
             bands += [_with(b, compare=f"min({back}, {drive})")
-                      for b in _bands(both, dict(quantity="double-sided impacts", where=m,
+                      for b in rule_bands(both, dict(quantity="double-sided impacts", where=m,
                                                  metric=f"double_sided_{m}", op=">",
                                                  threshold=0.0,
                                                  severity=rules.double_sided),
                                       lambda idx, m=m, back=back, drive=drive:
-                                      f"{m} hits both flanks: {_stat(arrays, drive, idx)} "
-                                      f"drive and {_stat(arrays, back, idx)} back impacts "
+                                      f"{m} hits both flanks: {stat_text(arrays, drive, idx)} "
+                                      f"drive and {stat_text(arrays, back, idx)} back impacts "
                                       f"{per}", **kw)
                       if (b.direction, b.start, b.stop) not in rattling]
     ok = np.asarray(arrays.get("ok", np.ones(np.asarray(arrays["param"]).size, bool)), bool)
@@ -314,11 +186,11 @@ def _contact_bands(arrays, meshes, bearings, rules, param_unit, roles=None) -> l
         # a loaded rolling bearing has elements outside its load zone at any speed: the
         # band is where more unload than at the run's quietest point
         least = float(np.min(np.asarray(arrays[key], float)[ok]))
-        bands += _bands(arrays, dict(quantity="bearing unloading", where=b, metric=key,
+        bands += rule_bands(arrays, dict(quantity="bearing unloading", where=b, metric=key,
                                      op=">", threshold=least + rules.unloaded_above,
                                      severity=rules.bearing_unloading),
                         lambda idx, b=b, key=key, least=least:
-                        f"{b}: {_stat(arrays, key, idx)} rolling elements out of contact on "
+                        f"{b}: {stat_text(arrays, key, idx)} rolling elements out of contact on "
                         f"average ({fmt(least)} at the quietest point)", **kw)
     return bands
 
@@ -419,17 +291,17 @@ def _motion_bands(arrays, rules, kw) -> list[Band]:
                                           "exciting at their own frequencies): periodic over "
                                           "their common period, or, where that exceeds the "
                                           "period limit, not chaotic")):
-        out += _bands(arrays, dict(quantity=quantity, where="gearbox" if kw["param_unit"]
+        out += rule_bands(arrays, dict(quantity=quantity, where="gearbox" if kw["param_unit"]
                                    == "rpm" else "system", metric="motion_class", op="==",
                                    threshold=code, severity=severity), ev, **kw)
     if "period_n" in arrays:
         pn = np.asarray(arrays["period_n"])
-        out += _bands(arrays, dict(quantity="subharmonic motion", where="gearbox" if
+        out += rule_bands(arrays, dict(quantity="subharmonic motion", where="gearbox" if
                                    kw["param_unit"] == "rpm" else "system", metric="period_n",
                                    op=">=", threshold=2, severity=rules.subharmonic),
                       lambda idx: f"period {', '.join(str(int(n)) for n in np.unique(pn[idx]))}"
                       " x the excitation period", **kw)
-        out += _bands(arrays, dict(quantity="periodic motion", where="gearbox" if
+        out += rule_bands(arrays, dict(quantity="periodic motion", where="gearbox" if
                                    kw["param_unit"] == "rpm" else "system", metric="period_n",
                                    op="==", threshold=1, severity="fine"),
                       lambda idx: f"period 1 at {_points(idx.size)}", **kw)
@@ -482,7 +354,7 @@ def _hysteresis(arrays, rules, param_unit, scale, unit,
     step = float(np.min(np.diff(grid))) if grid.size > 1 else 0.0
     bands = []
     for i0, i1 in segments(mask):
-        idx = _select(arrays, grid, "both", i0, i1)
+        idx = band_points(arrays, grid, "both", i0, i1)
         bands.append(Band("hysteresis (up and down differ)", monitored, "both", float(grid[i0]),
                           float(grid[i1]), rules.hysteresis, metric, ">", thr,
                           f"up and down end in different states: qmax differs by up to "

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...config.numbers import fmt
-from .bands import Band, segments
+from .band_rule import Band, segments
 
 __all__ = ["branch_events", "resonance_events", "erp_findings", "states_findings",
            "runup_findings", "RUNUP_MERGE_PERIODS"]

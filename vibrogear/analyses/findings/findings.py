@@ -30,7 +30,8 @@ import numpy as np
 from ...config.numbers import fmt, fmt_param
 from ...pipeline.files import listed_paths
 
-from .bands import Band, map_bands, sweep_bands
+from .band_rule import Band
+from .bands import map_bands, sweep_bands
 from .iso_resonance import iso_bands
 from .events import branch_events, erp_findings, resonance_events, runup_findings, states_findings
 from .text import verdict_text
@@ -103,7 +104,7 @@ def run_findings(scene, results: dict, sources: dict | None = None,
 
 
 def _key(name: str) -> str:
-    """A mesh name as the sweep's array names spell it (motion.contact_groups)."""
+    """A mesh name as the sweep's array names spell it (record_metrics.contact_groups)."""
     import re
     return re.sub(r"[^0-9A-Za-z]+", "_", str(name)).strip("_") or "contact"
 
@@ -275,7 +276,7 @@ def _grid(sources) -> np.ndarray:
 def _margin_within(band: dict, lo: float, hi: float, sources) -> float:
     """``band``'s margin over its file's points in [lo, hi] (its own margin where the file
     or the metric is not at hand)."""
-    from .bands import margin_of
+    from .band_rule import margin_of
     arrays = (sources or {}).get(band.get("source", ""))
     if arrays is None or band["metric"] not in arrays or "param" not in arrays \
             or band["op"] in ("==", "in") or band.get("compare"):
@@ -309,7 +310,7 @@ def windows(bands: list[dict], grid, sources=None) -> list[dict]:
                 m |= (grid >= b["from"]) & (grid <= b["to"])
         return m
 
-    from .bands import segments
+    from .band_rule import segments
     flagged = covered(("avoid", "caution"))
     fine = [{"from": float(grid[a]), "to": float(grid[b]), "status": "fine", "limits": [],
              "margin": 0.0} for a, b in segments(~flagged)]

@@ -80,7 +80,7 @@ def iso_bands(iso: dict, roles, rules, span) -> tuple[list, list[str]]:
     """A caution band per loaded mesh where the run's speed range meets its main resonance
     range (N_S < n / n_E1 <= 1.15; ``metric`` "N", source "iso6336": recompute as
     ``N_S < param / n_E1_rpm <= 1.15``), and what was checked."""
-    from .bands import Band
+    from .band_rule import Band
     bands, names = [], []
     lo, hi = float(span[0]), float(span[1])
     for m in iso.get("meshes", []):

@@ -5,8 +5,9 @@ Each load row is a sweep over the driving speed (the sweep's point solver,
 :func:`~vibrogear.solvers.sequential.sweep.sweep` walks a unit: every point starts from the end state
 of the previous good point of its direction, the first of each unit from the static
 equilibrium of that load at the grid's first speed, as a sweep's), so every map point is a settled sweep point with its motion
-class and the rattle / contact metrics of :mod:`vibrogear.solvers.sequential.motion` (impacts per
-mesh period per flank, rattle energy, contact fraction, bearing elements out of contact).
+class and the rattle / contact metrics of
+:mod:`vibrogear.solvers.sequential.record_metrics` (impacts per mesh period per flank,
+rattle energy, contact fraction, bearing elements out of contact).
 The largest mesh force of each point is added here: ``force_periods`` mesh periods more,
 sampled ``force_samples`` times per period, from the point's end state, through the one
 contact law (:func:`~vibrogear.solvers.integrator.contact_eval.contact_history`).
@@ -37,7 +38,8 @@ from ...pipeline.resume import PartialStore, fingerprint
 from ...pipeline.wall_split import WallSplit
 from ...solvers.integrator.contact_eval import contact_history
 from ...solvers.integrator.integrate import integrate
-from ...solvers.sequential.motion import FAILED, MOTION_LEGEND, contact_groups
+from ...solvers.sequential.motion import FAILED, MOTION_LEGEND
+from ...solvers.sequential.record_metrics import contact_groups
 from ...status import Outcome, Status
 from ...solvers.sequential.sweep import assemble_result, sweep_units
 from ...solvers.sequential.sweep_point import run_point
@@ -69,7 +71,7 @@ class OperatingMap:
     twist: np.ndarray
     directions: tuple
     rows: tuple
-    meshes: tuple                   # metric keys of the meshes (motion.contact_groups)
+    meshes: tuple                   # metric keys of the meshes (record_metrics.contact_groups)
     bearings: tuple                 # metric keys of the bearings ("bearing_<name>")
     status_code: Status
     status_message: str

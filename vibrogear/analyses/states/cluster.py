@@ -34,7 +34,8 @@ from scipy.stats import binomtest, ks_2samp, norm
 from scipy.stats import t as student_t
 
 from ...solvers.sequential.motion import (APERIODIC, CHAOTIC, MOTION_LEGEND, NOT_SETTLED,
-    QUASI_PERIODIC, batch_blocks)
+    QUASI_PERIODIC)
+from ...solvers.sequential.record_metrics import batch_blocks
 from .gaps import split_by_extrema
 
 __all__ = ["Attractor", "cluster_point", "wilson", "mesh_keys", "interval_widths",

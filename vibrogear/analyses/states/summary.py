@@ -17,7 +17,7 @@ import numpy as np
 
 from ...status import Status
 from ..mesh_loads import mesh_judgement_arrays, static_mesh_forces
-from ...solvers.sequential.motion import contact_groups
+from ...solvers.sequential.record_metrics import contact_groups
 
 __all__ = ["states_summary", "coexisting_points", "states_arrays"]
 

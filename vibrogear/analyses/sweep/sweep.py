@@ -133,7 +133,7 @@ def run(study: Study, scene, ctx: RunContext) -> AnalysisOutcome:
     if res.motion_class is not None and study.model.contacts.count:
         # kv_, rattle_db_, rattle_threshold_ (the linear model at each point's speed)
         from ..mesh_loads import mesh_judgement_arrays, rattle_threshold, static_mesh_forces
-        from ...solvers.sequential.motion import contact_groups
+        from ...solvers.sequential.record_metrics import contact_groups
         groups, start = contact_groups(study.model), study.start(params[0])
         res.metrics.update(mesh_judgement_arrays(res.metrics, static_mesh_forces(
             study.model, start, groups)))

@@ -1,5 +1,5 @@
 """REXS components -> scene tables: shafts, cylindrical gears, cylindrical stages (meshes),
-and the analysis sections; bearings and loads in :mod:`.mapping_supports`.
+and the analysis sections; bearings in :mod:`.mapping_supports`, loads in :mod:`.mapping_loads`.
 
 Frames.  A REXS model places every part by its ``support_vector`` and ``u_axis_vector`` in
 the gear unit's frame.  All shafts must be parallel with the same u direction a (else exit
@@ -29,45 +29,13 @@ from pathlib import Path
 
 from ..base import ConfigError, NAME_MAX_LEN
 from ..model.shaft_mesh import mesh_sections
+from .mapping_scope import KNOWN_IGNORED, MAPPED_TYPES, refuse_unsupported
 from .mapping_shafts import STEEL, axial_reference, diameter_at, gear_data, shafts_of
 from .reader import RexsModel, read_rexs
 
 __all__ = ["import_rexs", "RexsImport", "MappingReport", "MappingStopped", "is_rexs_path",
-           "UNSUPPORTED", "STEEL"]
+           "STEEL"]
 
-#: component types that carry power in a way the scene cannot express: refused by name
-UNSUPPORTED = ("planetary_stage", "planet_carrier", "planet_shaft", "planet_pin",
-               "bevel_gear", "bevel_stage", "worm_gear", "worm_wheel", "worm_stage",
-               "ring_gear", "coupling", "fixed_coupling", "switchable_coupling",
-               "slide_bearing", "general_gear", "general_stage", "crossed_helical_stage",
-               "hypoid_stage")
-#: shaft-hub connections and shaft details: the hub is taken as rigidly fixed to its shaft
-_RIGID_CONNECTIONS = ("cylindrical_interference_fit", "tapered_interference_fit",
-                      "feather_key_connection", "involute_spline_connection",
-                      "involute_spline_gear_hub", "involute_spline_gear_shaft",
-                      "involute_spline_gear_flank", "involute_spline_stage_gear_data",
-                      "shaft_shoulder", "shaft_shoulder_with_undercut", "rectangular_groove",
-                      "round_groove", "v_notch", "transverse_bore", "notch_effect_shaft_hub_connection",
-                      "fkm_evaluation_point")
-#: read only as data of other components, or known and deliberately left out
-KNOWN_IGNORED = {
-    "gear_unit": "only its duration share per load case is read (load_duration_fraction, "
-                 "REXS 1.6 operating_time_fraction): the load case taken is the longest "
-                 "unless `--load-case N` names one",
-    "gear_casing": "the casing is rigid ground: bearings in it are bearings to ground "
-                   "(`vibrogear import --housing box` generates a box housing with "
-                   "its walls at the casing bearings' planes; `--housing CASING.step "
-                   "--fixed-region ...` takes the casing from CAD)",
-    "lubricant": "oil data do not enter the dynamic model",
-    "cylindrical_stage_gear_data": "read through the stage's gears",
-    "cylindrical_gear_flank": "read as the gear's pressure angle and profile shift",
-    "shaft_section": "read as the shaft's sections",
-    "material": "read through the shafts that reference it",
-    "rolling_bearing_row": "read as its bearing's element set",
-    "rolling_element": "read as its bearing's element set",
-    **{t: "a shaft-hub connection or shaft detail: the hub is taken as rigidly fixed, the "
-          "shaft as its sections" for t in _RIGID_CONNECTIONS},
-}
 
 def is_rexs_path(path) -> bool:
     return Path(str(path)).suffix.lower() in (".rexs", ".rexsj")
@@ -114,22 +82,6 @@ class MappingStopped(ConfigError):
         self.draft = draft
 
 
-def _refuse_unsupported(model, errs) -> None:
-    for c in model.components.values():
-        with errs.catch():
-            if c.type in UNSUPPORTED:
-                raise ConfigError(model.source, f"component {c.id} is a {c.type!r}"
-                                  f"{' (' + repr(c.name) + ')' if c.name else ''}: not "
-                                  "supported (vibrogear maps shafts, cylindrical gears and "
-                                  "stages, rolling and concept bearings, external loads); fix: "
-                                  "export the gearbox without it, or model it by hand")
-            if c.type == "cylindrical_gear" and c.given("number_of_teeth") and \
-                    c.number("number_of_teeth", model.source) < 0:
-                raise ConfigError(model.source, f"component {c.id} is an internal "
-                                  "'cylindrical_gear' (negative number_of_teeth): internal "
-                                  "gears are not supported")
-
-
 def _overlap(gears, shafts, ga, gb):
     """(face width common to both gears [m], housing y of its centre [m]) of a stage: each
     gear's face about its own centre, the mesh on the overlap."""
@@ -151,11 +103,12 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
     "max"} in m).  ``load_case``: the load case to take (1-based; default the one with the
     largest duration share)."""
     from ..base import ErrorList
-    from .mapping_supports import analysis_sections, bearings, loads
+    from .mapping_loads import analysis_sections, loads
+    from .mapping_supports import bearings
     model = read_rexs(path)
     src = model.source
     errs = ErrorList()
-    _refuse_unsupported(model, errs)
+    refuse_unsupported(model, errs)
     report = MappingReport()
     frame, shafts = shafts_of(model, report, errs)
     gears, comments = {}, {}
@@ -325,7 +278,7 @@ def import_rexs(path, *, name: str | None = None, housing: str | None = None,
     for c in model.components.values():
         if c.type in KNOWN_IGNORED and c.type not in skip:
             report.ignored.append(f"{c.type} {c.id}: {KNOWN_IGNORED[c.type]}")
-        elif c.type not in KNOWN_IGNORED and c.type not in _MAPPED_TYPES:
+        elif c.type not in KNOWN_IGNORED and c.type not in MAPPED_TYPES:
             report.ignored.append(f"{c.type} {c.id}: a component type the importer does not "
                                   "map (it carries no power path of the scene)")
     imp = RexsImport(data, comments, report, model)
@@ -357,11 +310,6 @@ def _additional_masses(model, shafts, report) -> dict:
                              + (" (eccentricity not mapped)" if c.has("eccentricity_vector")
                                 else ""))
     return out
-
-
-_MAPPED_TYPES = ("additional_mass", "shaft", "cylindrical_gear", "cylindrical_stage", "external_load",
-                 "rolling_bearing_with_catalog_geometry", "rolling_bearing_with_detailed_geometry",
-                 "concept_bearing")
 
 
 def _mesh_damping(a, b, width: float | None = None) -> float:

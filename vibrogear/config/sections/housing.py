@@ -41,7 +41,8 @@ class HousingSweepConfig:
 
     def housing_points(self, housing: HousingConfig, path: str = "housing_sweep") -> tuple[HousingConfig, ...]:
         """The validated housing of each sweep point (ConfigError names the point and field)."""
-        from ..base import as_data, build, set_path
+        from ..base import as_data, build
+        from ..overrides import set_path
 
         keys = self.parameter.split(".")[1:]
         base = as_data(housing)

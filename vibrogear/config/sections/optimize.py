@@ -18,7 +18,8 @@ import copy
 import math
 from dataclasses import dataclass
 
-from ..base import ConfigError, as_data, parse_override, set_path, spec
+from ..base import ConfigError, as_data, spec
+from ..overrides import parse_override, set_path
 
 __all__ = ["OptimizeConfig", "OptimizeVariable", "OptimizeObjective", "OptimizeConstraint",
            "METHODS", "REDUCTIONS", "evaluation_data", "data_with"]

@@ -245,7 +245,8 @@ def _working_radii(scene, cfg):
     """Working pitch radius of gear_a of each mesh [m] (None without the scene)."""
     if scene is None:
         return None
-    from .model import mesh_geometry, shaft_axis    # the model's own geometry
+    from .mesh_contacts import mesh_geometry        # the model's own geometry
+    from .model import shaft_axis
     _, gear_p = cfg.speed_ratios()
     axes = [shaft_axis(scene, sh, i) for i, sh in enumerate(cfg.shafts)]
     out = []

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ...config.base import ConfigError
-from ...config.model.gearbox import stiffness_wave_minimum
+from ...config.model.gearbox_meshes import stiffness_wave_minimum
 from .iso6336 import MeshStiffness, mesh_stiffness
 
 __all__ = ["iso_mesh_stiffness", "mesh_law", "level_harmonics"]

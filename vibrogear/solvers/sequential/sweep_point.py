@@ -40,7 +40,7 @@ periods T, so its end state is again at phase 0.
   state (periods 1 and 2).  A stable orbit makes it periodic
   (``settled_by = "shooting"``; the record is taken again on the orbit); an unstable one
   is reported beside the class (``orbit_*`` metrics), which the exponent then decides.
-* **Metrics** (:func:`~.motion.metrics_with_errors`): impacts, approach speeds at onset
+* **Metrics** (:func:`~.record_metrics.metrics_with_errors`): impacts, approach speeds at onset
   (the switching function's rate where the integrator located the onset),
   contact fractions, rattle energy and power, unloaded rolling elements, each with a
   batch-means error over blocks of the record window; the largest force of each mesh
@@ -63,16 +63,15 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...config.options import IntegrationOptions, SweepOptions
-from ...models.contact_law import flank
-from ..integrator.contact_eval import contact_kinematics
 from ..integrator.integrate import integrate
-from .lyapunov import CHUNK, block_estimate, initial_direction, state_scale, tangent_chunk
+from .lyapunov import CHUNK, initial_direction, state_scale
 from .orbit_check import check_orbit, near_periods
-from .record_window import RecordWindow, record_extrema, record_window
-from .motion import (CHAOTIC, FAILED, batch_blocks, best_defect, monitored_name,
-                     classify_period, contact_groups, count_clusters, metrics_with_errors,
-                     monitored_deformation, monitored_quantities, motion_class, period_defect,
-                     resolutions, resolved_period)
+from .point_evidence import (group_periods, lyapunov_exponent, record_contact_metrics,
+                             resolution_metrics, resolution_test)
+from .record_window import record_extrema, record_window
+from .motion import (CHAOTIC, FAILED, best_defect, classify_period, count_clusters,
+                     monitored_deformation, motion_class, period_defect)
+from .record_metrics import contact_groups
 from ...status import Outcome, Status
 
 __all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
@@ -173,107 +172,6 @@ def _settled(dense, strob, W: int, max_period: int) -> bool:
     return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
 
 
-def _metrics(model, param, u_rec, rec: RecordWindow, groups, R, T, n) -> dict:
-    """The contact metrics of a record with their batch-means errors."""
-    mode0 = flank(contact_kinematics(model, param, [0.0], u_rec[None, :])[0][:, 0],
-                  model.contacts.gap_hi, model.contacts.gap_lo)
-    out = metrics_with_errors(model, groups, mode0, rec.events, rec.speeds, 0.0, R * T, T,
-                              period_n=n)
-    for key, (kind, idx) in groups.items():     # the largest mesh force [N] (record_window)
-        if kind == "mesh" and rec.peak_force and int(idx[0]) in rec.peak_force:
-            out[f"max_force_{key}"] = rec.peak_force[int(idx[0])] * model.force_unit_n
-    return out
-
-
-def _group_periods(model, param, T, strob, groups, max_period, period_tol,
-                   resolved=None) -> dict:
-    """period_n of each contact group: a mesh's from its deformation and force at the
-    engineering resolution (``resolved``: (samples, resolutions) of
-    :func:`_resolution_test`), or, where those do not repeat, from its deformations and
-    rates within period_tol, as a bearing's."""
-    out = {}
-    t = np.zeros(strob.shape[0])          # period ends are at phase 0
-    d, dd, _ = contact_kinematics(model, param, t, strob)
-    for key, (_kind, idx) in groups.items():
-        n = 0
-        if resolved is not None and f"delta_{key}" in resolved[0]:
-            mine = {k: resolved[0][k] for k in (f"delta_{key}", f"force_{key}")}
-            n = resolved_period(mine, resolved[1], max_period)[0]
-        if n == 0:
-            s = np.hstack([d[idx].T, dd[idx].T])
-            n = classify_period(s, max_period, period_tol, split=len(idx))[0]
-        out[f"period_n_{key}"] = n
-    return out
-
-
-def _resolution_test(model, param, states, rec: RecordWindow, settings):
-    """(n, defect in resolutions, samples, resolutions) of the engineering-resolution
-    test: the stroboscopic samples of every monitored quantity
-    (:func:`~.motion.monitored_quantities`) against its resolution
-    (:func:`~.motion.resolutions`, from the quantity's range over the record's dense
-    samples)."""
-    q = monitored_quantities(model, param, np.zeros(len(states)), states)
-    samples = {k: v for k, (v, _kind) in q.items()}
-    kinds = {k: kind for k, (_v, kind) in q.items()}
-    ranges = {}
-    for k, v in samples.items():
-        lo, hi = (rec.ranges or {}).get(k, (math.inf, -math.inf))
-        ranges[k] = max(hi, float(np.max(v))) - min(lo, float(np.min(v)))
-    res = resolutions(model, ranges, kinds, rel=settings.resolution_rel,
-                      length_m=settings.resolution_length, force_n=settings.resolution_force)
-    n, defect = resolved_period(samples, res, settings.max_period)
-    return n, defect, samples, res
-
-
-def _qmax_error(rec: RecordWindow) -> float:
-    """Batch-means error of the monitored deformation's largest value: the standard error
-    of the mean of the block maxima over at most 8 blocks of the record's chunks."""
-    c = np.asarray(rec.chunk_max if rec.chunk_max is not None else [], dtype=float)
-    if c.size < 2 or not np.all(np.isfinite(c)):
-        return math.nan
-    L, B = batch_blocks(c.size, 0, 8)
-    if B < 2:
-        return math.nan
-    blocks = c[:L * B].reshape(B, L).max(axis=1)
-    return float(np.std(blocks, ddof=1) / math.sqrt(B))
-
-
-def _exponent(model, param, chunks, v0, options, T, chunk, counts):
-    """(exponent, interval, message) of Benettin's method on a record's chunks from the
-    tangent ``v0`` (:mod:`~.lyapunov`), in units of the model's time."""
-    scale = state_scale(np.vstack([chunks[0][0]] + [c[1] for c in chunks]), model.n_modes)
-    v, logs = v0, []
-    for start, ends, _ in chunks:
-        g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale, options=options)
-        counts[2] += calls
-        if st != Status.OK:
-            return math.nan, (math.nan, math.nan), \
-                f"Lyapunov exponent not determined: {st.message}"
-        logs.append(g)
-    lam, ci, _ = block_estimate(np.concatenate(logs), T, chunk, burn=1)
-    return lam, ci, "ok"
-
-
-def _resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor) -> dict:
-    """The class's evidence at engineering resolution and the exponent in physical units:
-    ``resolution_period_n`` (0: the samples do not repeat within the resolution),
-    ``resolution_defect`` (the samples' largest difference at that period, in
-    resolutions; where none: the least over n, how many resolutions they spread),
-    ``qmax_res`` (the monitored deformation's resolution), ``qmax_err`` (batch means of
-    its largest value), ``lyapunov_per_s`` / ``lyapunov_lo_per_s`` (the exponent and its
-    95 % lower bound in 1/s) and ``lyapunov_per_period`` / ``lyapunov_lo_per_period`` /
-    ``lyapunov_floor_per_period`` (per excitation period: the log growth over one period;
-    the floor, the change at rtol / 10; NaN where not computed)."""
-    per_s = 1.0 / model.time_unit_s
-    return {"resolution_period_n": int(n_res),
-            "resolution_defect": float(res_defect),
-            "qmax_res": float(res.get(monitored_name(model), math.nan)),
-            "qmax_err": _qmax_error(rec),
-            "lyapunov_per_s": float(lam) * per_s, "lyapunov_lo_per_s": float(ci[0]) * per_s,
-            "lyapunov_per_period": float(lam) * T, "lyapunov_lo_per_period": float(ci[0]) * T,
-            "lyapunov_floor_per_period": float(floor) * T}
-
-
 def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
               options: IntegrationOptions, cluster_tol: float = 1e-3, keep_states: bool = False,
               settle: bool = True) -> PointRecord:
@@ -336,7 +234,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
 
     # ---- class and evidence: a period at the engineering resolution, else within
     # period_tol on the full state
-    n_res, res_defect, res_samples, res = _resolution_test(model, param, states, rec, settings)
+    n_res, res_defect, res_samples, res = resolution_test(model, param, states, rec, settings)
     if n_res > 1 and settled_by == "budget":
         # a free vibration still decaying at a rational multiple of the excitation
         # frequency repeats after n > 1 periods within the resolution: a period n > 1 needs
@@ -355,7 +253,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         # start along the last step of the stroboscopic map: the slowest direction
         v0 = initial_direction(strob[-1] - strob[-2] if len(strob) > 1 else None, scale,
                                u_rec.size, index)
-        lam, ci, msg = _exponent(model, param, chunks, v0, options, T, chunk, counts)
+        lam, ci, msg = lyapunov_exponent(model, param, chunks, v0, options, T, chunk, counts)
         if math.isfinite(ci[0]) and ci[0] > 0.0:
             # the same estimate on the same record at rtol / 10 (module docstring)
             fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
@@ -363,8 +261,8 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                                   has_monitor)
             lam_f, ci_f = math.nan, (math.nan, math.nan)
             if not isinstance(rec_f, tuple):
-                lam_f, ci_f, _ = _exponent(model, param, rec_f.chunks, v0, fine, T, chunk,
-                                           counts)
+                lam_f, ci_f, _ = lyapunov_exponent(model, param, rec_f.chunks, v0, fine, T,
+                                                   chunk, counts)
             floor = abs(lam_f - lam) if math.isfinite(lam_f) else math.inf
             # chaotic where the tighter integration reproduces a positive lower bound (a
             # chaotic record at rtol / 10 is another stretch of the attractor: its change is
@@ -390,7 +288,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                             has_monitor)
             if not isinstance(again, tuple):
                 n2, d2 = classify_period(again.states, max_period, period_tol, split=m)
-                r2 = _resolution_test(model, param, again.states, again, settings)
+                r2 = resolution_test(model, param, again.states, again, settings)
                 if r2[0] > 0:
                     n2, d2 = r2[0], period_defect(again.states, r2[0], split=m)
                 if n2 > 0:
@@ -404,7 +302,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     mf = model.multi_frequency
     cls = motion_class(n, ci, budget_used=budget_used, floor=chaos_floor, period_multiple=P,
                        multi_frequency=mf)
-    metrics = _group_periods(model, param, T, states, groups, max_period, period_tol,
+    metrics = group_periods(model, param, T, states, groups, max_period, period_tol,
                              (res_samples, res)) if has_monitor else {}
     for key in list(metrics):
         gn = metrics[key]
@@ -412,14 +310,14 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             gn, ci, budget_used=budget_used, floor=chaos_floor, period_multiple=P,
             multi_frequency=mf) if gn > 0 else cls
     if has_monitor:
-        metrics.update(_metrics(model, param, u_rec, rec, groups, R, T, n))
+        metrics.update(record_contact_metrics(model, param, u_rec, rec, groups, R, T, n))
         if rec.lost_events:
             msg = "event log full: raise [integration] event_log for the contact metrics"
             metrics = {k: (math.nan if not k.startswith(("period_n", "motion_class")) else v)
                        for k, v in metrics.items()}
     if orbit is not None:
         metrics.update(orbit.as_metrics())
-    metrics.update(_resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor))
+    metrics.update(resolution_metrics(model, T, n_res, res_defect, res, rec, lam, ci, floor))
     clock.lap("metrics")
     if settings.second_tolerance and cls == CHAOTIC:
         # two records of a chaotic motion diverge whatever the tolerance: their difference
@@ -440,7 +338,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             e2 = record_extrema(model, param, rec2, has_monitor)
             tol_err["qmin"], tol_err["qmax"] = abs(e2[0] - e1[0]), abs(e2[1] - e1[1])
             if has_monitor:
-                m2 = _metrics(model, param, u_rec, rec2, groups, R, T, n)
+                m2 = record_contact_metrics(model, param, u_rec, rec2, groups, R, T, n)
                 tol_err.update({k: abs(v - metrics[k]) for k, v in m2.items()
                                 if not k.endswith("_err") and k in metrics})
         metrics.update({f"{k}_tol_err": float(v) for k, v in tol_err.items()})
