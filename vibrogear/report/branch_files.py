@@ -13,9 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from ..pipeline.files import atomic_write_bytes, atomic_write_npz
-from ..solvers.periodic.branch import branch_arrays
 
-__all__ = ["branch_arrays", "write_branches", "CSV_COLUMNS"]
+__all__ = ["write_branches", "CSV_COLUMNS"]
 
 CSV_COLUMNS = ("branch", "n_periods", "param", "period", "stable", "label", "qmin", "qmax",
                "impacts", "max_abs_multiplier", "residual", "neutral")
@@ -27,8 +26,10 @@ def _cell(x) -> str:
     return str(x)
 
 
-def write_branches(branches, out_dir) -> dict:
-    arrays = branch_arrays(branches)
+def write_branches(result, out_dir) -> dict:
+    """``branch.npz`` and ``branch.csv`` in ``out_dir`` from a continuation's result (its
+    :meth:`arrays`)."""
+    arrays = result.arrays()
     for key, a in arrays.items():
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
             raise ValueError(f"branch array {key!r} holds non-finite values")

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..branch_files import branch_arrays
 from .branch import plot_branches
 from ..figure import plain_title, save_figure
 from ..sweep_files import sweep_arrays
@@ -45,7 +44,7 @@ def sweep_figure(result, branches=None, *, per_contact_rows: bool = False):
     study = result.study
     data = display_arrays(sweep_arrays(result.sweep), study.monitor.scale)
     arrays = None if branches is None else display_arrays(
-        branch_arrays(branches.branches), study.monitor.scale, ("qmin", "qmax"))
+        branches.arrays(), study.monitor.scale, ("qmin", "qmax"))
     fig = bifurcation_figure(data, study, arrays, per_contact_rows=per_contact_rows)
     fig.tight_layout()
     return fig
@@ -86,7 +85,7 @@ def branch_figure(result, quantity: str = "qmax", sweep=None, sweep_data=None):
     in display units)."""
     study = result.study
     mon = study.monitor
-    arrays = display_arrays(branch_arrays(result.branches),
+    arrays = display_arrays(result.arrays(),
                             mon.scale, ("qmin", "qmax"))
     sw = sweep_data if sweep is None else display_arrays(sweep_arrays(sweep.sweep), mon.scale)
     lines = tuple(mon.lines)
@@ -106,7 +105,7 @@ def plot_combined(result, out, sweep_data: dict, *, per_contact_rows: bool = Fal
     """``bifurcation_branches``: sweep arrays ``sweep_data`` (display units) with the
     branches of ``result`` overlaid."""
     study = result.study
-    arrays = display_arrays(branch_arrays(result.branches),
+    arrays = display_arrays(result.arrays(),
                             study.monitor.scale, ("qmin", "qmax"))
     return draw_bifurcation(sweep_data, study, Path(out) / "bifurcation_branches",
                             branches=arrays, per_contact_rows=per_contact_rows)

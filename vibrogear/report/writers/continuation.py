@@ -35,7 +35,7 @@ def _sweep_of(previous, out, study):
 
 def write(scene, outcome, out, previous=None) -> dict:
     r = outcome.result
-    paths = write_branches(r.branches, out)
+    paths = write_branches(r, out)
     data = _sweep_of(previous, out, r.study)
     plot_branch_figures(r, out, sweep_data=data)
     files = {k: str(v) for k, v in paths.items()}

@@ -23,7 +23,6 @@ from pathlib import Path
 import numpy as np
 
 from ..plots.bifurcation import display_arrays
-from ..branch_files import branch_arrays
 from ..plots.branch import branch_legend, draw_branches, label_special_points
 from ..figure import new_figure, plain_title, save_figure
 from ..plots.sweep import class_categories, draw_band, motion_rows
@@ -90,7 +89,7 @@ def write_fig2(result, out, sweep_data: dict, *, per_contact_rows: bool = False)
     ``sweep_data`` (display units) of the same study."""
     study = result.study
     mon = study.monitor
-    arrays = display_arrays(branch_arrays(result.branches),
+    arrays = display_arrays(result.arrays(),
                             mon.scale, ("qmin", "qmax"))
     below = " (below 0: the teeth lose contact)" if mon.zero_line else ""
     title = (f"{plain_title(study.title)}: response against speed{below}\nsweep minima / "

@@ -94,8 +94,7 @@ def _forced(previous, out, study, name: str, file: str):
     got = (previous or {}).get(name)
     if got is not None and got.result is not None:
         if name == "continuation":
-            from ..branch_files import branch_arrays
-            return branch_arrays(got.result.branches)
+            return got.result.arrays()
         from ..sweep_files import sweep_arrays
         return sweep_arrays(got.result.sweep)
     path = Path(out) / file

@@ -27,7 +27,6 @@ import numpy as np
 
 from ...analyses.runup.runup import runup_arrays
 from ...pipeline.files import atomic_write_bytes, atomic_write_npz
-from ..branch_files import branch_arrays
 from ..figure import save_figure
 from ..plots.runup import plot_envelopes, plot_orders, plot_waterfall
 from ..sweep_files import read_sweep_npz, sweep_arrays
@@ -64,7 +63,7 @@ def steady_state(previous, out, study) -> tuple[dict | None, dict | None]:
     elif (Path(out) / "sweep.npz").is_file():
         sweep = read_sweep_npz(Path(out) / "sweep.npz")
     if previous.get("continuation") is not None:
-        branch = branch_arrays(previous["continuation"].result.result.branches)
+        branch = previous["continuation"].result.arrays()
     elif (Path(out) / "branch.npz").is_file():
         with np.load(Path(out) / "branch.npz", allow_pickle=False) as z:
             branch = {k: z[k] for k in z.files}
