@@ -77,8 +77,8 @@ class GearboxModesResult:
     def plot(self):
         """The resonance map (``resonance_map.png``) as a matplotlib Figure: natural
         frequencies against every mesh's orders over the speed range."""
-        from ..report.writers.gearbox_modes import figure
-        return figure(self)
+        from ..report.plots.gearbox import resonance_map_figure
+        return resonance_map_figure(self)
 
 #: a mode is rigid when its natural frequency is below this fraction of the highest one
 RIGID_TOL = 1e-7

@@ -87,8 +87,8 @@ class TimeResponseResult:
         """The report's figure of this time response (``time_response.png``) as a
         matplotlib Figure: a gearbox's mesh deformations, phase trajectories, mesh and
         bearing forces; the impact pair's deformation and phase trajectory."""
-        from ..report.writers.time_response import figure
-        return figure(self)
+        from ..report.plots.time_response import time_response_figure
+        return time_response_figure(self)
 
 
 def working_flank_losses(delta, gap_hi: float, gap_lo: float) -> int:

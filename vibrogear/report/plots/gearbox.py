@@ -8,7 +8,7 @@ import numpy as np
 from ..figure import new_figure, plain_title
 from ...pipeline.files import atomic_write_bytes
 
-__all__ = ["write_modes_csv", "plot_resonance_map", "plot_gearbox_time_response",
+__all__ = ["write_modes_csv", "plot_resonance_map", "resonance_map_figure", "plot_gearbox_time_response",
 ]
 
 
@@ -138,3 +138,11 @@ def plot_gearbox_time_response(t_s, delta, ddot, force, mesh_names, bearing_forc
         axes[1, 1].set_visible(False)
     fig.suptitle(plain_title(title), fontsize=9)
     return fig
+
+
+def resonance_map_figure(r):
+    """The resonance map of a gearbox's modes
+    (:class:`~vibrogear.analyses.gearbox_modes.GearboxModesResult`) as a Figure, the
+    report's ``resonance_map.png``."""
+    return plot_resonance_map(r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo, r.rpm_hi, title=r.title,
+                              orders=r.orders, crossings=r.resonances)

@@ -11,9 +11,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..figure import save_figure
-from ..plots.gearbox import plot_resonance_map, write_modes_csv
+from ..plots.gearbox import resonance_map_figure, write_modes_csv
 
-__all__ = ["write", "figure"]
+__all__ = ["write"]
 
 
 def write(scene, outcome, out, previous=None) -> dict:
@@ -22,14 +22,6 @@ def write(scene, outcome, out, previous=None) -> dict:
     files = {"csv": str(write_modes_csv(out / "modes.csv", r.f_hz, r.fd_hz, r.zeta,
                                         list(r.names), r.shares, r.mesh,
                                         list(r.mesh_names)))}
-    save_figure(figure(r), out / "resonance_map")
+    save_figure(resonance_map_figure(r), out / "resonance_map")
     files["png"] = str(out / "resonance_map.png")
     return files
-
-
-def figure(r):
-    """The resonance map of a gearbox's modes
-    (:class:`~vibrogear.analyses.gearbox_modes.GearboxModesResult`) as a Figure, the
-    report's ``resonance_map.png``."""
-    return plot_resonance_map(r.f_hz, r.mesh, r.mesh_teeth, r.rpm_lo, r.rpm_hi, title=r.title,
-                              orders=r.orders, crossings=r.resonances)
