@@ -21,6 +21,8 @@ from cli_cases import cli_args
 from vibrogear.cli import main
 from vibrogear.status import Status
 
+from test_extreme_optimize import SCENE as OPTIMIZE_SCENE
+
 ROOT = Path(__file__).resolve().parents[2]
 IMPACT = str(ROOT / "configs" / "impact_pair.toml")
 GEAR_PAIR = str(ROOT / "configs" / "gear_pair.toml")
@@ -198,34 +200,9 @@ def test_reduction_accuracy_with_a_failed_level_is_partial(monkeypatch, tmp_path
 
 # ------------------------------------------------------------------ optimize
 
-LINEAR = """
-[scene]
-name = "linear"
-analyses = ["optimize"]
-
-[impact_pair]
-zeta = 0.1
-kappa = 0.5
-f_m = 0.0
-f_p = 0.05
-b_r = 1.0
-
-[integration]
-rtol = 1e-6
-atol = 1e-8
-
-[time_response]
-omega = 0.8
-periods = 10
-samples_per_period = 16
-
-[optimize]
-variables = [{ key = "impact_pair.kappa", min = 0.3, max = 1.0 }]
-objective = { analysis = "time_response", metric = "deformation_second_half.clearance", reduce = "max", sense = "max" }
-budget = 4
-workers = 1
-xtol = 1e-2
-"""
+# the linear impact pair of the optimiser's extreme-input tests, with 4 evaluations on one worker
+LINEAR = OPTIMIZE_SCENE.replace("budget = 6\n", "budget = 4\nworkers = 1\n")
+assert "workers = 1" in LINEAR
 
 
 def _spy_analyses(monkeypatch, fail=()):
