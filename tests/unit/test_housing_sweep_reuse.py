@@ -97,6 +97,47 @@ def test_krylov_refinement_finds_the_closed_form_spectrum():
     assert np.allclose(Z.T @ (mdiag[:, None] * Z), np.eye(p), atol=1e-10)
 
 
+def test_acceptance_criterion_rejects_perturbed_modes_and_accepts_converged_ones():
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from vibrogear.models.housing.sweep import DEFAULT_TOL, ritz_criterion
+
+    # fixed-fixed string (closed form as above): the exact modes, M-normalised
+    n, h, nev = 400, 1.0 / 401, 8
+    K = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csc") / h
+    mdiag = np.full(n, h)
+    lu = spla.splu(K)
+    k = np.arange(1, nev + 2)
+    exact = 4 * np.sin(k * math.pi / (2 * (n + 1))) ** 2 / h ** 2
+    Phi = np.sin(k[None, :] * math.pi * np.arange(1, n + 1)[:, None] / (n + 1))
+    Phi /= np.sqrt(np.sum(mdiag[:, None] * Phi ** 2, axis=0))
+    spectrum = 4 * np.sin(np.arange(1, n + 1) * math.pi / (2 * (n + 1))) ** 2 / h ** 2
+
+    def judge(Z):
+        Z = Z / np.sqrt(np.sum(mdiag[:, None] * Z ** 2, axis=0))
+        lam = np.einsum("ij,ij->j", Z, K @ Z)             # Rayleigh quotients
+        return lam, ritz_criterion(Z, lu.solve(mdiag[:, None] * Z), lam, mdiag)
+
+    lam, est = judge(Phi[:, :nev])                        # converged: accepted
+    assert np.all(est <= 1e-9) and np.allclose(lam, exact[:nev], rtol=1e-12)
+    rng = np.random.default_rng(7)
+    noisy = Phi[:, :nev].copy()
+    noisy[:, 2] += 0.05 * rng.standard_normal(n) * np.sqrt(1.0 / h) / np.sqrt(n)   # 5 % rough noise
+    mixed = Phi[:, :nev].copy()
+    mixed[:, 5] = math.cos(0.2) * Phi[:, 5] + math.sin(0.2) * Phi[:, 6]           # two modes mixed
+    for Z, j in ((noisy, 2), (mixed, 5)):
+        lam, est = judge(Z)
+        err = np.abs(lam / exact[:nev] - 1)
+        # the perturbed pair is rejected (and its eigenvalue is indeed off by more than the
+        # tolerance); the others stay accepted; each pair has an eigenvalue of the whole closed-form
+        # spectrum within its bound, |lam - lambda_i| <= est lambda_i
+        assert est[j] > DEFAULT_TOL and err[j] > DEFAULT_TOL
+        assert np.all(np.delete(est, j) <= 1e-9)
+        nearest = np.min(np.abs(lam[:, None] / spectrum[None, :] - 1), axis=1)
+        assert np.all(nearest <= est * (1 + 1e-9) + 1e-12)
+
+
 @pytest.fixture(scope="module")
 def small_sweep():
     from vibrogear.config.base import build
