@@ -248,25 +248,34 @@ def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, t
     processes.
 
     Returns (lam (p,) ascending, Z (n x p, M-orthonormal), est (p,): each pair's bound (nan where none
-    was computed), k blocks in the Ritz space, right-hand sides solved, Zp): K Z = M Zp, Zp = [Y_0 ..
-    Y_(k-1)] C, so the residual check needs no product with K."""
+    was computed), k blocks in the Ritz space, right-hand sides solved, Zp): K Z = M Zp for the first
+    ``nev`` columns, Zp = [Y_0 .. Y_(k-1)] C, so the residual check needs no product with K.  The Gram
+    matrices are the moments X0^T M A^s X0 (G_ab depends on a + b only): two per block, one of them
+    a symmetric rank-k product."""
     import scipy.linalg as sla
+
+    from scipy.linalg.blas import dsyrk
 
     p = X0.shape[1]
     Y = [np.asfortranarray(X0)]
     n_rhs = 0
-    G = {}
+    mu = {}                                     # mu[s] = X0^T M A^s X0 = Y_a^T M Y_b for a + b = s
+    sqm = np.sqrt(mdiag)[:, None]
 
-    def add_block():
+    def add_block():                            # Y_j; two new moments: 2 j - 1 and 2 j
         nonlocal n_rhs
         Yn = solve(np.asfortranarray(mdiag[:, None] * Y[-1]))
         n_rhs += Yn.shape[1]
         Y.append(Yn)
         j = len(Y) - 1
-        MYn = mdiag[:, None] * Yn
-        for a in range(j + 1):
-            G[a, j] = gram(Y[a], MYn)
-            G[j, a] = G[a, j].T
+        mu[2 * j - 1] = gram(Y[j - 1], mdiag[:, None] * Yn)
+        U = np.triu(dsyrk(1.0, np.asfortranarray(sqm * Yn), trans=1))
+        mu[2 * j] = reduce(U + np.triu(U, 1).T)
+
+    class _G:                                   # G[a, b] = Y_a^T M Y_b (A is M-self-adjoint)
+        def __getitem__(self, ab):
+            return mu[ab[0] + ab[1]]
+    G = _G()
 
     def combine(first, k, C):                   # [Y_first .. Y_(first+k-1)] C, block by block
         out = Y[first] @ C[:p]
@@ -311,7 +320,7 @@ def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, t
             lp, C = lq, Cq
             break
     bound[~np.isfinite(bound)] = np.nan
-    return lp, combine(1, k, C), bound, k, n_rhs, combine(0, k, C)
+    return lp, combine(1, k, C), bound, k, n_rhs, combine(0, k, C[:, :nev])
 
 
 def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float):
