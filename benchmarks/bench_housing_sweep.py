@@ -65,6 +65,7 @@ def main(argv=None) -> int:
                                 "stages": stages(reused), "steps": reused.steps, "n_rhs": reused.n_rhs,
                                 "criterion": reused.bound,
                                 "residual_max": reused.residual, "product_check": reused.product_check,
+                                "guard_spread": reused.spread, "guard_band": reused.band,
                                 "note": reused.note},
                      "fresh": {"seconds": round(fresh.seconds, 3), "stages": stages(fresh), "n_rhs": fresh.n_rhs,
                                "residual_max": fresh.residual},

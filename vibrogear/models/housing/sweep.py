@@ -67,7 +67,9 @@ class SweepVariant:
     iterations, check; ``residual``: max ||K x - lambda M x|| / ||K x|| over the modes; ``bound``: the
     acceptance criterion's largest value (the fresh solve's tolerance where fresh); ``product_check``:
     the relative difference of K X taken from the Krylov relation against one true product (0 where
-    K X was a true product, see :func:`_check`)."""
+    K X was a true product, see :func:`_check`); ``spread``, ``band``: the count's guard of a reused
+    variant (how far apart its wanted Ritz values moved, relative, against the previous variant's
+    lambda_(count + guard) / lambda_count - 1; :func:`_reused`)."""
     freqs_hz: np.ndarray
     n_dofs: int
     start: str
@@ -80,6 +82,8 @@ class SweepVariant:
     note: str = ""
     bound: float = float("nan")
     product_check: float = 0.0
+    spread: float = float("nan")
+    band: float = float("nan")
 
 
 def reusable(cfg: HousingConfig) -> str | None:
@@ -212,7 +216,9 @@ def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
         raise HousingSolveError(f"{exc} (the sweep has no Krylov-Schur fallback: run the point as a "
                                 "'modes' scene)") from exc
     timings["iterations"] = time.perf_counter() - t0
-    return _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X), lam, X, mdiag, st
+    chain = _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X)
+    chain.lam = lam
+    return chain, lam, X, mdiag, st
 
 
 def ritz_criterion(Z: np.ndarray, AZ: np.ndarray, lam: np.ndarray, mdiag: np.ndarray, reduce=lambda a: a) -> np.ndarray:
@@ -357,12 +363,23 @@ def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float
                                               gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
                                               nev=count, tol=tol, reduce=lambda a: comm.allreduce(a, op=MPI.SUM))
     timings["iterations"] = time.perf_counter() - t0
-    if np.any(est[:count] > tol):
-        raise Breakdown(f"the reused start did not converge: criterion {est[:count].max():.2g} > {tol:g} "
+    if not np.all(est[:count] <= tol):
+        raise Breakdown(f"the reused start did not converge: criterion {np.nanmax(est[:count]):.2g} > {tol:g} "
                         f"after {k} blocks")
-    chain.X = X
+    # the count's guard (no rigorous count: a Sylvester inertia would need an indefinite LDL^T factor
+    # of K - sigma M): a wanted eigenvalue missed altogether would have an eigenvector M-orthogonal to
+    # the Krylov space of the previous count + guard modes, i.e. come from above the previous guard
+    # modes; the wanted Ritz values, index by index, must move together by less than that band
+    shift = np.log(lam[:count] / chain.lam[:count])
+    band = float(np.log(chain.lam[-1] / chain.lam[count - 1]))
+    if not np.ptp(shift) < band:
+        raise Breakdown(f"the modes moved apart by {np.expm1(np.ptp(shift)):.1%} against the guard band "
+                        f"{np.expm1(band):.1%} (lambda_{len(chain.lam)} / lambda_{count} - 1): a mode may "
+                        "have crossed into the wanted ones")
+    chain.X, chain.lam = X, lam
     return lam, X, mdiag, {"steps": k, "n_rhs": n_rhs, "est": float(est[:count].max()),
-                           "KX": mdiag[:, None] * Xp[:, :count]}
+                           "KX": mdiag[:, None] * Xp[:, :count],
+                           "spread": float(np.expm1(np.ptp(shift))), "band": float(np.expm1(band))}
 
 
 def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: bool = True,
@@ -422,7 +439,8 @@ def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: boo
                              n_dofs=int(X.shape[0]), start=res[0], mesh=res[1],
                              seconds=time.perf_counter() - t_all, residual=resid, steps=int(st["steps"]),
                              n_rhs=int(st["n_rhs"]), timings=timings, note=note, bound=bound,
-                             product_check=mismatch)
+                             product_check=mismatch, spread=st.get("spread", float("nan")),
+                             band=st.get("band", float("nan")))
             out.append(v)
             if on_variant is not None:
                 on_variant(i, v)
