@@ -155,7 +155,7 @@ def _check(K, lam, X, mdiag, comm, KX=None) -> tuple[float, float]:
     MX *= scale
     mismatch = 0.0
     if KX is not None:
-        KX = KX * scale
+        KX *= scale                           # the caller's own array
         w = np.random.default_rng(20261129).standard_normal(X.shape[1])
         Kv = matmul(K, np.asfortranarray((X @ w)[:, None]))[:, 0]
         d = comm.allreduce(float(np.sum((Kv - KX @ w) ** 2)), op=MPI.SUM)
@@ -268,13 +268,16 @@ def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, t
     mu = {}                                     # mu[s] = X0^T M A^s X0 = Y_a^T M Y_b for a + b = s
     sqm = np.sqrt(mdiag)[:, None]
 
+    MY = [np.asfortranarray(mdiag[:, None] * X0)]   # M Y_j of the last block
+
     def add_block():                            # Y_j; two new moments: 2 j - 1 and 2 j
         nonlocal n_rhs
-        Yn = solve(np.asfortranarray(mdiag[:, None] * Y[-1]))
+        Yn = solve(MY[0])
         n_rhs += Yn.shape[1]
         Y.append(Yn)
         j = len(Y) - 1
-        mu[2 * j - 1] = gram(Y[j - 1], mdiag[:, None] * Yn)
+        MY[0] = np.asfortranarray(mdiag[:, None] * Yn)
+        mu[2 * j - 1] = gram(Y[j - 1], MY[0])
         U = np.triu(dsyrk(1.0, np.asfortranarray(sqm * Yn), trans=1))
         mu[2 * j] = reduce(U + np.triu(U, 1).T)
 
