@@ -19,17 +19,26 @@ parameter (a wall thickness) solves the variants in order, each from what the on
   checked to be zero on the chain's first variant).
 - **eigen-solve**: the Cholesky factor refactored numerically (the ordering reused), then
   Rayleigh-Ritz on the block Krylov space of the previous variant's ``count + guard`` modes
-  (:func:`krylov_refine`: a few solves with ``count + guard`` right-hand sides instead of block
-  Lanczos from a random block), to the fresh solve's criterion, SLEPc's ||K^-1 M x - theta x||_M /
-  theta, at the sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved
-  afresh.  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves
-  near-zero new blocks; the previous factor as a preconditioner of LOBPCG needed 7 steps for 1e-4,
-  and its criterion, evaluated with the old factor, passed low modes 3 % off: the check needs the
-  variant's own factor.)
+  (:func:`krylov_refine`: two solves with ``count + guard`` right-hand sides and one with as many
+  as pairs still missing the tolerance, instead of block Lanczos from a random block), to the fresh
+  solve's criterion, SLEPc's ||K^-1 M x - theta x||_M / theta (:func:`ritz_criterion`), at the
+  sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved afresh.
+  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves near-zero
+  new blocks.  Without the refactor, the previous factor as a preconditioner, the criterion has to
+  do without K^-1 of the new K: the residual in the M^-1 norm, Weinstein's bound, weighs the
+  mesh-scale part of the residual by lambda_j^2 and stayed above 0.7 (relative) after three block
+  Davidson steps whose eigenvalues were 2e-5 off (docs/performance.md); LOBPCG's criterion
+  evaluated with the old factor passed low modes 3 % off.)
+- **count**: not proven (a Sylvester inertia of K - sigma M needs an indefinite factor); a wanted
+  eigenvalue missed altogether would have to come from above the previous variant's guard modes,
+  so the wanted Ritz values, index by index, must move together by less than that band, or the
+  variant is solved afresh (:func:`_reused`).
 
-Every variant, fresh or reused, gets the fresh solve's residual check with new products,
-max ||K x - lambda M x|| / ||K x|| over its modes.  ``reuse=False`` gives the fresh solve of each
-variant by the same stages (for the benchmark's side-by-side comparison).
+Every variant, fresh or reused, gets the fresh solve's residual check, max ||K x - lambda M x|| /
+||K x|| over its modes: with a new product with K for a fresh variant, and for a reused one with
+K X = M Xp from the Krylov relation (:func:`krylov_refine`), verified against one true product of
+a random combination of the columns (:func:`_check`).  ``reuse=False`` gives the fresh solve of
+each variant by the same stages (for the benchmark's side-by-side comparison).
 """
 from __future__ import annotations
 
