@@ -243,102 +243,77 @@ def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, t
                   reduce=lambda a: a):
     """The lowest modes of K x = lambda M x (M = diag(``mdiag``)) from approximate ones ``X0`` (n x p).
 
-    Rayleigh-Ritz on the block Krylov space span(Y_1 .. Y_k), Y_j = A^j X0 with A = K^-1 M
-    (``solve``(B) = K^-1 B, the variant's own factor), for k = 1, 2, ... up to ``max_blocks``: every
-    Gram matrix comes from the M-products G_ab = Y_a^T M Y_b, because K Y_b = M Y_(b-1), so K is never
-    multiplied.  Each Ritz pair (lambda, z = sum Y_a c_a) is checked with the next block,
-    A z = sum Y_(a+1) c_a, by the fresh solve's criterion (SLEPc's, :func:`ritz_criterion`)
+    Rayleigh-Ritz on a growing basis S = [Y_1, W_1, W_2, ..] with A = K^-1 M (``solve``(B) = K^-1 B,
+    the variant's own factor): Y_1 = A X0, then W_j = A z for the wanted Ritz vectors z of span(S)
+    not yet accepted.  Each such A z is exactly what the fresh solve's criterion (SLEPc's,
+    :func:`ritz_criterion`) needs,
 
         est = ||A z - z / lambda||_M lambda <= tol   (||z||_M = 1),
 
-    which puts an eigenvalue lambda_i within |lambda - lambda_i| <= est lambda_i.  Where some of the
-    ``nev`` wanted pairs miss ``tol`` on span(Y_1 .. Y_k), the Ritz pairs of span(Y_1 .. Y_(k+1)) (its
-    Gram matrices are at hand) are checked with A z for those pairs only (a solve with as many
-    right-hand sides as pairs missing, not a whole block); only where that fails too does the next
-    block come.  A pair's bound carries over to the larger space's pair of the same index: the Ritz
-    values only fall, and stay above the eigenvalue of that index (Courant-Fischer), so the new one is
-    at least as close.  The basis is M-orthonormalised by the eigen-decomposition of its Gram matrix
-    scaled to a unit diagonal (directions below 1e-12 of the largest dropped: the power basis leans
-    towards the lowest modes).  ``gram``(A, B) = A^T B over all processes; ``reduce``: sums over all
-    processes.
+    which puts an eigenvalue lambda_i within |lambda - lambda_i| <= est lambda_i; so the check of
+    one basis is the next block, and a block has as many columns as pairs still missing ``tol``
+    (the first: the ``nev`` wanted).  K is never multiplied: every block B of S has K B = M P with
+    P known (X0 for Y_1, the Ritz vectors z for W_j), so both projected matrices are M-products,
+    S^T K S = S^T M P, and all but the new block's M-products follow from the earlier ones.  A
+    pair's bound carries over to the larger basis's pair of the same index: the Ritz values only
+    fall, and stay above the eigenvalue of that index (Courant-Fischer), so the new one is at least
+    as close.  The basis is M-orthonormalised by the eigen-decomposition of its Gram matrix scaled to
+    a unit diagonal (directions below 1e-12 of the largest dropped).  ``gram``(A, B) = A^T B over all
+    processes; ``reduce``: sums over all processes.  ``max_blocks``: blocks in S at most.
 
     Returns (lam (p,) ascending, Z (n x p, M-orthonormal), est (p,): each pair's bound (nan where none
-    was computed), k blocks in the Ritz space, right-hand sides solved, Zp): K Z = M Zp for the first
-    ``nev`` columns, Zp = [Y_0 .. Y_(k-1)] C, so the residual check needs no product with K.  The Gram
-    matrices are the moments X0^T M A^s X0 (G_ab depends on a + b only): two per block, one of them
-    a symmetric rank-k product."""
+    was computed), blocks in S, right-hand sides solved, Zp): K Z = M Zp for the first ``nev``
+    columns, so the residual check needs no product with K."""
     import scipy.linalg as sla
-
-    from scipy.linalg.blas import dsyrk
+    from scipy.linalg.blas import dgemm
 
     p = X0.shape[1]
-    Y = [np.asfortranarray(X0)]
-    n_rhs = 0
-    mu = {}                                     # mu[s] = X0^T M A^s X0 = Y_a^T M Y_b for a + b = s
-    sqm = np.sqrt(mdiag)[:, None]
+    S = [solve(np.asfortranarray(mdiag[:, None] * X0))]     # Y_1 = A X0, K Y_1 = M X0
+    P = [np.asfortranarray(X0)]
+    n_rhs = p
+    MS = mdiag[:, None] * S[0]
+    Mg = reduce(S[0].T @ MS)                    # S^T M S
+    Kg = gram(MS, P[0])                         # S^T K S = S^T M P
+    del MS
 
-    MY = [np.asfortranarray(mdiag[:, None] * X0)]   # M Y_j of the last block
+    def times(blocks, C):                       # [B_1 B_2 ..] C, block by block, in place
+        out, r = None, 0
+        for B in blocks:
+            out = dgemm(1.0, B, np.asfortranarray(C[r:r + B.shape[1]]), beta=0.0 if out is None else 1.0,
+                        c=out, overwrite_c=True)
+            r += B.shape[1]
+        return out
 
-    def add_block():                            # Y_j; two new moments: 2 j - 1 and 2 j
-        nonlocal n_rhs
-        Yn = solve(MY[0])
-        n_rhs += Yn.shape[1]
-        Y.append(Yn)
-        j = len(Y) - 1
-        MY[0] = np.asfortranarray(mdiag[:, None] * Yn)
-        mu[2 * j - 1] = gram(Y[j - 1], MY[0])
-        U = np.triu(dsyrk(1.0, np.asfortranarray(sqm * Yn), trans=1))
-        mu[2 * j] = reduce(U + np.triu(U, 1).T)
-
-    class _G:                                   # G[a, b] = Y_a^T M Y_b (A is M-self-adjoint)
-        def __getitem__(self, ab):
-            return mu[ab[0] + ab[1]]
-    G = _G()
-
-    def combine(first, k, C):                   # [Y_first .. Y_(first+k-1)] C, block by block
-        out = Y[first] @ C[:p]
-        for a in range(1, k):
-            out += Y[first + a] @ C[a * p:(a + 1) * p]
-        return np.asfortranarray(out)
-
-    def ritz(k):                                # Rayleigh-Ritz on span(Y_1 .. Y_k)
-        Mg = np.block([[G[a, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        Kg = np.block([[G[a, b - 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
+    bound = np.full(p, np.inf)
+    todo = np.arange(nev)
+    while True:
         d = 1.0 / np.sqrt(np.diag(Mg))
         ev, U = np.linalg.eigh(0.5 * (Mg + Mg.T) * d[:, None] * d[None, :])
         keep = ev > 1e-12 * ev.max()
         T = d[:, None] * U[:, keep] / np.sqrt(ev[keep])
         lam, Q = sla.eigh(T.T @ (0.5 * (Kg + Kg.T)) @ T)
-        return lam[:p], T @ Q[:, :p], Mg     # z = [Y_1 .. Y_k] C, M-orthonormal
-
-    bound = np.full(p, np.inf)
-    add_block()                                # Y_1
-    for k in range(1, max_blocks + 1):
-        add_block()                            # Y_(k+1): checks span(Y_1 .. Y_k)
-        lp, C, G11 = ritz(k)
-        # ||A z - z / lam||_M^2 from the Gram matrices: A z = [Y_2 .. Y_(k+1)] C
-        G22 = np.block([[G[a + 1, b + 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        G21 = np.block([[G[a + 1, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        sq = (np.einsum("ij,ij->j", C, G22 @ C) - 2.0 / lp * np.einsum("ij,ij->j", C, G21 @ C)
-              + np.einsum("ij,ij->j", C, G11 @ C) / lp ** 2)
-        bound = np.minimum(bound, np.sqrt(np.maximum(sq, 0.0)) * lp)
-        miss = np.nonzero(~(bound[:nev] <= tol))[0]
-        if miss.size == 0 or k == max_blocks:
+        lam, C = lam[:p], T @ Q[:, :p]          # z = S C, M-orthonormal
+        Zt = times(S, C[:, todo])
+        W = solve(np.asfortranarray(mdiag[:, None] * Zt))     # A z, K W = M z
+        n_rhs += todo.size
+        bound[todo] = np.minimum(bound[todo], ritz_criterion(Zt, W, lam[todo], mdiag, reduce))
+        if np.all(bound[:nev] <= tol) or len(S) == max_blocks:
             break
-        # the larger space span(Y_1 .. Y_(k+1)), checked for the missing pairs only
-        lq, Cq, _ = ritz(k + 1)
-        Zm = combine(1, k + 1, Cq[:, miss])
-        AZm = solve(np.asfortranarray(mdiag[:, None] * Zm))
-        n_rhs += miss.size
-        est_m = ritz_criterion(Zm, AZm, lq[miss], mdiag, reduce)
-        del Zm, AZm
-        if np.all(est_m[:nev] <= tol):
-            bound[miss] = np.minimum(bound[miss], est_m)
-            k += 1
-            lp, C = lq, Cq
-            break
+        sel = np.nonzero(bound[todo] > tol)[0]
+        todo, W, Zt, Cn = todo[sel], np.asfortranarray(W[:, sel]), Zt[:, sel], C[:, todo[sel]]
+        # the new block's M-products: S^T M W and W^T M W; its K-products from them, K W = M S Cn
+        MW = mdiag[:, None] * W
+        SMW = np.vstack([gram(B, MW) for B in S])
+        WMW = reduce(W.T @ MW)
+        del MW
+        Mg = np.block([[Mg, SMW], [SMW.T, WMW]])
+        SKW = Mg[:-todo.size, :-todo.size] @ Cn             # S^T K W = S^T M S Cn
+        WKW = SMW.T @ Cn                                   # W^T K W = W^T M S Cn
+        Kg = np.block([[Kg, SKW], [SKW.T, 0.5 * (WKW + WKW.T)]])
+        S.append(W)
+        P.append(Zt)
     bound[~np.isfinite(bound)] = np.nan
-    return lp, combine(1, k, C), bound, k, n_rhs, combine(0, k, C[:, :nev])
+    return lam, times(S, C), bound, len(S), n_rhs, times(P, C[:, :nev])
 
 
 def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float):
