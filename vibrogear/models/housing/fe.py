@@ -181,7 +181,8 @@ def housing_forms(dmesh, facet_tags, base_tag: int, material: MaterialConfig, de
     # hexahedra: Gauss-Lobatto-Legendre quadrature on the element's own nodes lumps the mass
     # exactly onto the diagonal (spectral-element lumping; docs/housing.md, "Hexahedra")
     md = {"quadrature_rule": "GLL", "quadrature_degree": 2 * degree - 1} if hexes else {}
-    return {"V": V, "a": fem.form(a_ufl, jit_params=stiffness_jit_params()), "m": fem.form(rho_c * ufl.inner(u, v) * ufl.dx(metadata=md)),
+    return {"V": V, "a": fem.form(a_ufl, jit_params=stiffness_jit_params()),
+            "m": fem.form(rho_c * ufl.inner(u, v) * ufl.dx(metadata=md)),
             "mass": fem.form(rho_c * ufl.dx), "bcs": bcs, "hexes": hexes, "rho": rho_c}
 
 
