@@ -2,7 +2,7 @@
 
 One run, side by side: the wall-thickness variants of a housing (Q3 hexahedra) are solved in order
 by :func:`vibrogear.models.housing.sweep.sweep_housing_modes` with reuse (moved mesh nodes, the
-previous factor as preconditioner, the previous modes as start); right after each variant, the
+factor refactored numerically, the previous modes as start); right after each variant, the
 same variant is solved afresh (its own generated mesh, assembly, factor, random-start block
 Lanczos) in the same process.  Reported: each variant's seconds by stage, the ratio reused / fresh,
 the largest relative difference of its ``count`` frequencies from the fresh ones, the residuals,
