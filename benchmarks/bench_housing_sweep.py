@@ -2,7 +2,7 @@
 
 One run, side by side: the wall-thickness variants of a housing (Q3 hexahedra) are solved in order
 by :func:`vibrogear.models.housing.sweep.sweep_housing_modes` with reuse (moved mesh nodes, the
-previous factor as preconditioner, the previous modes as start); right after each variant, the
+factor refactored numerically, the previous modes as start); right after each variant, the
 same variant is solved afresh (its own generated mesh, assembly, factor, random-start block
 Lanczos) in the same process.  Reported: each variant's seconds by stage, the ratio reused / fresh,
 the largest relative difference of its ``count`` frequencies from the fresh ones, the residuals,
@@ -64,7 +64,9 @@ def main(argv=None) -> int:
                      "reused": {"start": reused.start, "mesh": reused.mesh, "seconds": round(reused.seconds, 3),
                                 "stages": stages(reused), "steps": reused.steps, "n_rhs": reused.n_rhs,
                                 "criterion": reused.bound,
-                                "residual_max": reused.residual, "note": reused.note},
+                                "residual_max": reused.residual, "product_check": reused.product_check,
+                                "guard_spread": reused.spread, "guard_band": reused.band,
+                                "note": reused.note},
                      "fresh": {"seconds": round(fresh.seconds, 3), "stages": stages(fresh), "n_rhs": fresh.n_rhs,
                                "residual_max": fresh.residual},
                      "ratio": round(reused.seconds / fresh.seconds, 3),

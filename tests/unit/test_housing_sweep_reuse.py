@@ -85,14 +85,57 @@ def test_krylov_refinement_finds_the_closed_form_spectrum():
     i = np.arange(1, n + 1)[:, None]
     # the start: the modes of a string 5 % longer (a neighbouring variant), on these nodes
     X0 = np.sin(k[None, :] * math.pi * i / (1.05 * (n + 1)))
-    lam, Z, est, blocks, n_rhs = krylov_refine(X0, solve=lambda B: lu.solve(B), mdiag=mdiag,
-                                               gram=lambda A, B: A.T @ B, nev=nev, tol=1e-2)
-    assert np.all(est[:nev] <= 1e-2) and blocks >= 1 and n_rhs == (blocks + 1) * p
+    lam, Z, est, blocks, n_rhs, Zp = krylov_refine(X0, solve=lambda B: lu.solve(B), mdiag=mdiag,
+                                                   gram=lambda A, B: A.T @ B, nev=nev, tol=1e-2)
+    assert np.all(est[:nev] <= 1e-2) and blocks >= 1 and p + nev <= n_rhs <= p + blocks * nev
+    # K Z from the Krylov relation, as a product
+    assert np.allclose(K @ Z[:, :nev], mdiag[:, None] * Zp, rtol=0, atol=1e-9 * np.abs(K @ Z).max())
     # the criterion bounds each eigenvalue's relative error (here the error is ~5 % of the bound:
     # quadratic in the modes' error, where the criterion is linear)
     err = np.abs(lam[:nev] / exact[:nev] - 1)
     assert np.all(err <= est[:nev]) and err.max() < 1e-3
     assert np.allclose(Z.T @ (mdiag[:, None] * Z), np.eye(p), atol=1e-10)
+
+
+def test_acceptance_criterion_rejects_perturbed_modes_and_accepts_converged_ones():
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+
+    from vibrogear.models.housing.sweep import DEFAULT_TOL, ritz_criterion
+
+    # fixed-fixed string (closed form as above): the exact modes, M-normalised
+    n, h, nev = 400, 1.0 / 401, 8
+    K = sp.diags([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csc") / h
+    mdiag = np.full(n, h)
+    lu = spla.splu(K)
+    k = np.arange(1, nev + 2)
+    exact = 4 * np.sin(k * math.pi / (2 * (n + 1))) ** 2 / h ** 2
+    Phi = np.sin(k[None, :] * math.pi * np.arange(1, n + 1)[:, None] / (n + 1))
+    Phi /= np.sqrt(np.sum(mdiag[:, None] * Phi ** 2, axis=0))
+    spectrum = 4 * np.sin(np.arange(1, n + 1) * math.pi / (2 * (n + 1))) ** 2 / h ** 2
+
+    def judge(Z):
+        Z = Z / np.sqrt(np.sum(mdiag[:, None] * Z ** 2, axis=0))
+        lam = np.einsum("ij,ij->j", Z, K @ Z)             # Rayleigh quotients
+        return lam, ritz_criterion(Z, lu.solve(mdiag[:, None] * Z), lam, mdiag)
+
+    lam, est = judge(Phi[:, :nev])                        # converged: accepted
+    assert np.all(est <= 1e-9) and np.allclose(lam, exact[:nev], rtol=1e-12)
+    rng = np.random.default_rng(7)
+    noisy = Phi[:, :nev].copy()
+    noisy[:, 2] += 0.05 * rng.standard_normal(n) * np.sqrt(1.0 / h) / np.sqrt(n)   # 5 % rough noise
+    mixed = Phi[:, :nev].copy()
+    mixed[:, 5] = math.cos(0.2) * Phi[:, 5] + math.sin(0.2) * Phi[:, 6]           # two modes mixed
+    for Z, j in ((noisy, 2), (mixed, 5)):
+        lam, est = judge(Z)
+        err = np.abs(lam / exact[:nev] - 1)
+        # the perturbed pair is rejected (and its eigenvalue is indeed off by more than the
+        # tolerance); the others stay accepted; each pair has an eigenvalue of the whole closed-form
+        # spectrum within its bound, |lam - lambda_i| <= est lambda_i
+        assert est[j] > DEFAULT_TOL and err[j] > DEFAULT_TOL
+        assert np.all(np.delete(est, j) <= 1e-9)
+        nearest = np.min(np.abs(lam[:, None] / spectrum[None, :] - 1), axis=1)
+        assert np.all(nearest <= est * (1 + 1e-9) + 1e-12)
 
 
 @pytest.fixture(scope="module")

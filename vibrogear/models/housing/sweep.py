@@ -19,17 +19,26 @@ parameter (a wall thickness) solves the variants in order, each from what the on
   checked to be zero on the chain's first variant).
 - **eigen-solve**: the Cholesky factor refactored numerically (the ordering reused), then
   Rayleigh-Ritz on the block Krylov space of the previous variant's ``count + guard`` modes
-  (:func:`krylov_refine`: a few solves with ``count + guard`` right-hand sides instead of block
-  Lanczos from a random block), to the fresh solve's criterion, SLEPc's ||K^-1 M x - theta x||_M /
-  theta, at the sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved
-  afresh.  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves
-  near-zero new blocks; the previous factor as a preconditioner of LOBPCG needed 7 steps for 1e-4,
-  and its criterion, evaluated with the old factor, passed low modes 3 % off: the check needs the
-  variant's own factor.)
+  (:func:`krylov_refine`: two solves with ``count + guard`` right-hand sides and one with as many
+  as pairs still missing the tolerance, instead of block Lanczos from a random block), to the fresh
+  solve's criterion, SLEPc's ||K^-1 M x - theta x||_M / theta (:func:`ritz_criterion`), at the
+  sweep's tolerance (:data:`DEFAULT_TOL`); where that is not met the variant is solved afresh.
+  (Block Lanczos started from those modes stalls: the nearly invariant start block leaves near-zero
+  new blocks.  Without the refactor, the previous factor as a preconditioner, the criterion has to
+  do without K^-1 of the new K: the residual in the M^-1 norm, Weinstein's bound, weighs the
+  mesh-scale part of the residual by lambda_j^2 and stayed above 0.7 (relative) after three block
+  Davidson steps whose eigenvalues were 2e-5 off (docs/performance.md); LOBPCG's criterion
+  evaluated with the old factor passed low modes 3 % off.)
+- **count**: not proven (a Sylvester inertia of K - sigma M needs an indefinite factor); a wanted
+  eigenvalue missed altogether would have to come from above the previous variant's guard modes,
+  so the wanted Ritz values, index by index, must move together by less than that band, or the
+  variant is solved afresh (:func:`_reused`).
 
-Every variant, fresh or reused, gets the fresh solve's residual check with new products,
-max ||K x - lambda M x|| / ||K x|| over its modes.  ``reuse=False`` gives the fresh solve of each
-variant by the same stages (for the benchmark's side-by-side comparison).
+Every variant, fresh or reused, gets the fresh solve's residual check, max ||K x - lambda M x|| /
+||K x|| over its modes: with a new product with K for a fresh variant, and for a reused one with
+K X = M Xp from the Krylov relation (:func:`krylov_refine`), verified against one true product of
+a random combination of the columns (:func:`_check`).  ``reuse=False`` gives the fresh solve of
+each variant by the same stages (for the benchmark's side-by-side comparison).
 """
 from __future__ import annotations
 
@@ -49,7 +58,7 @@ from ...geometry.housing_hex import hex_housing_arrays, moved_hex_nodes
 from .block_lanczos import Breakdown
 from .fe_common import HousingSolveError
 
-__all__ = ["SweepVariant", "sweep_housing_modes", "krylov_refine", "reusable", "DEFAULT_TOL"]
+__all__ = ["SweepVariant", "sweep_housing_modes", "krylov_refine", "ritz_criterion", "reusable", "DEFAULT_TOL"]
 
 #: the reused start's tolerance on SLEPc's criterion ||A x - theta x||_M / theta (A = K^-1 M,
 #: theta = 1 / lambda), the fresh solve's criterion: some eigenvalue lies within this relative
@@ -64,7 +73,12 @@ class SweepVariant:
 
     ``start``: "fresh" (random block) or "previous" (the previous variant's modes); ``mesh``:
     "generated" or "moved"; ``timings`` (s) by stage: mesh, forms, assembly, factorization,
-    iterations, check; ``residual``: max ||K x - lambda M x|| / ||K x|| over the modes."""
+    iterations, check; ``residual``: max ||K x - lambda M x|| / ||K x|| over the modes; ``bound``: the
+    acceptance criterion's largest value (the fresh solve's tolerance where fresh); ``product_check``:
+    the relative difference of K X taken from the Krylov relation against one true product (0 where
+    K X was a true product, see :func:`_check`); ``spread``, ``band``: the count's guard of a reused
+    variant (how far apart its wanted Ritz values moved, relative, against the previous variant's
+    lambda_(count + guard) / lambda_count - 1; :func:`_reused`)."""
     freqs_hz: np.ndarray
     n_dofs: int
     start: str
@@ -76,6 +90,9 @@ class SweepVariant:
     timings: dict = field(default_factory=dict)
     note: str = ""
     bound: float = float("nan")
+    product_check: float = 0.0
+    spread: float = float("nan")
+    band: float = float("nan")
 
 
 def reusable(cfg: HousingConfig) -> str | None:
@@ -131,8 +148,13 @@ def _mass_diagonal(forms, comm):
     return out
 
 
-def _check(K, lam, X, mdiag, comm) -> float:
-    """max ||K x - lam M x|| / ||K x|| with fresh products, as the fresh solve's check."""
+def _check(K, lam, X, mdiag, comm, KX=None) -> tuple[float, float]:
+    """max ||K x - lam M x|| / ||K x|| over the modes, as the fresh solve's check.
+
+    ``KX``: K X known without a product (the Krylov refinement's K Z = M Zp); it is then checked
+    against one true product with K, K (X w) = (K X) w for a random combination w of all the
+    columns, and replaced by the full product where the two differ by more than 1e-6.  Returns (the
+    residual, that relative difference (0 where the full product was taken))."""
     from mpi4py import MPI
     from .fe_eigen import matmul
 
@@ -140,11 +162,21 @@ def _check(K, lam, X, mdiag, comm) -> float:
     scale = 1.0 / np.sqrt(comm.allreduce(np.einsum("ij,ij->j", X, MX), op=MPI.SUM))
     X = X * scale
     MX *= scale
-    KX = matmul(K, X)
+    mismatch = 0.0
+    if KX is not None:
+        KX *= scale                           # the caller's own array
+        w = np.random.default_rng(20261129).standard_normal(X.shape[1])
+        Kv = matmul(K, np.asfortranarray((X @ w)[:, None]))[:, 0]
+        d = comm.allreduce(float(np.sum((Kv - KX @ w) ** 2)), op=MPI.SUM)
+        mismatch = float(np.sqrt(d / comm.allreduce(float(np.sum(Kv ** 2)), op=MPI.SUM)))
+        if not mismatch <= 1e-6:
+            KX = None
+    if KX is None:
+        KX = matmul(K, X)
     R = KX - MX * lam
     resid = np.sqrt(comm.allreduce(np.einsum("ij,ij->j", R, R), op=MPI.SUM)
                     / comm.allreduce(np.einsum("ij,ij->j", KX, KX), op=MPI.SUM))
-    return float(resid.max()) if resid.size else 0.0
+    return (float(resid.max()) if resid.size else 0.0), mismatch
 
 
 def _lanczos(K, F, mdiag, comm, *, nev, extra, tol, start):
@@ -193,67 +225,95 @@ def _fresh(cfg, count, guard, comm, tmp: Path, timings: dict):
         raise HousingSolveError(f"{exc} (the sweep has no Krylov-Schur fallback: run the point as a "
                                 "'modes' scene)") from exc
     timings["iterations"] = time.perf_counter() - t0
-    return _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X), lam, X, mdiag, st
+    chain = _Chain(cfg, counts, cells, facets, values, dmesh, forms, K, ksp, X)
+    chain.lam = lam
+    return chain, lam, X, mdiag, st
 
 
-def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, tol: float, max_blocks: int = 4):
+def ritz_criterion(Z: np.ndarray, AZ: np.ndarray, lam: np.ndarray, mdiag: np.ndarray, reduce=lambda a: a) -> np.ndarray:
+    """SLEPc's criterion per Ritz pair, est_i = ||A z_i - z_i / lam_i||_M lam_i (A = K^-1 M, ``AZ`` =
+    A Z, ``Z`` M-orthonormal columns, M = diag(``mdiag``)): some eigenvalue lambda of K x = lambda M x
+    lies within |lam_i - lambda| <= est_i lambda (Weinstein's bound for the M-self-adjoint A at
+    1 / lam_i).  ``reduce`` sums the local column sums over all processes."""
+    D = AZ - Z / lam
+    return np.sqrt(np.maximum(reduce(np.einsum("ij,ij->j", D, mdiag[:, None] * D)), 0.0)) * lam
+
+
+def krylov_refine(X0: np.ndarray, *, solve, mdiag: np.ndarray, gram, nev: int, tol: float, max_blocks: int = 4,
+                  reduce=lambda a: a):
     """The lowest modes of K x = lambda M x (M = diag(``mdiag``)) from approximate ones ``X0`` (n x p).
 
-    Rayleigh-Ritz on the block Krylov space span(Y_1 .. Y_k), Y_j = A^j X0 with A = K^-1 M
-    (``solve``(B) = K^-1 B, the variant's own factor), for k = 1, 2, ... up to ``max_blocks``: every
-    Gram matrix comes from the M-products G_ab = Y_a^T M Y_b, because K Y_b = M Y_(b-1), so K is never
-    multiplied.  Each Ritz pair (lambda, z = sum Y_a c_a) is checked with the next block,
-    A z = sum Y_(a+1) c_a, by the fresh solve's criterion (SLEPc's, see :mod:`.block_lanczos`)
+    Rayleigh-Ritz on a growing basis S = [Y_1, W_1, W_2, ..] with A = K^-1 M (``solve``(B) = K^-1 B,
+    the variant's own factor): Y_1 = A X0, then W_j = A z for the wanted Ritz vectors z of span(S)
+    not yet accepted.  Each such A z is exactly what the fresh solve's criterion (SLEPc's,
+    :func:`ritz_criterion`) needs,
 
         est = ||A z - z / lambda||_M lambda <= tol   (||z||_M = 1),
 
-    which puts an eigenvalue lambda_i within |lambda - lambda_i| <= est lambda_i.  The basis is
-    M-orthonormalised by the eigen-decomposition of its Gram matrix scaled to a unit diagonal
-    (directions below 1e-12 of the largest dropped: the power basis leans towards the lowest modes).  ``gram``(A, B) = A^T B over all processes.
+    which puts an eigenvalue lambda_i within |lambda - lambda_i| <= est lambda_i; so the check of
+    one basis is the next block, and a block has as many columns as pairs still missing ``tol``
+    (the first: the ``nev`` wanted).  K is never multiplied: every block B of S has K B = M P with
+    P known (X0 for Y_1, the Ritz vectors z for W_j), so both projected matrices are M-products,
+    S^T K S = S^T M P, and all but the new block's M-products follow from the earlier ones.  A
+    pair's bound carries over to the larger basis's pair of the same index: the Ritz values only
+    fall, and stay above the eigenvalue of that index (Courant-Fischer), so the new one is at least
+    as close.  The basis is M-orthonormalised by the eigen-decomposition of its Gram matrix scaled to
+    a unit diagonal (directions below 1e-12 of the largest dropped).  ``gram``(A, B) = A^T B over all
+    processes; ``reduce``: sums over all processes.  ``max_blocks``: blocks in S at most.
 
-    Returns (lam (p,) ascending, Z (n x p, M-orthonormal), est (p,), blocks k, right-hand sides)."""
+    Returns (lam (p,) ascending, Z (n x p, M-orthonormal), est (p,): each pair's bound (nan where none
+    was computed), blocks in S, right-hand sides solved, Zp): K Z = M Zp for the first ``nev``
+    columns, so the residual check needs no product with K."""
     import scipy.linalg as sla
+    from scipy.linalg.blas import dgemm
 
     p = X0.shape[1]
-    Y = [np.asfortranarray(X0)]
-    n_rhs = 0
-    G = {}
+    S = [solve(np.asfortranarray(mdiag[:, None] * X0))]     # Y_1 = A X0, K Y_1 = M X0
+    P = [np.asfortranarray(X0)]
+    n_rhs = p
+    MS = mdiag[:, None] * S[0]
+    Mg = reduce(S[0].T @ MS)                    # S^T M S
+    Kg = gram(MS, P[0])                         # S^T K S = S^T M P
+    del MS
 
-    def add_block():
-        nonlocal n_rhs
-        MY = mdiag[:, None] * Y[-1]
-        Yn = solve(np.asfortranarray(MY))
-        n_rhs += Yn.shape[1]
-        Y.append(Yn)
-        j = len(Y) - 1
-        MYn = mdiag[:, None] * Yn
-        for a in range(j + 1):
-            G[a, j] = gram(Y[a], MYn)
-            G[j, a] = G[a, j].T
+    def times(blocks, C):                       # [B_1 B_2 ..] C, block by block, in place
+        out, r = None, 0
+        for B in blocks:
+            out = dgemm(1.0, B, np.asfortranarray(C[r:r + B.shape[1]]), beta=0.0 if out is None else 1.0,
+                        c=out, overwrite_c=True)
+            r += B.shape[1]
+        return out
 
-    add_block()                                # Y_1
-    for k in range(1, max_blocks + 1):
-        add_block()                            # Y_(k+1): checks span(Y_1 .. Y_k)
-        Mg = np.block([[G[a, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        Kg = np.block([[G[a, b - 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
+    bound = np.full(p, np.inf)
+    todo = np.arange(nev)
+    while True:
         d = 1.0 / np.sqrt(np.diag(Mg))
         ev, U = np.linalg.eigh(0.5 * (Mg + Mg.T) * d[:, None] * d[None, :])
         keep = ev > 1e-12 * ev.max()
         T = d[:, None] * U[:, keep] / np.sqrt(ev[keep])
         lam, Q = sla.eigh(T.T @ (0.5 * (Kg + Kg.T)) @ T)
-        C = T @ Q[:, :p]                       # z = [Y_1 .. Y_k] C, M-orthonormal
-        # ||A z - z / lam||_M^2 from the Gram matrices: A z = [Y_2 .. Y_(k+1)] C
-        G11 = Mg
-        G22 = np.block([[G[a + 1, b + 1] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        G21 = np.block([[G[a + 1, b] for b in range(1, k + 1)] for a in range(1, k + 1)])
-        lp = lam[:p]
-        sq = (np.einsum("ij,ij->j", C, G22 @ C) - 2.0 / lp * np.einsum("ij,ij->j", C, G21 @ C)
-              + np.einsum("ij,ij->j", C, G11 @ C) / lp ** 2)
-        est = np.sqrt(np.maximum(sq, 0.0)) * lp
-        if np.all(est[:nev] <= tol) or k == max_blocks:
+        lam, C = lam[:p], T @ Q[:, :p]          # z = S C, M-orthonormal
+        Zt = times(S, C[:, todo])
+        W = solve(np.asfortranarray(mdiag[:, None] * Zt))     # A z, K W = M z
+        n_rhs += todo.size
+        bound[todo] = np.minimum(bound[todo], ritz_criterion(Zt, W, lam[todo], mdiag, reduce))
+        if np.all(bound[:nev] <= tol) or len(S) == max_blocks:
             break
-    Z = np.asfortranarray(np.hstack(Y[1:k + 1]) @ C)
-    return lp, Z, est, k, n_rhs
+        sel = np.nonzero(bound[todo] > tol)[0]
+        todo, W, Zt, Cn = todo[sel], np.asfortranarray(W[:, sel]), Zt[:, sel], C[:, todo[sel]]
+        # the new block's M-products: S^T M W and W^T M W; its K-products from them, K W = M S Cn
+        MW = mdiag[:, None] * W
+        SMW = np.vstack([gram(B, MW) for B in S])
+        WMW = reduce(W.T @ MW)
+        del MW
+        Mg = np.block([[Mg, SMW], [SMW.T, WMW]])
+        SKW = Mg[:-todo.size, :-todo.size] @ Cn             # S^T K W = S^T M S Cn
+        WKW = SMW.T @ Cn                                   # W^T K W = W^T M S Cn
+        Kg = np.block([[Kg, SKW], [SKW.T, 0.5 * (WKW + WKW.T)]])
+        S.append(W)
+        P.append(Zt)
+    bound[~np.isfinite(bound)] = np.nan
+    return lam, times(S, C), bound, len(S), n_rhs, times(P, C[:, :nev])
 
 
 def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float):
@@ -286,15 +346,27 @@ def _reused(chain: _Chain, cfg, count, guard, comm, timings: dict, *, tol: float
     F = chain.ksp.getPC().getFactorMatrix()
     timings["factorization"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    lam, X, est, k, n_rhs = krylov_refine(chain.X, solve=lambda B: matsolve(F, B, comm), mdiag=mdiag,
-                                          gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
-                                          nev=count, tol=tol)
+    lam, X, est, k, n_rhs, Xp = krylov_refine(chain.X, solve=lambda B: matsolve(F, B, comm), mdiag=mdiag,
+                                              gram=lambda A, B: comm.allreduce(A.T @ B, op=MPI.SUM),
+                                              nev=count, tol=tol, reduce=lambda a: comm.allreduce(a, op=MPI.SUM))
     timings["iterations"] = time.perf_counter() - t0
-    if np.any(est[:count] > tol):
-        raise Breakdown(f"the reused start did not converge: criterion {est[:count].max():.2g} > {tol:g} "
+    if not np.all(est[:count] <= tol):
+        raise Breakdown(f"the reused start did not converge: criterion {np.nanmax(est[:count]):.2g} > {tol:g} "
                         f"after {k} blocks")
-    chain.X = X
-    return lam, X, mdiag, {"steps": k, "n_rhs": n_rhs, "est": float(est[:count].max())}
+    # the count's guard (no rigorous count: a Sylvester inertia would need an indefinite LDL^T factor
+    # of K - sigma M): a wanted eigenvalue missed altogether would have an eigenvector M-orthogonal to
+    # the Krylov space of the previous count + guard modes, i.e. come from above the previous guard
+    # modes; the wanted Ritz values, index by index, must move together by less than that band
+    shift = np.log(lam[:count] / chain.lam[:count])
+    band = float(np.log(chain.lam[-1] / chain.lam[count - 1]))
+    if not np.ptp(shift) < band:
+        raise Breakdown(f"the modes moved apart by {np.expm1(np.ptp(shift)):.1%} against the guard band "
+                        f"{np.expm1(band):.1%} (lambda_{len(chain.lam)} / lambda_{count} - 1): a mode may "
+                        "have crossed into the wanted ones")
+    chain.X, chain.lam = X, lam
+    return lam, X, mdiag, {"steps": k, "n_rhs": n_rhs, "est": float(est[:count].max()),
+                           "KX": mdiag[:, None] * Xp[:, :count],
+                           "spread": float(np.expm1(np.ptp(shift))), "band": float(np.expm1(band))}
 
 
 def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: bool = True,
@@ -344,7 +416,7 @@ def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: boo
             if len(lam) < count:
                 raise HousingSolveError(f"variant {i}: block Lanczos converged {len(lam)} of {count} modes")
             t0 = time.perf_counter()
-            resid = _check(chain.K, lam[:count], X[:, :count], mdiag, comm)
+            resid, mismatch = _check(chain.K, lam[:count], X[:, :count], mdiag, comm, KX=st.pop("KX", None))
             bound = cfg.modes.tol if res[0] == "fresh" else st["est"]
             timings["check"] = time.perf_counter() - t0
             if not reuse:
@@ -353,7 +425,9 @@ def sweep_housing_modes(cfgs: Sequence[HousingConfig], *, count: int, reuse: boo
             v = SweepVariant(freqs_hz=np.sqrt(np.maximum(lam[:count], 0.0)) / (2 * np.pi),
                              n_dofs=int(X.shape[0]), start=res[0], mesh=res[1],
                              seconds=time.perf_counter() - t_all, residual=resid, steps=int(st["steps"]),
-                             n_rhs=int(st["n_rhs"]), timings=timings, note=note, bound=bound)
+                             n_rhs=int(st["n_rhs"]), timings=timings, note=note, bound=bound,
+                             product_check=mismatch, spread=st.get("spread", float("nan")),
+                             band=st.get("band", float("nan")))
             out.append(v)
             if on_variant is not None:
                 on_variant(i, v)
