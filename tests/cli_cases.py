@@ -19,15 +19,16 @@ def cli_args(verb: str, scene: str, out, overrides) -> list:
     return args
 
 
-def cases(table) -> list:
+def cases(table, ci=None) -> list:
     """pytest.param entries, the id being each case's first value (entries that are already
-    pytest.param, e.g. the slow ones, keep their marks)."""
+    pytest.param, e.g. the slow ones, keep their marks).  ``ci``: the ids the CI tier runs;
+    the others are marked ``system`` (``make test-system``)."""
     out = []
     for c in table:
-        if hasattr(c, "values"):
-            out.append(pytest.param(*c.values[1:], marks=c.marks, id=c.values[0]))
-        else:
-            out.append(pytest.param(*c[1:], id=c[0]))
+        values, marks = (c.values, list(c.marks)) if hasattr(c, "values") else (c, [])
+        if ci is not None and values[0] not in ci:
+            marks.append(pytest.mark.system)
+        out.append(pytest.param(*values[1:], marks=marks, id=values[0]))
     return out
 
 

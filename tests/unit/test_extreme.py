@@ -143,13 +143,14 @@ def test_chattering_contact_is_reported():
     assert loose.status == Status.OK and loose.events > 50
 
 
-@pytest.mark.parametrize("overrides", [
+@pytest.mark.parametrize("overrides", [          # two in the CI tier, the rest: make test-system
     ["impact_pair.kappa=0.0"],
-    ["impact_pair.zeta=0.0", "impact_pair.f_m=0.0", "impact_pair.f_p=0.05"],
+    pytest.param(["impact_pair.zeta=0.0", "impact_pair.f_m=0.0", "impact_pair.f_p=0.05"],
+                 marks=pytest.mark.system),
     ["impact_pair.b_r=1e-9"],
-    ["impact_pair.kappa=1e-4"],
-    ["impact_pair.f_p=1.0", "impact_pair.kappa=0.0", "impact_pair.f_m=0.1",
-     "impact_pair.zeta=0.02"],
+    pytest.param(["impact_pair.kappa=1e-4"], marks=pytest.mark.system),
+    pytest.param(["impact_pair.f_p=1.0", "impact_pair.kappa=0.0", "impact_pair.f_m=0.1",
+                  "impact_pair.zeta=0.02"], marks=pytest.mark.system),
 ])
 def test_extreme_scenes_write_finite_files(tmp_path, overrides):
     out = tmp_path / "o"

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cli_cases import cli_args, read_outputs
+from cli_cases import cases, cli_args, read_outputs
 
 from vibrogear.cli import main
 
@@ -210,8 +210,8 @@ VALID = [
 ]
 
 
-@pytest.mark.parametrize("scene, overrides, check", [c[1:] for c in VALID],
-                         ids=[c[0] for c in VALID])
+@pytest.mark.parametrize("scene, overrides, check", cases(VALID, ci=(
+    "budget-of-2-points", "loosest-rtol", "gear-stiff-mesh")))     # the rest: make test-system
 def test_extreme_input_gives_a_finite_backbone(tmp_path, scene, overrides, check):
     out = tmp_path / "out"
     overrides = ['scene.analyses=["nnm"]', *overrides]

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from cli_cases import cli_args
+from cli_cases import cases, cli_args
 
 from vibrogear.analyses.optimize.optimize import F_CAP, penalised
 from vibrogear.cli import main
@@ -283,8 +283,8 @@ VALID = [
 ]
 
 
-@pytest.mark.parametrize("overrides, bounds, budget, check", [c[1:] for c in VALID],
-                         ids=[c[0] for c in VALID])
+@pytest.mark.parametrize("overrides, bounds, budget, check", cases(VALID, ci=(
+    "log-range-600-decades", "never-feasible", "zero-load")))      # the rest: make test-system
 def test_extreme_input_runs_to_an_explicit_outcome(scene, tmp_path, overrides, bounds, budget,
                                                    check):
     out = tmp_path / "out"

@@ -173,6 +173,7 @@ def test_reused_start_sweep_matches_each_fresh_solve(small_sweep):
     assert reused[2].freqs_hz[0] > reused[1].freqs_hz[0] > reused[0].freqs_hz[0]
 
 
+@pytest.mark.system
 def test_housing_sweep_analysis_reuses_in_runs(tmp_path):
     """The ``housing_sweep`` analysis with an all-hex housing: the points in one run of neighbours,
     each but the first from the previous one; every frequency within 1 % of the point's fresh solve."""

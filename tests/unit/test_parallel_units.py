@@ -167,6 +167,7 @@ if root:
 """
 
 
+@pytest.mark.system
 @pytest.mark.mpi
 @pytest.mark.skipif(__import__("shutil").which("mpirun") is None, reason="no mpirun")
 def test_mpirun_two_ranks_share_the_orbits_and_branches_and_match_one_worker(tmp_path):

@@ -27,6 +27,7 @@ def _run(tmp_path, name, *extra) -> tuple[int, Path, dict]:
     return code, out, summary
 
 
+@pytest.mark.system
 def test_analysis_order_changes_no_result(tmp_path):
     """sweep then continuation, and continuation then sweep: the same numbers in every file,
     and the branch figures carry the sweep overlay either way."""
@@ -45,6 +46,7 @@ def test_analysis_order_changes_no_result(tmp_path):
         assert not (out / "sweep.partial.jsonl").exists()     # removed once sweep.npz exists
 
 
+@pytest.mark.system
 def test_continuation_alone_overlays_the_sweep_already_in_the_folder(tmp_path):
     """``continue`` after ``sweep`` into the same folder: the combined figure is drawn from
     the sweep.npz there; into an empty folder there is none."""

@@ -276,6 +276,7 @@ def test_mpirun_two_ranks_identical_to_serial(tmp_path, serial):
     assert not (tmp_path / PARTIAL_NAME).exists()
 
 
+@pytest.mark.system
 @pytest.mark.mpi
 @pytest.mark.skipif(MPIRUN is None, reason="no mpirun")
 def test_mpirun_unit_exception_ends_all_ranks(tmp_path):

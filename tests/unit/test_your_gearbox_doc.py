@@ -26,6 +26,7 @@ def _workdir(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
 
 
+@pytest.mark.system
 def test_doc_commands_fast(tmp_path, monkeypatch):
     cmds = _commands()
     assert len(cmds) >= 6

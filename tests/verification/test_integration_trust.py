@@ -79,8 +79,7 @@ def test_two_stage_estimate_bounds_the_error_over_one_period():
     _check_honest(_work_precision(_study("two_stage.toml"), 2000.0, 1))
 
 
-@pytest.mark.parametrize("rtol", [3e-2, 1e-1])
-def test_stiff_gear_pair_at_a_loose_rtol_is_not_ok(rtol):
+def test_stiff_gear_pair_at_a_loose_rtol_is_not_ok():
     """400 mesh periods at 5200 rpm (rattling): at rtol 1e-8 ok with the events of rtol 1e-10; at loose
     tolerances the 57 kHz modes carry noise, the contact switches on it, and the run says so
     and names the tolerance to tighten."""
@@ -92,10 +91,11 @@ def test_stiff_gear_pair_at_a_loose_rtol_is_not_ok(rtol):
     good = integrate(m, p, st.start(p), 0.0, span, options=IntegrationOptions(rtol=1e-8,
                                                                               atol=1e-12))
     assert good.ok and ref.ok and good.events == ref.events > 100      # it rattles
-    bad = integrate(m, p, st.start(p), 0.0, span, options=IntegrationOptions(rtol=rtol,
-                                                                             atol=1e-12))
-    assert bad.status in (Status.INACCURATE, Status.DIVERGED)
-    assert f"rtol {rtol:.3g}" in bad.message and "tighten" in bad.message
+    for rtol in (3e-2, 1e-1):        # the references above serve both loose tolerances
+        bad = integrate(m, p, st.start(p), 0.0, span,
+                        options=IntegrationOptions(rtol=rtol, atol=1e-12))
+        assert bad.status in (Status.INACCURATE, Status.DIVERGED), rtol
+        assert f"rtol {rtol:.3g}" in bad.message and "tighten" in bad.message
 
 
 def test_loosest_rtol_is_measured_and_holds_over_a_long_run():
