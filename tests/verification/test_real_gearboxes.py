@@ -102,7 +102,17 @@ def test_end_to_end_load_and_findings(name, tmp_path):
         assert np.all(ok)
         for mesh in hand:
             assert np.all(z[f"contact_fraction_{mesh}"][ok] == 1.0)
-            assert np.all(z[f"kv_{mesh}"][ok] > 1.0) and np.all(z[f"kv_{mesh}"][ok] < 1.3)
+            # in contact throughout, the response is close to the linear one: the largest
+            # rise of the force over the static one against the linearised model's largest
+            # drop below it (its rattle threshold ratio: one complex solve per harmonic,
+            # independent of the integration), within 40 % or 1.5 % of the static force
+            # (several meshes' tones add to a rise and a drop that differ, and the Hertzian
+            # bearings add combination tones of up to 1 % of the static force on the
+            # three-stage reducer, also after 3660 settled periods; FVA agrees within 3 %:
+            # 0.69 against 0.70 at 3456 rpm)
+            kv, lin = z[f"kv_{mesh}"][ok], z[f"rattle_threshold_{mesh}"][ok]
+            assert np.all(kv > 1.0)
+            assert np.allclose(kv - 1.0, lin, rtol=0.4, atol=0.015), (mesh, kv, lin)
         assert not np.any(z["motion_class"] == 3)             # chaotic
     assert not any(b["severity"] == "avoid" for b in f["bands"])
     assert f["verdict"].startswith("Run at")

@@ -163,25 +163,33 @@ def _response(gm, scene, cfg):
     if not warm.ok:
         return None, warm, {}, 0, [warm.outcome]
     R = -(-cfg.record_periods // P) * P
+    # the record continues the forcing where the transient left it: the transient's base
+    # periods modulo the forcing's common period (0 where the forcing repeats every base
+    # period, as before; a restart at 0 would jump the phase of a torque order or of a mesh
+    # at its own frequency)
+    P_f = r.forcing_period_multiple
+    t_w = float((cfg.transient_periods % P_f if P_f else cfg.transient_periods) * T)
     t_eval = np.arange(1, _SAMPLES * R + 1) * (T / _SAMPLES)
     t_eval[-1] = R * T
-    tr = integrate(r, rpm, warm.u_end, 0.0, R * T, t_eval=t_eval, options=opts)
+    t_eval = t_w + t_eval
+    tr = integrate(r, rpm, warm.u_end, t_w, t_w + R * T, t_eval=t_eval, options=opts)
     if not tr.ok:
         return None, tr, {}, 0, [warm.outcome, tr.outcome]
     u = np.vstack([warm.u_end, tr.u])
-    delta = contact_history(r, rpm, np.concatenate([[0.0], t_eval]), u)[0]
+    delta = contact_history(r, rpm, np.concatenate([[t_w], t_eval]), u)[0]
     n, _ = classify_period(tr.u[_SAMPLES - 1::_SAMPLES], min(8, R // 2), 1e-4,
                            split=r.n_modes)
     stats = deformation_statistics(delta[0, :-1], _SAMPLES, period_n=n)
     # the metrics count per base period of a window given in excitation periods P T
     stats.update(_contact_statistics(r, rpm, warm.u_end, tr, t_eval, P * T,
-                                     n // P if n % P == 0 else n, opts))
+                                     n // P if n % P == 0 else n, opts, t_w))
     return delta[0], tr, stats, int(n), [warm.outcome, tr.outcome]
 
 
-def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
+def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts, t_w: float = 0.0) -> dict:
     """Impacts per period (both flanks) and rattle intensity of meshes[0], with their
-    batch-means errors (:func:`~vibrogear.solvers.sequential.record_metrics.metrics_with_errors`)."""
+    batch-means errors (:func:`~vibrogear.solvers.sequential.record_metrics.metrics_with_errors`),
+    over the record [t_w, t_eval[-1]] (model times)."""
     from ..models.contact_law import flank
     from ..solvers.integrator.contact_eval import contact_kinematics
     from ..solvers.sequential.record_metrics import contact_groups, metrics_with_errors
@@ -193,12 +201,12 @@ def _contact_statistics(r, rpm, start, tr, t_eval, T, n, opts) -> dict:
         return {}
     rows = {int(groups[key][1][0])}
     speeds = onset_speeds(tr, rows)
-    mode0 = flank(contact_kinematics(r, rpm, [0.0], start[None, :])[0][:, 0],
+    mode0 = flank(contact_kinematics(r, rpm, [t_w], start[None, :])[0][:, 0],
                   r.contacts.gap_hi, r.contacts.gap_lo)
     m = metrics_with_errors(r, {key: groups[key]}, mode0,
                             (tr.event_times, np.asarray(tr.event_contacts, int),
                              np.asarray(tr.event_modes, int)), np.array(speeds),
-                            0.0, t_eval[-1], T, period_n=n)
+                            t_w, t_eval[-1], T, period_n=n)
     return {"impacts": m[f"impacts_drive_{key}"] + m[f"impacts_back_{key}"],
             "impacts_err": float(np.hypot(m[f"impacts_drive_{key}_err"],
                                           m[f"impacts_back_{key}_err"])),

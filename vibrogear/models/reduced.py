@@ -216,6 +216,22 @@ class ReducedModel:
         it is multi-frequency forced, and there is no periodic orbit to shoot."""
         return self._forcing_period != self._period_multiple
 
+    def phase_time(self, periods: int, param: float) -> float:
+        """The model time from which an integration ``periods`` excitation periods into a
+        run continues the forcing where the last one left it: 0 where the forcing repeats
+        every excitation period (every model the solvers span whole: integrations restart at
+        0, exactly), else, for a multi-frequency model sampled per base period, the elapsed
+        periods modulo the forcing's common period (all of them where that period is
+        unknown) times the period.  Restarting such a model at 0 jumps the phase of every
+        mesh whose frequency is not a multiple of the base one: a 0.8 % state error per
+        restart on the FVA gearbox at 1602 rpm, and transients that read as a dynamic factor
+        of 1.10 at 543 rpm (1.001 with the phase carried on)."""
+        if not self.multi_frequency:
+            return 0.0
+        P = self.forcing_period_multiple
+        n = int(periods) % P if P else int(periods)
+        return float(n * self.excitation_period(param))
+
     def base_period(self, param: float) -> float:
         """2 pi / W: the mesh period of a gearbox (the excitation period unless a harmonic
         order is fractional)."""

@@ -136,11 +136,13 @@ def _max_mesh_force(model, param, u, meshes, periods, samples, options, force_un
     return _mesh_force_run(model, param, u, meshes, periods, samples, options, force_unit)[0]
 
 
-def _mesh_force_run(model, param, u, meshes, periods, samples, options, force_unit):
-    """(:func:`_max_mesh_force`'s dict, the integration's result)."""
+def _mesh_force_run(model, param, u, meshes, periods, samples, options, force_unit,
+                    t0: float = 0.0):
+    """(:func:`_max_mesh_force`'s dict, the integration's result); ``t0``: the model time of
+    ``u`` (the forcing's phase: 0 unless the model is multi-frequency)."""
     T = model.excitation_period(param)
-    t = np.arange(1, periods * samples + 1) * (T / samples)
-    tr = integrate(model, param, u, 0.0, periods * T, t_eval=t, options=options)
+    t = t0 + np.arange(1, periods * samples + 1) * (T / samples)
+    tr = integrate(model, param, u, t0, t0 + periods * T, t_eval=t, options=options)
     if not tr.ok:
         return {f"max_force_{k}": np.nan for k in meshes}, tr
     force = contact_history(model, param, tr.t, tr.u)[2]
@@ -167,7 +169,7 @@ def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
         if rec is None:
             rec = run_point(m, float(p), seed, direction, i, settings, **kw)
             if rec.ok:
-                force, tr = _mesh_force_run(m, float(p), rec.u_end, **extra)
+                force, tr = _mesh_force_run(m, float(p), rec.u_end, **extra, t0=rec.u_end_t)
                 rec = dataclasses.replace(rec, metrics={**rec.metrics, **force})
                 if not tr.ok:
                     # the motion settled but its largest mesh force is unknown: the point

@@ -90,8 +90,10 @@ def operating_shape(rpm: float, rates: np.ndarray, per_bin: np.ndarray) -> dict:
 
 
 def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
-                  ) -> tuple[np.ndarray, np.ndarray, str]:
-    """(rpm (P,), settled states (P, n), source) of the steady points (module docstring)."""
+                  ) -> tuple[np.ndarray, np.ndarray, str, np.ndarray]:
+    """(rpm (P,), settled states (P, n), source, each state's model time (P,): the
+    forcing's phase, zeros unless the model is multi-frequency) of the steady points (module
+    docstring)."""
     cfg = scene.nvh
     prev = (previous or {}).get("sweep") if cfg.use_sweep else None
     if prev is not None:
@@ -101,7 +103,9 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
             raise NumericalFailure(f"nvh: the sweep has no settled {cfg.sweep_direction!r} "
                                    "points")
         order = np.argsort(res.param[keep], kind="stable")
-        return res.param[keep][order], res.u_end[keep][order], f"sweep:{cfg.sweep_direction}"
+        phase = np.zeros(res.param.size) if res.u_end_t is None else res.u_end_t
+        return (res.param[keep][order], res.u_end[keep][order], f"sweep:{cfg.sweep_direction}",
+                phase[keep][order])
     if not cfg.own_grid():
         raise ConfigError("nvh.rpm_min", "no steady points: list 'sweep' before 'nvh' in "
                           "scene.analyses (with nvh.use_sweep = true), or give the [nvh] "
@@ -124,7 +128,8 @@ def steady_points(study: Study, scene, previous, ctx: RunContext | None = None
     ok = res.status == 0
     if not np.any(ok):
         raise NumericalFailure(f"nvh: no speed of the [nvh] grid settled: {res.message[0]}")
-    return res.param[ok], res.u_end[ok], "nvh grid"
+    phase = np.zeros(res.param.size) if res.u_end_t is None else res.u_end_t
+    return res.param[ok], res.u_end[ok], "nvh grid", phase[ok]
 
 
 def order_lines(gearbox_cfg, rpm) -> tuple[np.ndarray, np.ndarray, tuple]:
@@ -150,13 +155,16 @@ def _bearings(study: Study):
     return out
 
 
-def _record(study: Study, p: float, u0, R: int, S: int, opts):
+def _record(study: Study, p: float, u0, R: int, S: int, opts, t0: float = 0.0):
     """The trajectory over R whole excitation periods from ``u0`` (R P mesh periods, P the
     model's period_multiple: 1 unless torque orders or meshes at their own frequencies make
-    the excitation's period longer) with S samples per mesh period."""
+    the excitation's period longer) with S samples per mesh period; ``t0``: the model time
+    of ``u0`` (the forcing's phase: 0 unless the model is multi-frequency).  The times
+    returned count from the record's start."""
     P, T = study.model.period_multiple, study.model.base_period(p)
     t = np.arange(R * P * S) * (T / S)
-    return t, R * P * T, integrate(study.model, p, u0, 0.0, R * P * T, t_eval=t, options=opts)
+    tr = integrate(study.model, p, u0, t0, t0 + R * P * T, t_eval=t0 + t, options=opts)
+    return t, R * P * T, tr
 
 
 def _signals(study: Study, p: float, t, u, mesh, bearings) -> dict:
@@ -254,7 +262,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     cfg = scene.nvh
     gm, model = study.gearbox, study.model
     t_start = time.perf_counter()
-    rpm, states0, source = steady_points(study, scene, previous, ctx)
+    rpm, states0, source, phase0 = steady_points(study, scene, previous, ctx)
     t_settle = time.perf_counter() - t_start
     R, S = cfg.record_periods, cfg.samples_per_period
     opts = integration_options(scene, record=True, study=study)
@@ -267,15 +275,15 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     erp, erp_bins, kept, rates_at, best, warnings = [], [], [], {}, (-1.0, None), []
     solves = []             # each steady point's record: one outcome for the runner
     with ctx.progress(len(rpm), "nvh") as bar:
-        for p, u0 in zip(rpm, states0):
+        for p, u0, t0 in zip(rpm, states0, phase0):
             p = float(p)
-            t, span, tr = _record(study, p, u0, R, S, opts)
+            t, span, tr = _record(study, p, u0, R, S, opts, t0=float(t0))
             solves.append(tr.outcome)
             bar.update(1, f"{p:.4g} rpm")
             if not tr.ok:
                 warnings.append(f"nvh: {p:g} rpm left out: {tr.message}")
                 continue
-            for k, x in _signals(study, p, t, tr.u, mesh, bearings).items():
+            for k, x in _signals(study, p, tr.t, tr.u, mesh, bearings).items():
                 spec = amplitude_spectrum(x, span)
                 records[k].append(spec.amplitude)
                 if x.size:

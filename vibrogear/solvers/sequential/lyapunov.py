@@ -80,21 +80,23 @@ def state_scale(samples, m: int) -> np.ndarray:
 
 
 def tangent_chunk(model: ReducedModel, param: float, u_start, reference, direction,
-                  scale, *, options: IntegrationOptions, d0: float = D0):
+                  scale, *, options: IntegrationOptions, d0: float = D0, t_start: float = 0.0):
     """One chunk of Benettin's method.
 
     ``u_start``: the reference state at the chunk's start (phase 0, an integrator end
     state); ``reference`` (K, n): the reference states at the K period ends, integrated
     from ``u_start`` over [0, K T] by one :func:`integrate` call with ``options``;
     ``direction`` (n,): unit tangent in scaled units.  Returns (log growth per period
-    (K,), next unit direction, rhs calls, trajectory status)."""
+    (K,), next unit direction, rhs calls, trajectory status).  ``t_start``: the model time
+    the reference started from (the forcing's phase; 0 unless the model is multi-frequency:
+    ``ReducedModel.phase_time``)."""
     reference = np.atleast_2d(np.asarray(reference, dtype=float))
     K = reference.shape[0]
     T = model.excitation_period(param)
     v = np.asarray(direction, dtype=float)
     u_p = np.asarray(u_start, dtype=float) + d0 * v * scale
-    t_eval = np.arange(1, K + 1) * T
-    tr = integrate(model, param, u_p, 0.0, K * T, t_eval=t_eval, options=options)
+    t_eval = t_start + np.arange(1, K + 1) * T
+    tr = integrate(model, param, u_p, t_start, t_start + K * T, t_eval=t_eval, options=options)
     if not tr.ok:
         return np.full(K, math.nan), v, tr.rhs_calls, tr.status
     diff = (tr.u - reference) / scale
@@ -170,9 +172,10 @@ def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
     v = None
     logs, calls = [], 0
     status, message = Status.OK, "ok"
-    for _ in range(int(periods) // chunk):
-        t_eval = np.arange(1, chunk + 1) * T
-        ref = integrate(model, param, u, 0.0, chunk * T, t_eval=t_eval, options=options)
+    for i in range(int(periods) // chunk):
+        t_s = model.phase_time(i * chunk, param)     # the forcing carried on (0: periodic)
+        t_eval = t_s + np.arange(1, chunk + 1) * T
+        ref = integrate(model, param, u, t_s, t_s + chunk * T, t_eval=t_eval, options=options)
         calls += ref.rhs_calls
         if not ref.ok:
             status, message = ref.status, ref.message
@@ -180,7 +183,8 @@ def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
         if scale is None:
             scale = state_scale(np.vstack([u, ref.u]), m)
             v = initial_direction(direction, scale, u.size, seed)
-        g, v, c, st = tangent_chunk(model, param, u, ref.u, v, scale, options=options, d0=d0)
+        g, v, c, st = tangent_chunk(model, param, u, ref.u, v, scale, options=options, d0=d0,
+                                    t_start=t_s)
         calls += c
         if st != Status.OK:
             status, message = st, f"perturbed trajectory: {st.message}"

@@ -46,7 +46,8 @@ def record_to_json(r: PointRecord) -> dict:
          "lyapunov": json_number(r.lyapunov), "lyapunov_ci": _arr(r.lyapunov_ci),
          "transient_used": int(r.transient_used), "settled_by": r.settled_by,
          "metrics": {k: json_number(v) for k, v in r.metrics.items()},
-         "timings": {k: json_number(v) for k, v in r.timings.items()}}
+         "timings": {k: json_number(v) for k, v in r.timings.items()},
+         "u_end_t": json_number(r.u_end_t)}
     if r.states is not None:
         d["states_shape"] = list(np.shape(r.states))
         d["states"] = _arr(r.states)
@@ -70,4 +71,5 @@ def record_from_json(d: dict) -> PointRecord:
         transient_used=int(d.get("transient_used", 0)), settled_by=d.get("settled_by", ""),
         metrics={k: (int(v) if k.startswith(("period_n_", "motion_class_")) and v is not None
                      else _f(v)) for k, v in (d.get("metrics") or {}).items()},
-        timings={k: _f(v) for k, v in (d.get("timings") or {}).items()})
+        timings={k: _f(v) for k, v in (d.get("timings") or {}).items()},
+        u_end_t=_f(d.get("u_end_t", 0.0)))

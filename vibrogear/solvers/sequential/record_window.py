@@ -71,14 +71,23 @@ class RecordWindow:
     chunk_max: np.ndarray = None
     chunk_min: np.ndarray = None
     peak_force: dict = None      # {mesh contact row: largest |force| (model units)}
+    #: (R,) the model time (the forcing's phase) of each period end in ``states``: zeros
+    #: unless the model is multi-frequency (``ReducedModel.phase_time``)
+    strob_t: np.ndarray = None
+
+    def phase_times(self) -> np.ndarray:
+        return np.zeros(len(self.states)) if self.strob_t is None else self.strob_t
 
 
-def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_monitor):
+def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_monitor,
+                  start: int = 0):
     """The record window of R periods in chunks (module docstring): a :class:`RecordWindow`,
     or (status, message) where the integration failed.  Each chunk starts afresh (with the
     step the last one proposed it costs ~2 % fewer steps, but a chaotic point's record is
     then another stretch of its attractor: the sweep's goldens and statistics tests were
-    reviewed on these)."""
+    reviewed on these).  ``start``: the excitation periods integrated before the record
+    from the point's start (the forcing's phase: ``ReducedModel.phase_time``); each chunk is
+    ``(start state, period-end states, time from the record's start, phase time)``."""
     mesh_rows = {int(idx[0]) for kind, idx in groups.values() if kind == "mesh"}
     rows = np.array(sorted(mesh_rows), dtype=int)
     peaks = np.zeros(rows.size)
@@ -96,7 +105,9 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
         ends_t[-1] = k * T
         t_eval = (np.arange(k)[:, None] * T + np.arange(1, S + 1)[None, :] * (T / S)).ravel()
         t_eval[S - 1::S] = ends_t              # the period ends exactly as without samples
-        tr = integrate(model, param, seed, 0.0, k * T, t_eval=t_eval, options=options)
+        t_s = model.phase_time(start + int(round(t0 / T)), param)
+        t_eval = t_s + t_eval
+        tr = integrate(model, param, seed, t_s, t_s + k * T, t_eval=t_eval, options=options)
         counts += tr.counts
         if not tr.ok:
             return tr.status, tr.message
@@ -112,13 +123,13 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
         cmin.append(tr.monitor_min if has_monitor else math.nan)
         if rows.size:
             peaks = np.maximum(peaks, _force_peaks(model, param, tr.t, tr.u, rows))
-        chunks.append((seed.copy(), ends, t0))
+        chunks.append((seed.copy(), ends, t0, t_s))
         states.append(ends)
         qmin, qmax = min(qmin, tr.monitor_min), max(qmax, tr.monitor_max)
         losses += tr.monitor_losses
         lost_events |= tr.events > tr.event_times.size
         speeds += onset_speeds(tr, mesh_rows)
-        ev_t += [t0 + te for te in tr.event_times]
+        ev_t += [t0 + (te - t_s) for te in tr.event_times]
         ev_j += [int(j) for j in tr.event_contacts]
         ev_m += [int(md) for md in tr.event_modes]
         seed = tr.u_end.copy()
@@ -126,13 +137,14 @@ def record_window(model, param, seed, R, T, chunk, groups, options, counts, has_
     return RecordWindow(chunks, np.concatenate(states), seed, qmin, qmax, losses, lost_events,
                    (np.array(ev_t), np.array(ev_j, int), np.array(ev_m, int)),
                    np.array(speeds), ranges, np.array(cmax), np.array(cmin),
-                   dict(zip(rows.tolist(), peaks.tolist())))
+                   dict(zip(rows.tolist(), peaks.tolist())),
+                   np.array([model.phase_time(start + k, param) for k in range(1, R + 1)]))
 
 
 def record_extrema(model, param, rec: RecordWindow, has_monitor) -> tuple[float, float]:
     """(min, max) of the monitored deformation over a record: the integrator's located
     extrema and the stroboscopic samples (the samples alone without a monitored contact)."""
-    delta = monitored_deformation(model, param, np.zeros(len(rec.states)), rec.states)
+    delta = monitored_deformation(model, param, rec.phase_times(), rec.states)
     if not has_monitor:
         return float(delta.min()), float(delta.max())
     return min(rec.qmin, float(delta.min())), max(rec.qmax, float(delta.max()))

@@ -128,6 +128,9 @@ class SweepResult:
     #: the monitored contact's name (the key of ``hysteresis_<name>`` in sweep.npz; "" when
     #: unknown)
     monitored: str = ""
+    #: (N,) the model time (the forcing's phase) of each ``u_end``: zeros unless the model is
+    #: multi-frequency (``ReducedModel.phase_time``; None: all 0)
+    u_end_t: np.ndarray | None = None
 
     @property
     def ok(self) -> np.ndarray:
@@ -393,4 +396,5 @@ def assemble_result(records, *, n_states: int, record_periods: int, options, per
         transient_used=i("transient_used"),
         settled_by=np.array([r.settled_by for r in recs], dtype="<U10"), metrics=metrics,
         timings={k: float(sum(r.timings.get(k, 0.0) for r in recs)) for k in PHASES},
+        u_end_t=np.array([r.u_end_t for r in recs], dtype=float),
         monitored=str(monitored))
