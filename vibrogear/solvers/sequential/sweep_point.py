@@ -2,7 +2,10 @@
 class with its evidence (period, Lyapunov exponent) and the contact metrics.
 
 Every integration starts at phase 0 (t = 0, cos(W t) = 1) and covers whole excitation
-periods T, so its end state is again at phase 0.
+periods T, so its end state is again at phase 0; a multi-frequency model (sampled per base
+period of a forcing whose common period is longer) starts each integration where the last
+left the forcing instead (``ReducedModel.phase_time``), and its end state's time is
+``PointRecord.u_end_t``.
 
 * **Transient** in blocks of max(max_period + 2, 8) periods, at most ``transient_periods +
   extra_transient_periods`` (the budget).  It stops after a block when
