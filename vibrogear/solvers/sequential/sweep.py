@@ -19,10 +19,9 @@ metrics per contact group come from them (:mod:`.motion`, :mod:`.lyapunov`).
 
 Each point starts at t = 0 where the excitation phase is cos(W t) = 1; since a whole
 number of periods is integrated, the end state is again at phase 0 and seeds the next
-point directly (a multi-frequency model's end state lies at ``u_end_t`` within the forcing's
-common period; the next point, at another speed, starts from it at t = 0).  A failed point keeps NaN values and its integrator status and
-message; the unit goes on from its last good state.  Solvers never print.
-"""
+point directly (a multi-frequency model's end state lies at ``u_end_t``; the next point, at
+another speed, starts from it at t = 0).  A failed point keeps NaN values and its integrator
+status and message; the unit goes on from its last good state.  Solvers never print."""
 from __future__ import annotations
 
 import math
