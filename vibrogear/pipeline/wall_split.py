@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from .executors import effective_workers, run_units
 
-__all__ = ["WallSplit", "Phase", "project"]
+__all__ = ["WallSplit", "Phase", "project", "simulate"]
 
 
 @dataclass
@@ -47,11 +47,18 @@ class Phase:
     unit_work_s: float
     largest_unit_s: float
     workers: int
+    #: {part: {"units", "unit_work_s", "largest_unit_s"}} where the phase mixes kinds of unit
+    parts: dict | None = None
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "wall_s": round(self.wall_s, 4), "units": self.units,
-                "unit_work_s": round(self.unit_work_s, 4),
-                "largest_unit_s": round(self.largest_unit_s, 4), "workers": self.workers}
+        out = {"name": self.name, "wall_s": round(self.wall_s, 4), "units": self.units,
+               "unit_work_s": round(self.unit_work_s, 4),
+               "largest_unit_s": round(self.largest_unit_s, 4), "workers": self.workers}
+        if self.parts:
+            out["parts"] = {k: {"units": v["units"], "unit_work_s": round(v["unit_work_s"], 4),
+                                "largest_unit_s": round(v["largest_unit_s"], 4)}
+                            for k, v in self.parts.items()}
+        return out
 
 
 class _Timed:
@@ -79,23 +86,51 @@ class WallSplit:
     def describe(self, text: str) -> None:
         self.serial_part = text
 
-    def run(self, name: str, fn, units, *, workers=None, **kw) -> list:
+    def run(self, name: str, fn, units, *, workers=None, kind=None, on_done=None, **kw) -> list:
         """:func:`~vibrogear.pipeline.executors.run_units` (same arguments, same return
         value: fn's values in unit order), timed as the phase ``name``.  Collective under
-        MPI, as run_units is; an empty list of units is no phase."""
+        MPI, as run_units is; an empty list of units is no phase.  ``kind(unit) -> str``
+        names the part of the phase each unit belongs to (the units added by ``on_done``
+        too): the phase then reports each part's units, work and largest unit
+        (``parts``), and :meth:`work_by_kind` their work."""
         units = list(units)
         if not units:
             return []
+        every = list(units)
+        done = None
+        if on_done is not None:
+            def done(i, got):
+                new = on_done(i, got[0])
+                new = list(new or ())
+                every.extend(u for u, _c in new)
+                return new
         t0 = time.perf_counter()
-        got = run_units(_Timed(fn), units, workers=workers, **kw)
+        got = run_units(_Timed(fn), units, workers=workers, on_done=done, **kw)
         wall = time.perf_counter() - t0
         walls = [g[1] for g in got if g is not None]
-        self.add(name, wall, walls, effective_workers(len(units), workers))
+        parts = None
+        if kind is not None:
+            parts = {}
+            for u, g in zip(every, got):
+                if g is not None:
+                    parts.setdefault(kind(u), []).append(g[1])
+        self.add(name, wall, walls, effective_workers(len(every), workers), parts=parts)
         return [None if g is None else g[0] for g in got]
 
-    def add(self, name: str, wall_s: float, unit_walls, workers: int) -> None:
-        """Record a phase measured elsewhere (its units' walls; phases of one name add up)."""
+    def work_by_kind(self, name: str) -> dict:
+        """{part: summed unit wall} of phase ``name`` (empty without parts)."""
+        for p in self.phases:
+            if p.name == name:
+                return {k: v["unit_work_s"] for k, v in (p.parts or {}).items()}
+        return {}
+
+    def add(self, name: str, wall_s: float, unit_walls, workers: int, parts=None) -> None:
+        """Record a phase measured elsewhere (its units' walls; phases of one name add up;
+        ``parts``: {part: its units' walls})."""
         unit_walls = [float(w) for w in unit_walls]
+        summed = None if parts is None else {
+            k: {"units": len(v), "unit_work_s": float(sum(v)),
+                "largest_unit_s": float(max(v, default=0.0))} for k, v in parts.items()}
         for p in self.phases:
             if p.name == name:
                 p.wall_s += float(wall_s)
@@ -103,9 +138,17 @@ class WallSplit:
                 p.unit_work_s += sum(unit_walls)
                 p.largest_unit_s = max([p.largest_unit_s, *unit_walls])
                 p.workers = max(p.workers, int(workers))
+                if summed and p.parts is None:
+                    p.parts = {}
+                for k, v in (summed or {}).items():
+                    q = p.parts.setdefault(k, {"units": 0, "unit_work_s": 0.0,
+                                               "largest_unit_s": 0.0})
+                    q["units"] += v["units"]
+                    q["unit_work_s"] += v["unit_work_s"]
+                    q["largest_unit_s"] = max(q["largest_unit_s"], v["largest_unit_s"])
                 return
         self.phases.append(Phase(name, float(wall_s), len(unit_walls), sum(unit_walls),
-                                 max(unit_walls, default=0.0), int(workers)))
+                                 max(unit_walls, default=0.0), int(workers), summed))
 
     def summary(self) -> dict:
         total = time.perf_counter() - self.start
@@ -139,3 +182,71 @@ def project(entry: dict, workers: int) -> dict:
     return {"workers": w, "one_worker_s": one, "wall_s": [lo, hi],
             "speedup": [one / hi if hi > 0 else 1.0, one / lo if lo > 0 else 1.0],
             "amdahl_speedup": amdahl}
+
+
+def simulate(first, run, workers: int, *, on_result=None, on_done=None) -> dict:
+    """The wall time of a run of work units on ``workers`` workers, replayed from the units'
+    measured walls: a discrete-event copy of :func:`~vibrogear.pipeline.executors.run_units`'s
+    dispatch (the pending unit with the highest cost first, ties in index order, each to
+    the first free worker) with its ``on_done`` units, so that units that depend on others
+    (the census's orbits and branches) start when they would.
+
+    ``first``: the first units as (unit, cost); ``run(unit) -> (items, value, wall_s)``: a
+    unit's emitted items, its value and its wall (measured, or computed now);
+    ``on_result(i, item)`` and ``on_done(i, value) -> [(unit, cost)]`` as run_units's,
+    called in simulated time.  The coordinator's own time in them (measured here with the
+    real calls) delays the units they add, one call after the other (one coordinating
+    process).  Returns {"wall_s", "units", "unit_work_s", "coordinator_s", "idle_s" (workers'
+    idle time before the end)}."""
+    import heapq
+    import itertools
+
+    w = int(workers)
+    if w < 1:
+        raise ValueError(f"simulate: workers must be >= 1, got {workers}")
+    units, seq = [], itertools.count()
+    pending: list = []                  # (release time, -cost, index) not yet released
+    ready: list = []                    # (-cost, index) released
+    running: list = []                  # (finish time, index)
+    values: dict = {}
+
+    def add(pairs, at):
+        for u, c in pairs or ():
+            i = next(seq)
+            units.append(u)
+            heapq.heappush(pending, (at, -float(c), i))
+
+    add(first, 0.0)
+    t = coord = work = coord_total = 0.0
+    busy = 0
+    while pending or ready or running:
+        while pending and pending[0][0] <= t:
+            _at, c, i = heapq.heappop(pending)
+            heapq.heappush(ready, (c, i))
+        while ready and busy < w:
+            _c, i = heapq.heappop(ready)
+            items, value, wall = run(units[i])
+            values[i] = (items, value)
+            work += float(wall)
+            heapq.heappush(running, (t + float(wall), i))
+            busy += 1
+        nxt = [x for x in (running[0][0] if running else None,
+                           pending[0][0] if pending else None) if x is not None]
+        if not nxt:
+            break
+        t = max(t, min(nxt))
+        if running and running[0][0] <= t:
+            _ft, i = heapq.heappop(running)
+            busy -= 1
+            items, value = values.pop(i)
+            t0 = time.perf_counter()
+            for item in items:
+                if on_result is not None:
+                    on_result(i, item)
+            new = on_done(i, value) if on_done is not None else None
+            spent = time.perf_counter() - t0
+            coord = max(coord, t) + spent
+            coord_total += spent
+            add(new, coord)
+    return {"wall_s": t, "units": len(units), "unit_work_s": work,
+            "coordinator_s": coord_total, "idle_s": max(w * t - work, 0.0)}

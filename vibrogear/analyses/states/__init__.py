@@ -10,6 +10,8 @@ helper of the wing does not load the whole wing).  Its modules:
 - ``gaps``: A non-periodic group of census records split where its extrema fall into two clumps:
   distinct tori whose other statistics agree within their errors still differ in where their
   deformation turns (docs/states.md, "Grouping non-periodic motions").
+- ``plan``: The census's work as one stream of units: starts, orbits and branches start as soon
+  as what they need is there.
 - ``starts``: The random starts of ``vibrogear states``: their scales and their reproducible
   draw.
 - ``summary``: The ``states`` entry of ``summary.json``: what the census found, per grid value,
@@ -18,6 +20,6 @@ helper of the wing does not load the whole wing).  Its modules:
 
 from ...lazy import lazy_exports
 
-__all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
+__all__ = ["StatesResult", "run", "grid", "PARTIAL_NAME"]
 
 __getattr__, __dir__ = lazy_exports(__name__, dict.fromkeys(__all__, "states"))

@@ -32,19 +32,19 @@ from pathlib import Path
 import numpy as np
 
 from ...config.options import SweepOptions
-from ...pipeline.executors import broadcast, effective_workers, run_units, unit_size
+from ...pipeline.executors import broadcast
 from ...pipeline.wall_split import WallSplit
 from ...pipeline.outcome import AnalysisOutcome, NumericalFailure, RunContext
 from ...pipeline.resume import PartialStore
 from ...solvers.sequential.motion import MOTION_LEGEND
-from ...solvers.sequential.sweep_point import PHASES, run_point
-from .cluster import cluster_point, interval_widths
-from .starts import draw_start, start_scales
+from ...solvers.sequential.sweep_point import PHASES
+from .plan import CensusPlan, UnitContext, unit_kind, work_unit
+from .starts import start_scales
 from ..study import Study, integration_options
-from ...solvers.sequential.record_json import record_from_json, record_to_json
+from ...solvers.sequential.record_json import record_from_json
 from ...status import Outcome
 
-__all__ = ["StatesResult", "run", "census", "grid", "PARTIAL_NAME"]
+__all__ = ["StatesResult", "run", "grid", "census_plan", "PARTIAL_NAME"]
 
 PARTIAL_NAME = "states.partial.jsonl"
 #: settings that do not change a settled start (left out of the resume signature)
@@ -110,105 +110,25 @@ def grid(cfg) -> np.ndarray:
     return np.array([lo]) if cfg.n_points == 1 else np.linspace(lo, hi, cfg.n_points)
 
 
-def _compact(rec):
-    """A settled start as kept: the cycle (last n stroboscopic states) of a periodic one,
-    no states otherwise."""
-    n = int(rec.period_n)
-    st = rec.states
-    keep = np.array(st[-n:], dtype=float) if (n > 0 and st is not None) else None
-    return dataclasses.replace(rec, states=keep)
-
-
-def _settle_unit(model, settings, options, seed, unit, emit) -> int:
-    """Settle the starts of one unit (grid index, value, start indices, scales)."""
-    i, p, ks, scales = unit
-    for k in ks:
-        u = draw_start(scales, model, seed, i, k)
-        rec = run_point(model, float(p), u, "start", int(k), settings, options=options,
-                        keep_states=True)
-        emit((int(i), _compact(rec)))
-    return len(ks)
-
-
 def _describe(param_name, unit) -> str:
-    i, p, ks, _ = unit
-    return f"{param_name} = {p:.6g}, starts {ks[0]}..{ks[-1]}"
+    """A unit named for the user (where an MPI rank lost it)."""
+    kind, i, p = unit[0], unit[1], unit[2]
+    if kind == "start":
+        return f"{param_name} = {p:.6g}, starts {unit[3][0]}..{unit[3][-1]}"
+    if kind == "orbit":
+        return f"{param_name} = {unit[3]:.6g}, the orbit of attractor {unit[2]}"
+    return f"{param_name} = {unit[3]:.6g}, a half-branch"
 
 
-def census(model, params, cfg, *, options, scales, store=None, done=None, progress=None,
-           root: bool = True, split=None) -> tuple[dict, dict]:
-    """Settle the starts of every grid value (module docstring, steps 1-2); returns
-    ({grid index: [PointRecord]}, {"rounds", "new", "stopped_early"}).  ``done``: {(i, k):
-    record} already settled (resumed); ``split``: a :class:`~vibrogear.pipeline.wall_split.WallSplit`
-    that times the units.  Collective under MPI: every rank calls it."""
-    settings = SweepOptions.of(cfg)
-    done = dict(done or {})
-    P = len(params)
-    round_size = cfg.batch if cfg.basin_tol is not None else cfg.starts
-    active = list(range(P))
-    upto, rounds, new, early = 0, 0, 0, []
-    while active:
-        upto = min(upto + round_size, cfg.starts)
-        units = None
-        if root:
-            todo = {i: [k for k in range(upto) if (i, k) not in done] for i in active}
-            n_todo = sum(len(v) for v in todo.values())
-            w = effective_workers(n_todo, cfg.workers)
-            # at most `batch` starts a unit; smaller where the workers would otherwise
-            # run out of units before the end (the last units leave the others idle)
-            size = cfg.batch if w == 1 else unit_size(n_todo, w, cfg.batch)
-            units = []
-            for i in active:
-                for a in range(0, len(todo[i]), size):
-                    units.append((i, float(params[i]), tuple(todo[i][a:a + size]),
-                                  scales[i]))
-        units = broadcast(units)
-
-        def on_result(_u, item):
-            i, rec = item
-            done[(i, int(rec.index))] = rec
-            if store is not None:
-                store.append({"point": i, **record_to_json(rec)})
-            if progress is not None:
-                progress(i, rec)
-
-        if units:
-            run = run_units if split is None else partial(split.run, "census")
-            run(partial(_settle_unit, model, settings, options, cfg.seed), units,
-                workers=cfg.workers, on_result=on_result, costs=[len(u[2]) for u in units],
-                describe=partial(_describe, model.param_name))
-            new += sum(len(u[2]) for u in units)
-        rounds += 1
-        still = None
-        if root:
-            still = []
-            for i in active:
-                if upto >= cfg.starts:
-                    continue
-                recs = [done[(i, k)] for k in range(upto) if (i, k) in done]
-                atts, _, _ = cluster_point(recs, i, params[i], n_modes=model.n_modes,
-                                           cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
-                if interval_widths(atts) < cfg.basin_tol:
-                    early.append(i)
-                else:
-                    still.append(i)
-        active = broadcast(still)
-    by_point = {i: [r for (j, _k), r in sorted(done.items()) if j == i] for i in range(P)}
-    return by_point, {"rounds": rounds, "new": new, "stopped_early": early}
-
-
-def _group(by_point, params, model, cfg, study):
-    """Rank 0's grouping of the settled starts: (attractors, settled and failed per grid
-    value, the records, the starts' table, its wall seconds)."""
-    t0 = time.perf_counter()
+def _group(plan, study):
+    """Rank 0's result of the census: (attractors in grid order, settled and failed per grid
+    value, the records, the starts' table)."""
+    by_point = plan.by_point()
     attractors, n_ok, n_failed = [], [], []
-    for i, p in enumerate(params):
-        atts, k, f = cluster_point(by_point[i], i, p, n_modes=model.n_modes,
-                                   cluster_tol=cfg.cluster_tol, stat_tol=cfg.stat_tol)
+    for atts, k, f in plan.attractors:
         attractors += atts
         n_ok.append(k)
         n_failed.append(f)
-    t_cluster = time.perf_counter() - t0
     if sum(n_ok) == 0:
         first = next((r for recs in by_point.values() for r in recs), None)
         raise NumericalFailure("states: every start failed" + (
@@ -220,29 +140,51 @@ def _group(by_point, params, model, cfg, study):
               "wall_s": np.array([r.wall_time for v in by_point.values() for r in v], float)}
     starts["attractor"] = np.array([which.get((i, k), -1) for i, k in
                                     zip(starts["point"], starts["index"])], int)
-    return attractors, n_ok, n_failed, recs, starts, t_cluster
+    return attractors, n_ok, n_failed, recs, starts
 
 
 #: what the census does without sharing it among the workers (summary.json's serial_part)
 SERIAL_PART = ("not shared among the workers: the start states and the resume file before "
-               "the census; the grouping into attractors, the choice of each wave of branches, "
-               "the comparison with the sweep and the summary after it")
+               "the units; between them, on the coordinating process while the workers go "
+               "on, each grid value's grouping into attractors and the choice of the "
+               "candidates for branches; after them the comparison with the sweep and the "
+               "summary")
 
 
-def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
-    from .branches import compare_with_sweep, continue_branches, refine_orbits
-    from .summary import states_summary
-
+def census_plan(study, scene, *, done=None, store=None, progress=None, previous=None):
+    """The census's coordinator and the context its units run in: (CensusPlan, UnitContext)
+    for ``scene.states`` (``done``: starts settled before; ``previous``: this run's results
+    so far, whose continuation's branches count as known)."""
+    from .branches import branch_settings, known_branches, orbit_options
     cfg = scene.states
     model = study.model
     params = grid(cfg)
-    wall = time.perf_counter()
-    split = WallSplit(SERIAL_PART)
     opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
                                study=study)
     scales = [start_scales(model, float(p), study.start(float(p)),
                            deformation_scale=cfg.deformation_scale,
                            velocity_scale=cfg.velocity_scale, box=cfg.box) for p in params]
+    orbit_opts, shooting = orbit_options(study, scene)
+    cont = None
+    if cfg.branches and cfg.param_max > cfg.param_min and not model.multi_frequency:
+        cont = branch_settings(study, scene)
+    ctx = UnitContext(model=model, settings=SweepOptions.of(cfg), options=opts, seed=cfg.seed,
+                      orbit_options=orbit_opts, shooting=shooting, continuation=cont)
+    plan = CensusPlan(study, cfg, params, scales, ctx, done=done, store=store,
+                      progress=progress, known=known_branches(previous), workers=cfg.workers)
+    return plan, ctx
+
+
+def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
+    from .branches import compare_with_sweep
+    from .summary import states_summary
+
+    cfg = scene.states
+    params = grid(cfg)
+    wall = time.perf_counter()
+    split = WallSplit(SERIAL_PART)
+    opts = integration_options(scene, record=True, period_tol=cfg.period_tol, section=cfg,
+                               study=study)
     store, done = None, {}
     if ctx.writes:
         settings = {k: v for k, v in dataclasses.asdict(cfg).items()
@@ -257,41 +199,44 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
         done = {key: r for key, r in done.items() if key[1] < cfg.starts}
     resumed = len(done)
     with ctx.progress(len(params) * cfg.starts - resumed, "states") as bar:
-        by_point, info = census(
-            model, params, cfg, options=opts, scales=scales, store=store, done=done,
-            root=ctx.root, split=split, progress=lambda i, rec: bar.update(
+        plan, unit_ctx = census_plan(
+            study, scene, done=done, store=store, previous=previous,
+            progress=lambda i, rec: bar.update(
                 1, f"{params[i]:.4g} {study.param_unit} P{rec.period_n}"))
-    t_census = time.perf_counter() - wall
+        coordinator = plan if ctx.root else None
+        first = broadcast(plan.start() if ctx.root else None)
+        split.run("census", partial(work_unit, unit_ctx), [u for u, _c in first],
+                  costs=[c for _u, c in first], workers=cfg.workers, kind=unit_kind,
+                  on_result=None if coordinator is None else coordinator.on_result,
+                  on_done=None if coordinator is None else coordinator.on_done,
+                  describe=partial(_describe, study.param_name))
+    t_units = time.perf_counter() - wall
     try:
-        grouped = _group(by_point, params, model, cfg, study) if ctx.root else None
+        grouped = _group(plan, study) if ctx.root else None
     except BaseException:
-        broadcast(None)         # the other ranks leave (they wait for the orbits' units)
+        broadcast(None)
         raise
     if broadcast(ctx.root and grouped is not None) is not True:
         return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
-    attractors, n_ok, n_failed, recs, starts, t_cluster = grouped or ([], [], [], [], {}, 0.0)
+    if not plan.finished():
+        raise NumericalFailure("states: the census's units ended before every grid value was "
+                               "grouped (an internal error: please report it)")
+    attractors, n_ok, n_failed, recs, starts = grouped
     timings = {ph: float(sum(r.timings.get(ph, 0.0) for r in recs)) for ph in PHASES}
-    timings["clustering"] = t_cluster
-    t0 = time.perf_counter()
-    refine_orbits(study, scene, attractors, workers=cfg.workers, split=split, root=ctx.root)
-    timings["orbits"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    branches, notes = (), ()
-    if cfg.branches:
-        branches, notes = continue_branches(study, scene, attractors, previous or {},
-                                            workers=cfg.workers, split=split, root=ctx.root)
-    timings["branches"] = time.perf_counter() - t0
-    if not ctx.root:            # rank 0 compares and reports
-        return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
+    timings["clustering"] = plan.clustering_s
+    work = split.work_by_kind("census")
+    timings["orbits"] = work.get("orbits", 0.0)
+    timings["branches"] = work.get("branches", 0.0)
     sweep = compare_with_sweep(study, attractors, (previous or {}).get("sweep"))
-    timings["census_wall"] = t_census
+    timings["census_wall"] = t_units
     timings["total_wall"] = time.perf_counter() - wall
-    solves = Outcome.combine((r.outcome for r in recs), wall_s=t_census)
+    solves = Outcome.combine((r.outcome for r in recs), wall_s=t_units)
+    info = plan.census_info()
     counters = {"starts_settled": len(recs), "starts_resumed": resumed, "rounds": info["rounds"],
                 **{k: solves.counters.get(k, 0) for k in ("steps", "rhs_calls", "events")}}
     result = StatesResult(params=params, attractors=tuple(attractors),
                           n_starts=np.array(n_ok, int), n_failed=np.array(n_failed, int),
-                          study=study, branches=tuple(branches), branch_notes=tuple(notes),
+                          study=study, branches=tuple(plan.found), branch_notes=tuple(plan.notes),
                           sweep=sweep, timings=timings, counters=counters, starts=starts)
     summary = states_summary(result, cfg, opts, info)
     summary.update(split.summary())
