@@ -2,32 +2,33 @@
 on 16 and 64 workers, serial part and unit granularity included (docs/performance.md,
 "Parallel runs: what is serial and what the split projects").
 
-Measured here, each once, on ``--workers`` worker processes (small runs: the machine is shared):
+Measured here, each once, on ``--workers`` worker processes:
 
 * ``states`` on gear_pair over the issue's grid (11 speeds, 4900-5400 rpm) with ``--starts``
-  starts per speed and branches on: census, orbit refinement and branches are work units;
+  starts per speed (the issue's 32 by default) and branches on, first on one worker with
+  every work unit recorded (each start's wall, each orbit's and half-branch's), then on
+  ``--workers`` workers for real (same result required).  The recorded units are then
+  replayed on 1, ``--workers``, 16 and 64 workers (:func:`vibrogear.pipeline.wall_split.simulate`:
+  run_units's dispatch, longest first, with the census's own plan adding the orbits and
+  branches as their starts come in); the wall on W workers is the replay plus the run's
+  serial part, and the speed-up is against the replay on one worker.  The replay on
+  ``--workers`` workers is checked against the real run of that many;
 * ``sweep`` on gear_pair, ``--sweep-points`` speeds up and down in ``--segments`` segments;
 * ``map`` on gear_pair, 2 loads x ``--map-speeds`` speeds, curves off.
 
 Each run's ``summary.json`` entry holds ``parallel_wall_s``, ``serial_wall_s`` and its phases
-(units, summed and largest unit wall); :func:`vibrogear.pipeline.wall_split.project` turns
-them into the wall and speed-up on W workers: serial + sum over phases of
-max(work / W, largest unit) (the speed-up's upper end) and Graham's bound serial + work / W +
-(1 - 1/W) largest unit (its lower end).  For the census the benchmark also projects the
-issue's full case (32 starts per speed, 352 starts): the census work scaled by 352 / the
-starts measured, its largest unit the longest start measured times the starts a unit holds at
-W workers (:func:`~vibrogear.pipeline.executors.unit_size`), the grouping scaled with the starts,
-the orbits and branches as measured (the same grid, so the same branch settings; the full
-census may find more attractors to continue from).  Projections are written as such, with the
-load average at each measurement.
+(units, summed and largest unit wall); for the sweep and the map
+:func:`vibrogear.pipeline.wall_split.project` turns them into the wall and speed-up on W
+workers: serial + sum over phases of max(work / W, largest unit) (the speed-up's upper end)
+and Graham's bound serial + work / W + (1 - 1/W) largest unit (its lower end).  Projections
+are written as such, with the load average at each measurement.
 
-Run: .venv/bin/python benchmarks/bench_parallel.py [--starts 3 --workers 2]
+Run: .venv/bin/python benchmarks/bench_parallel.py [--starts 32 --workers 2]
 Writes benchmarks/results/bench_parallel.json.
 """
 from __future__ import annotations
 
 import argparse
-import heapq
 import json
 import os
 import platform
@@ -42,7 +43,6 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from vibrogear.config import load_scene  # noqa: E402
-from vibrogear.pipeline.executors import unit_size  # noqa: E402
 from vibrogear.pipeline.outcome import RunContext  # noqa: E402
 from vibrogear.pipeline.wall_split import project  # noqa: E402
 from vibrogear.runner import run_scene  # noqa: E402
@@ -78,54 +78,119 @@ def _projections(entry: dict, workers) -> dict:
     return out
 
 
-def _full_census(entry: dict, measured_starts: int, full_starts: int, batch: int,
-                 longest_start: float, w: int) -> dict:
-    """The measured split with the census scaled to ``full_starts`` on ``w`` workers."""
-    ratio = full_starts / measured_starts
-    clustering = float(entry["wall_split_s"].get("clustering", 0.0))
-    phases = []
-    for p in entry["parallel_phases"]:
-        p = dict(p)
-        if p["name"] == "census":
-            p["unit_work_s"] = p["unit_work_s"] * ratio
-            size = unit_size(full_starts, w, batch) if w > 1 else batch
-            p["largest_unit_s"] = longest_start * size
-            p["units"] = -(-full_starts // size)
-        phases.append(p)
-    return {"serial_wall_s": entry["serial_wall_s"] + clustering * (ratio - 1.0),
-            "parallel_phases": phases}
+class _Recorder:
+    """``work_unit`` that keeps each unit's items, value and wall (a 1-worker run: in this
+    process), keyed as :func:`_key` names them; each start's own wall is its record's."""
+
+    def __init__(self, work_unit):
+        self.work_unit, self.units = work_unit, {}
+
+    def __call__(self, ctx, unit, emit):
+        items = []
+
+        def keep(item):
+            items.append(item)
+            emit(item)
+
+        t0 = time.perf_counter()
+        value = self.work_unit(ctx, unit, keep)
+        wall = time.perf_counter() - t0
+        if unit[0] == "start":
+            for i, rec in items:
+                self.units[("start", i, int(rec.index))] = ([(i, rec)], None, rec.wall_time)
+        else:
+            self.units[_key(unit)] = (items, value, wall)
+        return value
 
 
-def _list_schedule(times, workers: int) -> float:
-    """Makespan of units handed out in order, each to the first worker free (run_units)."""
-    free = [0.0] * workers
-    heapq.heapify(free)
-    for t in times:
-        heapq.heappush(free, heapq.heappop(free) + t)
-    return max(free)
+def _key(unit):
+    """A unit by what it computes (a half-branch by its start, not by its candidate's id)."""
+    if unit[0] == "orbit":
+        return unit[:3]
+    _, _c, u0, p, n, sign, _scale = unit
+    return ("half", float(p), int(n), int(sign), np.asarray(u0).tobytes())
 
 
-def _simulated_full(entry: dict, point, wall, full_per_speed: int, batch: int, w: int,
-                    serial: float) -> float:
-    """Wall of the full census on ``w`` workers: each speed's starts resampled (fixed seed)
-    from its measured starts, cut into units as the census cuts them, handed out in order
-    (equal costs); the orbits and branches as :func:`project` has them; ``serial``: the
-    scaled serial part."""
-    rng = np.random.default_rng(0)
-    speeds = sorted(set(int(i) for i in point))
-    size = unit_size(full_per_speed * len(speeds), w, batch) if w > 1 else batch
-    units = []
-    for i in speeds:
-        mine = rng.choice(wall[point == i], size=full_per_speed, replace=True)
-        units += [float(np.sum(mine[a:a + size])) for a in range(0, full_per_speed, size)]
-    rest = {"serial_wall_s": serial, "parallel_phases": [
-        p for p in entry["parallel_phases"] if p["name"] != "census"]}
-    return _list_schedule(units, w) + project(rest, w)["wall_s"][0]
+def _replay(recorded, ctx, work_unit):
+    """``run(unit)`` of :func:`~vibrogear.pipeline.wall_split.simulate`: a start unit is its
+    starts' records and walls, an orbit or half-branch its recorded one; a half-branch the
+    1-worker run never computed (a candidate dropped there before it was taken) is computed
+    now and timed."""
+    def run(unit):
+        if unit[0] == "start":
+            got = [recorded[("start", unit[1], int(k))] for k in unit[3]]
+            return [it for g in got for it in g[0]], len(got), sum(g[2] for g in got)
+        key = _key(unit)
+        if key not in recorded:
+            t0 = time.perf_counter()
+            value = work_unit(ctx, unit, lambda _item: None)
+            recorded[key] = ([], value, time.perf_counter() - t0)
+            run.computed += 1
+        return recorded[key]
+    run.computed = 0
+    return run
+
+
+def _states_census(starts: int, workers: int, out: Path) -> dict:
+    """The issue's census (11 speeds x ``starts``, branches on) on one worker with every
+    unit recorded, on ``workers`` workers for real, and replayed on 1, ``workers``, 16 and
+    64 workers (docs/performance.md)."""
+    from vibrogear.analyses.states import states as states_mod
+    from vibrogear.analyses.study import build_study
+    from vibrogear.pipeline.wall_split import simulate
+
+    sets = ('scene.analyses=["states"]', f"states.starts={starts}", "states.branches=true")
+    scene1 = load_scene(SCENE, (*sets, "states.workers=1"))
+    study = build_study(scene1)
+    recorder = _Recorder(states_mod.work_unit)
+    states_mod.work_unit = recorder
+    try:
+        before = _load()
+        got = states_mod.run(study, scene1, RunContext(out=out / "one", quiet=True))
+        one = {"load_average_1min": [before, _load()]}
+    finally:
+        states_mod.work_unit = recorder.work_unit
+    s1 = got.summary
+    one.update(wall_s=round(s1["wall_split_s"]["total_wall"], 3),
+               units_wall_s=round(s1["parallel_wall_s"], 3),
+               serial_wall_s=s1["serial_wall_s"], phase=s1["parallel_phases"][0],
+               attractors=s1["attractors"], branches_kept=len(got.result.branches))
+    m, entry = _run("states", (*sets, f"states.workers={workers}"), out / "many")
+    m["branches_kept"] = len(entry["branches"])
+    same = (json.loads(json.dumps(entry["per_speed"])) == json.loads(json.dumps(s1["per_speed"]))
+            and json.loads(json.dumps(entry["branches"])) == json.loads(json.dumps(s1["branches"])))
+    sims, computed = {}, 0
+    for w in (1, workers, *PROJECT_AT):
+        plan, ctx = states_mod.census_plan(build_study(scene1), load_scene(
+            SCENE, (*sets, f"states.workers={w}")))
+        run = _replay(recorder.units, ctx, recorder.work_unit)
+        first = plan.start()
+        sim = simulate(first, run, w, on_result=plan.on_result, on_done=plan.on_done)
+        computed += run.computed
+        sims[w] = {"units_wall_s": round(sim["wall_s"], 3), "units": sim["units"],
+                   "unit_work_s": round(sim["unit_work_s"], 3),
+                   "coordinator_s": round(sim["coordinator_s"], 3),
+                   "branches_kept": len(plan.found)}
+    serial = float(s1["serial_wall_s"])
+    t1 = serial + sims[1]["units_wall_s"]
+    for w, sim in sims.items():
+        sim["wall_s"] = round(serial + sim["units_wall_s"], 3)
+        sim["speedup"] = round(t1 / sim["wall_s"], 2)
+    return {"case": f"gear_pair states, 11 speeds x {starts} starts (4900-5400 rpm), branches "
+                    "on", "one_worker": one, f"{workers}_workers": m,
+            "same_result_on_both": same,
+            "replayed": {"note": "a projection, not a measurement: the 1-worker run's units "
+                                 "(each start's own wall, each orbit's and half-branch's) "
+                                 "dispatched on W workers by a copy of run_units's rule, with "
+                                 "the census's plan deciding the orbits and branches as the "
+                                 "run does, plus the run's serial part; half-branches the "
+                                 f"1-worker run never computed, computed here: {computed}",
+                         **{str(w): v for w, v in sims.items()}}}
 
 
 def main(argv=None) -> dict:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--starts", type=int, default=3, help="starts per speed (issue: 32)")
+    ap.add_argument("--starts", type=int, default=FULL_STARTS, help="starts per speed")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--sweep-points", type=int, default=12)
     ap.add_argument("--segments", type=int, default=2)
@@ -134,8 +199,6 @@ def main(argv=None) -> dict:
     ap.add_argument("--out", default="/tmp/bench_parallel")
     ap.add_argument("--results", default="bench_parallel.json",
                     help="file name in benchmarks/results/ (e.g. for a 1-worker reference)")
-    ap.add_argument("--reuse", action="store_true", help="states: recompute the projections "
-                    "from the last run's files in --out (no new measurement)")
     a = ap.parse_args(argv)
     out = Path(a.out)
     res = {"conditions": f"2-core machine shared with other jobs; load average (1 minute) "
@@ -147,42 +210,7 @@ def main(argv=None) -> dict:
            "runs": {}}
     w = f"workers={a.workers}"
     if "states" not in a.skip:
-        sets = (f"states.starts={a.starts}", f"states.{w}", "states.branches=true")
-        if a.reuse:
-            entry = json.loads((out / "states" / "summary.json").read_text())
-            old = json.loads((ROOT / "benchmarks" / "results" / a.results).read_text())
-            m = {k: v for k, v in old["runs"]["states"].items() if not k.startswith("projection")}
-            entry = entry["results"]["states"]
-        else:
-            m, entry = _run("states", sets, out / "states")
-        n = int(entry["counters"]["starts_settled"])
-        with np.load(out / "states" / "states.npz") as z:
-            wall = np.asarray(z["start_wall_s"], float)
-            point = np.asarray(z["start_point"], int)
-        longest = float(np.max(wall))
-        m.update(starts=n, attractors=entry["attractors"],
-                 branches_continued=len(entry["branches"]),
-                 wall_split_s=entry["wall_split_s"], longest_start_s=round(longest, 3),
-                 projection=_projections(m, (a.workers, *PROJECT_AT)))
-        full = FULL_STARTS * int(entry["points"])
-        batch = int(load_scene(SCENE).states.batch)
-        m["projection_full_census"] = {
-            "starts": full,
-            "note": "a projection, not a measurement: census work x " f"{full} / {n}, its "
-                    "largest unit the longest start x the starts a unit holds, grouping "
-                    "scaled, orbits and branches as measured",
-            **{str(k): _projections(_full_census(entry, n, full, batch, longest, k), (k,))[str(k)]
-               for k in (1, *PROJECT_AT)}}
-        scaled = _full_census(entry, n, full, batch, longest, 1)["serial_wall_s"]
-        one = _simulated_full(entry, point, wall, FULL_STARTS, batch, 1, scaled)
-        m["projection_full_census"]["simulated"] = {
-            "note": "each speed's starts resampled from its measured ones, units as the census "
-                    "cuts them, handed out in order to the first free worker; orbits and "
-                    "branches as in the projection",
-            **{str(k): {"wall_s": round(t, 2), "speedup": round(one / t, 2)}
-               for k in (1, *PROJECT_AT)
-               for t in (_simulated_full(entry, point, wall, FULL_STARTS, batch, k, scaled),)}}
-        res["runs"]["states"] = m
+        res["runs"]["states"] = _states_census(a.starts, a.workers, out / "states")
     if "sweep" not in a.skip:
         sets = (f"sweep.n_points={a.sweep_points}", f"sweep.segments={a.segments}",
                 f"sweep.{w}")
