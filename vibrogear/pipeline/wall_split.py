@@ -66,6 +66,16 @@ class _Timed:
         return out, time.perf_counter() - t0
 
 
+class _Untimed:
+    """``on_done(i, value)`` called with fn's own value out of :class:`_Timed`'s pair."""
+
+    def __init__(self, on_done):
+        self.on_done = on_done
+
+    def __call__(self, i, got):
+        return self.on_done(i, got[0])
+
+
 class WallSplit:
     """The wall clock of one analysis from its creation; :meth:`run` adds a parallel phase.
     ``serial_part``: what the analysis does on one process (set or extended later with
@@ -79,18 +89,21 @@ class WallSplit:
     def describe(self, text: str) -> None:
         self.serial_part = text
 
-    def run(self, name: str, fn, units, *, workers=None, **kw) -> list:
+    def run(self, name: str, fn, units, *, workers=None, on_done=None, **kw) -> list:
         """:func:`~vibrogear.pipeline.executors.run_units` (same arguments, same return
-        value: fn's values in unit order), timed as the phase ``name``.  Collective under
-        MPI, as run_units is; an empty list of units is no phase."""
+        value: fn's values in unit order, added units included), timed as the phase
+        ``name``; the units ``on_done`` adds count in this phase, timed as the others, and
+        ``on_done`` gets fn's own value.  Collective under MPI, as run_units is; an empty
+        list of units is no phase."""
         units = list(units)
         if not units:
             return []
+        done = None if on_done is None else _Untimed(on_done)
         t0 = time.perf_counter()
-        got = run_units(_Timed(fn), units, workers=workers, **kw)
+        got = run_units(_Timed(fn), units, workers=workers, on_done=done, **kw)
         wall = time.perf_counter() - t0
         walls = [g[1] for g in got if g is not None]
-        self.add(name, wall, walls, effective_workers(len(units), workers))
+        self.add(name, wall, walls, effective_workers(len(units), workers, done is not None))
         return [None if g is None else g[0] for g in got]
 
     def add(self, name: str, wall_s: float, unit_walls, workers: int) -> None:
