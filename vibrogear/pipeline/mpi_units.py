@@ -109,6 +109,7 @@ class _MpiRoot:
 
     def __init__(self, comm, fn, units, on_result, costs, describe, on_done=None):
         import heapq
+        from collections import deque
         from mpi4py import MPI
 
         self.comm, self.fn, self.units, self.on_result = comm, fn, list(units), on_result
