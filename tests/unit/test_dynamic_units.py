@@ -16,7 +16,6 @@ from pathlib import Path
 import pytest
 
 from vibrogear.pipeline.executors import effective_workers, run_units
-from vibrogear.pipeline.units_base import UnitError
 from vibrogear.pipeline.wall_split import WallSplit
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -191,7 +190,6 @@ MPI_SCRIPT = r"""
 import json, sys, time
 from mpi4py import MPI
 from vibrogear.pipeline.executors import run_units, broadcast
-from vibrogear.pipeline.units_base import UnitError
 rank = MPI.COMM_WORLD.rank
 def work(unit, emit):
     emit(unit)
