@@ -190,6 +190,7 @@ MPI_SCRIPT = r"""
 import json, sys, time
 from mpi4py import MPI
 from vibrogear.pipeline.executors import run_units, broadcast
+from vibrogear.pipeline.units_base import UnitError
 rank = MPI.COMM_WORLD.rank
 def work(unit, emit):
     emit(unit)
