@@ -4,6 +4,15 @@ exception in ``fn`` comes back to rank 0 and is re-raised as
 :class:`~vibrogear.pipeline.executors.UnitError` on every rank after an orderly shutdown;
 any other aborts all ranks (``MPI.Abort``): ``mpirun`` never hangs.
 
+**Added units** (``on_done``, see :func:`~vibrogear.pipeline.executors.run_units`): rank 0
+calls ``on_done`` once a unit's ``done`` has come (MPI keeps one rank's messages in order,
+so its items came first), pushes the units it returns onto the pending ones (costliest
+first) and sends them as it sends the initial ones: the unit itself travels in the
+message.  A rank whose queue runs dry is not told to end while any unit is pending, queued
+or running (rank 0's own included): it waits for a unit or the end.  An exception in
+``on_done`` interrupts every rank as a stop does; then rank 0 raises it as is and the other
+ranks raise :class:`~vibrogear.pipeline.executors.UnitError` with its traceback.
+
 **A lost rank** (killed, out of memory, a crash in compiled code).  Open MPI's ``mpirun``
 ends the whole job when one rank dies (SIGTERM to the others about 1 s later, SIGKILL 1 s
 after that), unless started with ``--enable-recovery``; either way every item rank 0
@@ -13,7 +22,7 @@ message and ``summary.json``):
 
 * rank 0 notices the loss (it checks the pids of the ranks on its node while it waits and
   between its own items), never talks to that rank again, gives the units it had queued
-  but not started to the others (itself included), and names the unit it was computing:
+  but not started back to the pending ones (with their costs), and names the unit it was computing:
   that unit's finished items are kept, the rest is not retried in this run (the unit may be
   what killed the rank).  Once every other unit is done, :class:`LostUnits` (exit 1) is
   raised on every live rank, naming the lost units; the same command resumes them.
@@ -40,23 +49,25 @@ from .mpi_peers import (AHEAD, CHECK_S, CTRL, DATA, LOST, PEERS, RESULT, STOP,
                         mark_lost, peers, recv_root, root_lost, RootLost, send_to, lose_rank_hook,
                         wait_for, alive, bcast)
 from .outcome import LostUnits
-from .units_base import (UnitError, world_comm, deliver_result, run_serial, StopUnit, transportable,
-                         in_unit)
+from .units_base import (UnitError, added_units, world_comm, deliver_result, run_serial, StopUnit,
+                         transportable, in_unit)
 
 __all__ = ["run_mpi", "bcast", "alive", "LostUnits"]
 
 log = logging.getLogger(__name__)
 
-def run_mpi(fn, units, on_result, order, describe=None) -> list:
-    """The MPI backend of :func:`~.executors.run_units` (see its module docstring)."""
+def run_mpi(fn, units, on_result, costs, describe=None, on_done=None) -> list:
+    """The MPI backend of :func:`~.executors.run_units` (see its module docstring);
+    ``costs``: one per unit (0 where the caller gave none)."""
     comm = world_comm()
+    root = None
     try:
         if comm.size < 2:
-            return run_serial(fn, units, on_result)
+            return run_serial(fn, units, on_result, on_done)
         peers(comm)
         if comm.rank == 0:
-            outcome = bcast(_MpiRoot(comm, fn, units, on_result, order, describe).run(),
-                            tag=RESULT)
+            root = _MpiRoot(comm, fn, units, on_result, costs, describe, on_done)
+            outcome = bcast(root.run(), tag=RESULT)
         else:
             try:
                 _mpi_worker(comm, fn)
@@ -72,6 +83,8 @@ def run_mpi(fn, units, on_result, order, describe=None) -> list:
                      exc_info=True)
         comm.Abort(1)
         raise
+    if root is not None and root.done_error is not None:
+        raise root.done_error                   # on_done's own exception, as is, on rank 0
     if outcome["error"] is not None:
         i, text, exc = outcome["error"]
         raise UnitError(i, text, exc)
@@ -82,20 +95,31 @@ def run_mpi(fn, units, on_result, order, describe=None) -> list:
 
 
 class _MpiRoot:
-    """Rank 0: hands out units in ``order`` (one at a time, a second one ahead while more
-    than one per rank is left), computes units itself between the messages it serves,
-    delivers every item to ``on_result``.  ``on_result`` returning False interrupts every
-    rank's unit (tag STOP) and skips the queued ones; an error lets the units already
-    handed out (at most AHEAD per rank) finish, their items delivered; then every rank
-    ends (CTRL).  A lost rank: see the module docstring."""
+    """Rank 0: hands out the pending units costliest first (lowest index among equal
+    costs; one at a time, a second one ahead while more than one per rank is left),
+    computes units itself between the messages it serves, delivers every item to
+    ``on_result`` and every finished unit to ``on_done``, whose added units join the
+    pending ones.  ``on_result`` returning False interrupts every rank's unit (tag STOP)
+    and skips the queued ones; an error lets the units already handed out (at most AHEAD
+    per rank) finish, their items delivered; then every rank ends (CTRL).  With
+    ``on_done`` a rank whose queue is empty is ended only once no unit is pending, queued
+    or running anywhere (rank 0's own included): until then it waits for a unit.  An
+    exception in ``on_done`` interrupts every rank as a stop does; rank 0 then raises it,
+    the others :class:`UnitError`.  A lost rank: see the module docstring."""
 
-    def __init__(self, comm, fn, units, on_result, order, describe):
+    def __init__(self, comm, fn, units, on_result, costs, describe, on_done=None):
+        import heapq
         from collections import deque
         from mpi4py import MPI
 
-        self.comm, self.fn, self.units, self.on_result = comm, fn, units, on_result
-        self.describe = describe
-        self.todo, self.results = deque(order), [None] * len(units)
+        self.comm, self.fn, self.units, self.on_result = comm, fn, list(units), on_result
+        self.describe, self.on_done = describe, on_done
+        self.costs = list(costs)
+        self.todo = [(-c, i) for i, c in enumerate(self.costs)]    # a heap: costliest first
+        heapq.heapify(self.todo)
+        self.results = [None] * len(units)
+        self.own: int | None = None              # the unit rank 0 computes now
+        self.done_error: BaseException | None = None   # on_done's exception
         self.workers = range(1, comm.size)
         self.active = {r for r in self.workers if r not in LOST}   # not yet said "bye"
         self.queued = {r: deque() for r in self.workers}   # units sent, not finished
@@ -117,18 +141,58 @@ class _MpiRoot:
         self.lose(r)
         return False
 
+    def pop(self) -> int:
+        import heapq
+        return heapq.heappop(self.todo)[1]
+
+    def push(self, i):
+        import heapq
+        heapq.heappush(self.todo, (-self.costs[i], i))
+
+    def outstanding(self) -> bool:
+        """A unit queued at a rank or running (rank 0's own included)."""
+        return self.own is not None or any(self.queued[r] for r in self.workers)
+
     def feed(self, r):
         if self.stopping or r in self.ended:
             return
         while self.todo and (not self.queued[r] or (
                 len(self.queued[r]) < AHEAD and len(self.todo) > self.comm.size)):
-            i = self.todo.popleft()
+            i = self.pop()
             self.queued[r].append(i)
             if not self.to(r, ("unit", i, self.units[i])):
                 return                          # lose() gave i back to todo
-        if not self.todo:
+        # without on_done no unit can be added: a rank is told to end behind its last unit
+        if not self.todo and (self.on_done is None or not self.outstanding()):
             self.ended.add(r)
             self.to(r, ("stop",))
+
+    def feed_all(self):
+        """Hand the pending units to the ranks short of work; end them all once nothing is
+        pending, queued or running."""
+        for r in self.workers:
+            self.feed(r)
+
+    def finished(self, i, value):
+        """Unit ``i`` is done (every item of it delivered): its added units, if any."""
+        self.results[i] = value
+        if self.on_done is None or self.stopping:
+            return
+        try:
+            added = added_units(self.on_done(i, value))
+        except Exception as exc:                # noqa: BLE001 - every rank ends, rank 0 raises it
+            self.done_error = exc
+            if self.error is None:
+                self.error = (i, "on_done raised for this unit:\n" + traceback.format_exc(),
+                              transportable(exc))
+            self.stop()
+            return
+        for unit, cost in added:
+            self.units.append(unit)
+            self.costs.append(cost)
+            self.results.append(None)
+            self.items.append(0)
+            self.push(len(self.units) - 1)
 
     def stop(self, interrupt: bool = True):
         if self.stopping:
@@ -161,8 +225,10 @@ class _MpiRoot:
             if i in self.queued[r]:
                 self.queued[r].remove(i)
             if kind == "done":
-                self.results[i] = msg[2]
+                self.finished(i, msg[2])
                 self.feed(r)
+                if self.on_done is not None:
+                    self.feed_all()             # units added, or the last one done
             else:
                 if self.error is None:
                     self.error = (i, msg[2], msg[3])
@@ -220,7 +286,8 @@ class _MpiRoot:
             self.queued[r].remove(i)
             self.lost.append((r, i))
         if not self.stopping:
-            self.todo.extendleft(reversed(self.queued[r]))
+            for j in self.queued[r]:
+                self.push(j)                    # back to pending, with its cost
         self.queued[r].clear()
         host, pid = PEERS[r]
         log.error("rank %d (pid %s on %s) was lost%s; the other ranks go on", r, pid, host,
@@ -257,26 +324,31 @@ class _MpiRoot:
             if self.interrupted:
                 raise StopUnit
 
+        self.own = i
         try:
             with in_unit():
-                self.results[i] = self.fn(self.units[i], emit)
+                value = self.fn(self.units[i], emit)
         except StopUnit:
-            pass
+            return
         except Exception as exc:                # noqa: BLE001 - ends every rank as a worker's
             if self.error is None:
                 self.error = (i, traceback.format_exc(), transportable(exc))
             self.stop(interrupt=False)
+            return
+        finally:
+            self.own = None
+        self.finished(i, value)
 
     def run(self) -> dict:
-        for r in self.workers:
-            self.feed(r)
+        self.feed_all()
         while self.active or self.todo:         # a stop empties todo
             self.serve(block=not self.todo)
+            if self.on_done is not None:
+                self.feed_all()                 # after a lost rank too: end the waiting ones
             if self.todo:
-                self.own_unit(self.todo.popleft())
-                if not self.todo:
-                    for r in self.workers:
-                        self.feed(r)            # the last units are out: end the idle ranks
+                self.own_unit(self.pop())
+                if not self.todo or self.on_done is not None:
+                    self.feed_all()             # the last units are out: end the idle ranks
         lost_units, message = self.lost_report() if self.lost and not self.interrupted \
             else ([], "")
         return {"results": self.results, "error": self.error, "lost_units": lost_units,

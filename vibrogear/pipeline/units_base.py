@@ -56,17 +56,40 @@ def deliver_result(on_result, i, item) -> bool:
     return on_result is None or on_result(i, item) is not False
 
 
-def run_serial(fn, units, on_result) -> list:
-    results: list = [None] * len(units)
-    for i, unit in enumerate(units):
+def added_units(ret) -> list[tuple[object, float]]:
+    """The units that ``on_done`` returned (None, or an iterable of ``(unit, cost)`` pairs)
+    as a list of (unit, cost as a float)."""
+    if ret is None:
+        return []
+    out = []
+    for pair in ret:
+        try:
+            unit, cost = pair
+        except (TypeError, ValueError):
+            raise TypeError("run_units: on_done must return None or (unit, cost) pairs, "
+                            f"got the entry {pair!r}") from None
+        out.append((unit, float(cost)))
+    return out
+
+
+def run_serial(fn, units, on_result, on_done=None) -> list:
+    """Every unit in turn, in index order; the units ``on_done`` adds follow, in the order
+    they were added.  A stop (``on_result`` returning False) leaves the rest undone (None)."""
+    units = list(units)
+    results: list = []
+    i = 0
+    while i < len(units):
         def emit(item, i=i):
             if not deliver_result(on_result, i, item):
                 raise StopUnit
         try:
-            results[i] = fn(unit, emit)
+            results.append(fn(units[i], emit))
         except StopUnit:
             break
-    return results
+        if on_done is not None:
+            units.extend(unit for unit, _ in added_units(on_done(i, results[i])))
+        i += 1
+    return results + [None] * (len(units) - len(results))
 
 
 def transportable(exc: BaseException):

@@ -73,6 +73,19 @@ class _Timed:
         return out, time.perf_counter() - t0
 
 
+class _Untimed:
+    """``on_done(i, value)`` called with fn's own value out of :class:`_Timed`'s pair;
+    ``added``: the units it added, in the order run_units numbers them."""
+
+    def __init__(self, on_done):
+        self.on_done, self.added = on_done, []
+
+    def __call__(self, i, got):
+        new = list(self.on_done(i, got[0]) or ())
+        self.added += [u for u, _c in new]
+        return new
+
+
 class WallSplit:
     """The wall clock of one analysis from its creation; :meth:`run` adds a parallel phase.
     ``serial_part``: what the analysis does on one process (set or extended later with
@@ -88,22 +101,16 @@ class WallSplit:
 
     def run(self, name: str, fn, units, *, workers=None, kind=None, on_done=None, **kw) -> list:
         """:func:`~vibrogear.pipeline.executors.run_units` (same arguments, same return
-        value: fn's values in unit order), timed as the phase ``name``.  Collective under
-        MPI, as run_units is; an empty list of units is no phase.  ``kind(unit) -> str``
-        names the part of the phase each unit belongs to (the units added by ``on_done``
-        too): the phase then reports each part's units, work and largest unit
+        value: fn's values in unit order, added units included), timed as the phase
+        ``name``; the units ``on_done`` adds count in this phase, timed as the others, and
+        ``on_done`` gets fn's own value.  Collective under MPI, as run_units is; an empty
+        list of units is no phase.  ``kind(unit) -> str`` names the part of the phase each
+        unit belongs to: the phase then reports each part's units, work and largest unit
         (``parts``), and :meth:`work_by_kind` their work."""
         units = list(units)
         if not units:
             return []
-        every = list(units)
-        done = None
-        if on_done is not None:
-            def done(i, got):
-                new = on_done(i, got[0])
-                new = list(new or ())
-                every.extend(u for u, _c in new)
-                return new
+        done = None if on_done is None else _Untimed(on_done)
         t0 = time.perf_counter()
         got = run_units(_Timed(fn), units, workers=workers, on_done=done, **kw)
         wall = time.perf_counter() - t0
@@ -111,10 +118,12 @@ class WallSplit:
         parts = None
         if kind is not None:
             parts = {}
+            every = units + (done.added if done is not None else [])
             for u, g in zip(every, got):
                 if g is not None:
                     parts.setdefault(kind(u), []).append(g[1])
-        self.add(name, wall, walls, effective_workers(len(every), workers), parts=parts)
+        self.add(name, wall, walls, effective_workers(len(units), workers, done is not None),
+                 parts=parts)
         return [None if g is None else g[0] for g in got]
 
     def work_by_kind(self, name: str) -> dict:

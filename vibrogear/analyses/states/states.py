@@ -216,7 +216,7 @@ def run(study: Study, scene, ctx: RunContext, previous=None) -> AnalysisOutcome:
     except BaseException:
         broadcast(None)
         raise
-    if broadcast(ctx.root and grouped is not None) is not True:
+    if broadcast(ctx.root and grouped is not None) is not True or not ctx.root:
         return AnalysisOutcome(summary={"status": "ok", "message": "census rank"})
     if not plan.finished():
         raise NumericalFailure("states: the census's units ended before every grid value was "
