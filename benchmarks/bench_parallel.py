@@ -154,7 +154,7 @@ def _states_census(starts: int, workers: int, out: Path) -> dict:
     one.update(wall_s=round(s1["wall_split_s"]["total_wall"], 3),
                units_wall_s=round(s1["parallel_wall_s"], 3),
                serial_wall_s=s1["serial_wall_s"], phase=s1["parallel_phases"][0],
-               attractors=s1["attractors"], branches_kept=len(got.result.branches))
+               attractors=s1["attractors"], branches_kept=len(s1["branches"]))
     m, entry = _run("states", (*sets, f"states.workers={workers}"), out / "many")
     m["branches_kept"] = len(entry["branches"])
     same = (json.loads(json.dumps(entry["per_speed"])) == json.loads(json.dumps(s1["per_speed"]))
@@ -170,7 +170,8 @@ def _states_census(starts: int, workers: int, out: Path) -> dict:
         sims[w] = {"units_wall_s": round(sim["wall_s"], 3), "units": sim["units"],
                    "unit_work_s": round(sim["unit_work_s"], 3),
                    "coordinator_s": round(sim["coordinator_s"], 3),
-                   "branches_kept": len(plan.found)}
+                   "branches_kept": len(plan.notes), "same_branches": json.loads(
+                       json.dumps(plan.notes)) == json.loads(json.dumps(s1["branches"]))}
     serial = float(s1["serial_wall_s"])
     t1 = serial + sims[1]["units_wall_s"]
     for w, sim in sims.items():
