@@ -43,8 +43,9 @@ import signal
 import time
 import traceback
 
-from .units_base import (UnitError, added_units, deliver_result, run_serial, transportable, in_unit, is_root,
-                         under_mpi, inside_unit, deferred_stop, raise_if_stopped)
+from .units_base import (UnitError, added_units, deliver_result, run_serial, transportable,
+                         in_unit, is_root, under_mpi, inside_unit, deferred_stop,
+                         raise_if_stopped)
 
 __all__ = ["run_units", "UnitError", "under_mpi", "is_root", "broadcast", "backend_for",
            "default_workers", "effective_workers", "unit_size", "blas_threads"]

@@ -22,8 +22,8 @@ message and ``summary.json``):
 
 * rank 0 notices the loss (it checks the pids of the ranks on its node while it waits and
   between its own items), never talks to that rank again, gives the units it had queued
-  but not started back to the pending ones (with their costs), and names the unit it was computing:
-  that unit's finished items are kept, the rest is not retried in this run (the unit may be
+  but not started back to the pending ones (with their costs), and names the unit it was
+  computing: that unit's finished items are kept, the rest is not retried in this run (the unit may be
   what killed the rank).  Once every other unit is done, :class:`LostUnits` (exit 1) is
   raised on every live rank, naming the lost units; the same command resumes them.
 * a rank that loses rank 0 (the one that writes the files) raises :class:`LostUnits` at once.
@@ -40,6 +40,7 @@ Test hook: ``VIBROGEAR_TEST_LOSE_RANK=R:N`` makes rank ``R`` kill itself (SIGKIL
 after it has handed over its ``N``-th item (tests/unit/test_mpi_lost_rank.py)."""
 from __future__ import annotations
 
+import heapq
 import logging
 import os
 import time
@@ -108,7 +109,6 @@ class _MpiRoot:
     the others :class:`UnitError`.  A lost rank: see the module docstring."""
 
     def __init__(self, comm, fn, units, on_result, costs, describe, on_done=None):
-        import heapq
         from collections import deque
         from mpi4py import MPI
 
@@ -142,11 +142,9 @@ class _MpiRoot:
         return False
 
     def pop(self) -> int:
-        import heapq
         return heapq.heappop(self.todo)[1]
 
     def push(self, i):
-        import heapq
         heapq.heappush(self.todo, (-self.costs[i], i))
 
     def outstanding(self) -> bool:
