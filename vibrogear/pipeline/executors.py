@@ -301,7 +301,10 @@ def _run_processes(fn, units, workers, on_result, costs, on_done=None) -> list:
             if p.is_alive():
                 p.terminate()
         for p in procs:
-            p.join(timeout=5)
+            p.join(timeout=2)
+            if p.is_alive():    # SIGTERM came before the worker took the default action
+                p.kill()        # (its fork inherited a handler that only records a stop)
+                p.join(timeout=5)
         tasks.cancel_join_thread()
         tasks.close()
         res_q.close()
