@@ -48,3 +48,44 @@ def test_chunks_from_their_phase_time_equal_one_continuous_integration():
     scale = np.linalg.norm(continuous)
     assert np.linalg.norm(chained - continuous) < 1e-8 * scale
     assert np.linalg.norm(restarted - continuous) > 1e-2 * scale   # the jump it replaces
+
+
+def test_a_sweeps_next_speed_continues_the_forcing_where_the_last_speed_left_it():
+    """A sweep's next point is at another speed.  Every forcing frequency is a multiple of
+    the speed, so after n excitation periods the forcing's phase is the same at any speed:
+    continuing from ``end_phase`` (n) at the new speed is the response to a forcing whose
+    speed steps while its phase runs on.  Reference: scipy's solve_ivp on x'' + 0.02 x' +
+    0.3 x = cos(theta) + 0.5 cos(23/51 theta), theta(t) = W t up to the step and
+    W t1 + W' (t - t1) after it (independent of the model's forcing code)."""
+    from types import SimpleNamespace
+
+    from scipy.integrate import solve_ivp
+
+    from vibrogear.solvers.sequential.sweep_point import end_phase
+
+    m = _oscillator(period_limit=16)
+    W, W2, n1, n2 = 1.0, 1.3, 10, 6
+    T, T2 = m.excitation_period(W), m.excitation_period(W2)
+    u = np.array([0.1, 0.0])
+    t0 = m.phase_time(0, W)
+    first = integrate(m, W, u, t0, t0 + n1 * T, options=OPT)
+    rec = SimpleNamespace(u_end_t=m.phase_time(n1, W), param=W, ok=True)
+    n = end_phase(m, rec)
+    assert n == n1 % 51
+    ts = m.phase_time(n, W2)
+    carried = integrate(m, W2, first.u_end, ts, ts + n2 * T2, options=OPT).u_end
+    restarted = integrate(m, W2, first.u_end, 0.0, n2 * T2, options=OPT).u_end
+    t1 = n1 * T
+
+    def rhs(t, y):
+        th = W * t if t <= t1 else W * t1 + W2 * (t - t1)
+        f = np.cos(th) + 0.5 * np.cos(23.0 / 51.0 * th)
+        return [y[1], f - 0.02 * y[1] - 0.3 * y[0]]
+
+    ref = u.copy()
+    for a, b in ((0.0, t1), (t1, t1 + n2 * T2)):
+        ref = solve_ivp(rhs, (a, b), ref, rtol=1e-11, atol=1e-14, method="DOP853").y[:, -1]
+    scale = np.linalg.norm(ref)
+    assert np.linalg.norm(carried - ref) < 1e-7 * scale
+    assert np.linalg.norm(restarted - ref) > 1e-2 * scale     # the phase jump it replaces
+    assert end_phase(_oscillator(period_limit=None), rec) == 0  # one common period: none

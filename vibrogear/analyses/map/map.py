@@ -42,7 +42,7 @@ from ...solvers.sequential.motion import FAILED, MOTION_LEGEND
 from ...solvers.sequential.record_metrics import contact_groups
 from ...status import Outcome, Status
 from ...solvers.sequential.sweep import assemble_result, sweep_units
-from ...solvers.sequential.sweep_point import run_point
+from ...solvers.sequential.sweep_point import end_phase, run_point
 from .load_scaling import LoadScaling, load_scaling
 from ...config.options import SweepOptions
 from ..study import Study, integration_options, start_state
@@ -163,11 +163,11 @@ def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
     row, scale, direction, indices, params, p_first, done = unit
     m = scaling.model_at(model, scale)
     seed = start_state(m, p_first, strict=False)
-    new = 0
+    new = phase = 0
     for i, p in zip(indices, params):
         rec = done.get(i)
         if rec is None:
-            rec = run_point(m, float(p), seed, direction, i, settings, **kw)
+            rec = run_point(m, float(p), seed, direction, i, settings, phase0=phase, **kw)
             if rec.ok:
                 force, tr = _mesh_force_run(m, float(p), rec.u_end, **extra, t0=rec.u_end_t)
                 rec = dataclasses.replace(rec, metrics={**rec.metrics, **force})
@@ -182,6 +182,7 @@ def _walk(model, scaling: LoadScaling, settings, kw, extra, unit, emit) -> int:
             new += 1
         if rec.ok or rec.motion_class != FAILED:      # the motion settled: its end seeds
             seed = np.array(rec.u_end, dtype=float)
+            phase = end_phase(m, rec)
     return new
 
 

@@ -19,8 +19,9 @@ metrics per contact group come from them (:mod:`.motion`, :mod:`.lyapunov`).
 
 Each point starts at t = 0 where the excitation phase is cos(W t) = 1; since a whole
 number of periods is integrated, the end state is again at phase 0 and seeds the next
-point directly (a multi-frequency model's end state lies at ``u_end_t``; the next point, at
-another speed, starts from it at t = 0).  A failed point keeps NaN values and its integrator
+point directly (a multi-frequency model's end state lies at ``u_end_t``, n excitation periods
+into its forcing; the next point, at another speed, continues the forcing from n periods:
+``sweep_point.end_phase``).  A failed point keeps NaN values and its integrator
 status and message; the unit goes on from its last good state.  Solvers never print."""
 from __future__ import annotations
 
@@ -39,7 +40,7 @@ from .motion import (MOTION_LEGEND, classify_period, count_clusters, monitored_d
                      monitored_name)
 from .strob_evidence import spectral_evidence
 from ...status import Outcome, Status
-from .sweep_point import PHASES, PointRecord, run_point
+from .sweep_point import PHASES, PointRecord, end_phase, run_point
 
 __all__ = ["PointRecord", "SweepResult", "sweep", "sweep_units", "classify_period",
            "count_clusters", "monitored_deformation", "assemble_result", "MOTION_LEGEND"]
@@ -258,15 +259,16 @@ def _walk_unit(model, settings, kw, unit, emit) -> int:
     ``emit``; done points are skipped and their end states seed the next point."""
     direction, indices, params, seed, done = unit
     seed = np.array(seed, dtype=float)
-    new = 0
+    new = phase = 0
     for i, p in zip(indices, params):
         rec = done.get(i)
         if rec is None:
-            rec = run_point(model, float(p), seed, direction, i, settings, **kw)
+            rec = run_point(model, float(p), seed, direction, i, settings, phase0=phase, **kw)
             emit(rec)
             new += 1
         if rec.ok:
             seed = np.array(rec.u_end, dtype=float)
+            phase = end_phase(model, rec)
     return new
 
 

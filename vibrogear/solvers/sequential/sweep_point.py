@@ -79,7 +79,7 @@ from .motion import (CHAOTIC, FAILED, best_defect, classify_period, count_cluste
 from .record_metrics import contact_groups
 from ...status import Outcome, Status
 
-__all__ = ["PointRecord", "run_point", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
+__all__ = ["PointRecord", "run_point", "end_phase", "failed_point", "SETTLE_TOL", "NO_CONTRACTION",
            "SETTLE_WINDOW", "PHASES"]
 
 #: the phases of a point whose wall time :attr:`PointRecord.timings` reports
@@ -181,10 +181,23 @@ def _settled(dense, strob, W: int, max_period: int) -> bool:
     return bool(d[1] >= NO_CONTRACTION * d[0] and d[2] >= NO_CONTRACTION * d[1])
 
 
+def end_phase(model, rec: PointRecord) -> int:
+    """The excitation periods the forcing has run at ``rec``'s end state (0 unless the model
+    is multi-frequency).  Every forcing frequency is a fixed multiple of the speed, so the
+    forcing's phase after n periods is the same at every speed: a sweep's next point, at
+    another speed, continues it from n (``run_point``'s ``phase0``) instead of jumping the
+    slower meshes' phase back to 0."""
+    if not model.multi_frequency:
+        return 0
+    return int(round(rec.u_end_t / model.excitation_period(rec.param)))
+
+
 def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
               options: IntegrationOptions, cluster_tol: float = 1e-3, keep_states: bool = False,
-              settle: bool = True) -> PointRecord:
-    """One sweep point (module docstring) with ``settings`` (:class:`SweepOptions`)."""
+              settle: bool = True, phase0: int = 0) -> PointRecord:
+    """One sweep point (module docstring) with ``settings`` (:class:`SweepOptions`).
+    ``phase0``: the excitation periods the forcing has run before ``u_seed`` (a sweep's
+    previous point: :func:`end_phase`); only a multi-frequency model reads it."""
     wall = time.perf_counter()
     clock = _Clock(wall)
     max_period, period_tol = settings.max_period, settings.period_tol
@@ -210,7 +223,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     used, settled_by = 0, "budget"
     while used < budget:
         k = min(block, budget - used)
-        t_s = model.phase_time(used, param)          # the forcing carried on (0: periodic)
+        t_s = model.phase_time(phase0 + used, param)     # the forcing carried on (0: periodic)
         t_eval = np.arange(1, k * _S_TRANSIENT + 1) * (T / _S_TRANSIENT)
         t_eval[-1] = k * T
         t_eval = t_s + t_eval
@@ -238,7 +251,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
     groups = contact_groups(model)
     chunk = max(1, min(CHUNK, R // 8))       # >= 8 blocks for the exponent's interval
     rec = record_window(model, param, u_rec, R, T, chunk, groups, options, counts, has_monitor,
-                        start=used)
+                        start=phase0 + used)
     if isinstance(rec, tuple):
         return fail(*rec, used)
     chunks, states, seed, losses = rec.chunks, rec.states, rec.end, rec.losses
@@ -270,7 +283,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
             # the same estimate on the same record at rtol / 10 (module docstring)
             fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
             rec_f = record_window(model, param, u_rec, R, T, chunk, groups, fine, counts,
-                                  has_monitor, start=used)
+                                  has_monitor, start=phase0 + used)
             lam_f, ci_f = math.nan, (math.nan, math.nan)
             if not isinstance(rec_f, tuple):
                 lam_f, ci_f, _ = lyapunov_exponent(model, param, rec_f.chunks, v0, fine, T,
@@ -351,7 +364,7 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
         # each statistic is its tolerance error
         fine = dataclasses.replace(options, rtol=options.rtol / 10, atol=options.atol / 10)
         rec2 = record_window(model, param, u_rec, R, T, chunk, groups, fine, counts, has_monitor,
-                             start=used)
+                             start=phase0 + used)
         tol_err = {k: math.nan for k in ("qmin", "qmax")}
         if not isinstance(rec2, tuple):
             e1 = record_extrema(model, param, rec, has_monitor)
@@ -375,4 +388,4 @@ def run_point(model, param, u_seed, direction, index, settings: SweepOptions, *,
                        lyapunov=float(lam), lyapunov_ci=tuple(float(c) for c in ci),
                        transient_used=int(used), settled_by=settled_by, metrics=metrics,
                        timings=clock.laps,
-                       u_end_t=model.phase_time(used + R, param))
+                       u_end_t=model.phase_time(phase0 + used + R, param))
