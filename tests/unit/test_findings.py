@@ -365,3 +365,25 @@ def test_summary_jumps_honour_resolution_and_errors():
     assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, 3e-9), level=0.0) == []
     assert jumps(p, q, res=np.full(5, 1e-9), err=np.full(5, np.nan), level=0.0) == \
         [150.0, 350.0]
+
+
+def test_band_margins_are_written_largest_first_and_never_over_one_another():
+    """Ten short bands 10 rpm apart on one row, each with its margin: the labels (each about
+    40 rpm wide at this scale) would overlap; the largest margin is written, and no two
+    written labels share a pixel.  Another row's label at the same speed is kept."""
+    from vibrogear.report.figure import new_figure
+    from vibrogear.report.writers.findings import _place_margins
+
+    fig = new_figure(figsize=(10, 3))
+    ax = fig.add_subplot(111)
+    ax.set_xlim(1500, 3000)
+    ax.set_ylim(-1, 2)
+    margins = [(0.01 * k, 0, 2000 + 10 * k, f"+{k}.0 %") for k in range(10)]
+    margins.append((0.05, 1, 2000, "+5.0 %"))
+    _place_margins(fig, ax, margins)
+    r = fig.canvas.get_renderer()
+    texts = [(t.get_text(), t.get_position()[1], t.get_window_extent(r)) for t in ax.texts]
+    row0 = [(s, box) for s, y, box in texts if y == 0]
+    assert "+9.0 %" in [s for s, _ in row0] and len(row0) < 10
+    assert all(not a.overlaps(b) for i, (_, a) in enumerate(row0) for _, b in row0[i + 1:])
+    assert [s for s, y, _ in texts if y == 1] == ["+5.0 %"]

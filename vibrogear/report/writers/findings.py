@@ -127,6 +127,7 @@ def plot_band_chart(findings: dict, path) -> Path | None:
     n = len(rows) + (1 if events else 0)
     fig = new_figure(figsize=(10, 1.3 + 0.42 * max(n, 1)))
     ax = fig.add_subplot(111)
+    margins = []
     for b in bands:
         y = rows.index(_label(b["where"], b["quantity"]))
         half = 0.5 * b.get("edge_err", 0.0)
@@ -136,8 +137,8 @@ def plot_band_chart(findings: dict, path) -> Path | None:
                 linewidth=0.3)
         past = margin_text([b])
         if past:                       # the margin: how far past the threshold
-            ax.text(left + 0.5 * width, y, past.replace("up to ", "+").split(" past")[0],
-                    ha="center", va="center", fontsize=7, color="black", clip_on=True)
+            margins.append((float(b["margin"]), y, left + 0.5 * width,
+                            past.replace("up to ", "+").split(" past")[0]))
     marker_handles = []
     if events:
         y = len(rows)
@@ -173,7 +174,26 @@ def plot_band_chart(findings: dict, path) -> Path | None:
                  "Where to avoid or watch the system", loc="left", fontsize=11)
     height = fig.get_size_inches()[1]
     fig.tight_layout(rect=(0, 0.35 / height if handles else 0, 1, 1))
+    _place_margins(fig, ax, margins)
     return save_figure(fig, path, formats=("png",), tight=False)[0]
+
+
+def _place_margins(fig, ax, margins) -> None:
+    """Each band's margin written on it, the largest of a row first, the others only where
+    they do not overlap one already written and fit inside the axes (a row of short bands
+    had its labels printed over one another)."""
+    renderer = fig.canvas.get_renderer()
+    inside = ax.get_window_extent(renderer)
+    placed: dict[int, list] = {}
+    for _m, y, x, text in sorted(margins, key=lambda m: -m[0]):
+        t = ax.text(x, y, text, ha="center", va="center", fontsize=7, color="black",
+                    clip_on=True)
+        box = t.get_window_extent(renderer).expanded(1.0, 1.0).padded(3)
+        if box.x0 < inside.x0 or box.x1 > inside.x1 or any(
+                box.overlaps(other) for other in placed.get(y, [])):
+            t.remove()
+            continue
+        placed.setdefault(y, []).append(box)
 
 
 def _esc(x) -> str:
