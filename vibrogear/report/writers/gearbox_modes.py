@@ -10,10 +10,29 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..figure import save_figure
-from ..plots.gearbox import resonance_map_figure, write_modes_csv
+import numpy as np
 
-__all__ = ["write"]
+from ...pipeline.files import atomic_write_bytes
+from ..figure import save_figure
+from ..plots.gearbox import resonance_map_figure
+
+__all__ = ["write", "write_modes_csv"]
+
+
+def write_modes_csv(path, f_hz, fd_hz, zeta, names, shares, mesh, mesh_names) -> Path:
+    """modes.csv: index, frequency_hz (natural frequency |lambda| / 2 pi, as in the rotor's
+    modes.csv), damped_frequency_hz, damping_ratio, dominant subsystem, its energy share,
+    and the strain-energy share of each gear mesh; frequencies at full precision."""
+    cols = ["index", "frequency_hz", "damped_frequency_hz", "damping_ratio", "dominant",
+            "share"] + [f"mesh_energy_{n}" for n in mesh_names]
+    lines = [",".join(cols)]
+    for i in range(len(f_hz)):
+        k = int(np.argmax(shares[:, i]))
+        row = [str(i), repr(float(f_hz[i])), repr(float(fd_hz[i])), f"{zeta[i]:.6g}", names[k],
+               f"{shares[k, i]:.3f}"]
+        row += [f"{mesh[j, i]:.4g}" for j in range(mesh.shape[0])]
+        lines.append(",".join(row))
+    return atomic_write_bytes(Path(path), ("\n".join(lines) + "\n").encode())
 
 
 def write(scene, outcome, out, previous=None) -> dict:
