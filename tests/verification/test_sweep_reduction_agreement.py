@@ -12,6 +12,8 @@ scene's master counts, m = 162, rtol 1e-6), point by point on the same speeds.
   3 combined errors (batch-means errors of both runs and their tolerance errors,
   ``second_tolerance``); metrics with zero error bars (a flank never hit, a mesh always in
   contact) are equal, but for one rolling element at the edge of a bearing's load zone.
+  A value without a batch-means error in one run (an impact speed from one impact) is not
+  weighed.
 The fast test takes two speeds; the slow one eight across the scene's range.
 """
 from __future__ import annotations
@@ -73,9 +75,16 @@ def _compare(rpms):
             a, b = new.metrics[k][i], ref.metrics[k][i]
             errs = [d.metrics.get(f"{k}{s}", np.full(rpms.size, np.nan))[i]
                     for d in (new, ref) for s in ("_err", "_tol_err")]
+            own = [d.metrics.get(f"{k}_err", np.full(rpms.size, np.nan))[i] for d in (new, ref)]
             errs = [e for e in errs if np.isfinite(e)]
             if len(errs) < 2 or not (np.isfinite(a) and np.isfinite(b)):
                 continue                             # no error bars here: nothing to weigh
+            if not np.all(np.isfinite(own)):
+                # one run's value has no sampling error: an impact speed from a single
+                # impact in the window (the housing's modes, rebuilt, take another rotation
+                # in their degenerate pairs; a chaotic walk then meets a rare impact in one
+                # run and not the other: measured at 1929 rpm, one impact in 32 periods)
+                continue
             bar = np.sqrt(np.sum(np.square(errs)))
             if bar == 0.0 and k.startswith("unloaded_"):
                 # rolling elements out of contact all the window long: the element at the

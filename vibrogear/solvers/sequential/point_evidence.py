@@ -22,6 +22,7 @@ from .record_metrics import batch_blocks, metrics_with_errors
 from .record_window import RecordWindow
 
 __all__ = ["record_contact_metrics", "group_periods", "resolution_test", "lyapunov_exponent",
+           "perturbation",
            "resolution_metrics"]
 
 
@@ -91,15 +92,22 @@ def _qmax_error(rec: RecordWindow) -> float:
     return float(np.std(blocks, ddof=1) / math.sqrt(B))
 
 
-def lyapunov_exponent(model, param, chunks, v0, options, T, chunk, counts):
+def perturbation(options) -> float:
+    """Benettin's perturbation for a record integrated with ``options``: 10 x rtol of the
+    state's scale, at least D0."""
+    return max(D0, 10.0 * float(options.rtol))
+
+
+def lyapunov_exponent(model, param, chunks, v0, options, T, chunk, counts, d0=None):
     """(exponent, interval, message) of Benettin's method on a record's chunks from the
-    tangent ``v0`` (:mod:`~.lyapunov`), in units of the model's time.  The perturbation is
-    ten times the integrator's rtol (at least D0) of the state's scale: a smaller one drowns
-    in the integration error, whose growth then reads as an exponent (the FVA gearbox at
-    543 rpm, kv 1.001: +1.24 per period with D0 = 1e-6 at rtol 1e-5, +0.20 with 1e-4 and
-    -0.05 at rtol 1e-6; the two-stage gearbox's chaos at 2000 rpm reads 0.61 and 0.57)."""
+    tangent ``v0`` (:mod:`~.lyapunov`), in units of the model's time.  The perturbation
+    ``d0`` (of the state's scale) is by default ten times the integrator's rtol (at least
+    D0): a smaller one drowns in the integration error, whose growth then reads as an
+    exponent (the FVA gearbox at 543 rpm, kv 1.001: +1.24 per period with D0 = 1e-6 at rtol
+    1e-5, +0.20 with 1e-4 and -0.05 at rtol 1e-6; the two-stage gearbox's chaos at 2000 rpm
+    reads 0.61 and 0.57)."""
     scale = state_scale(np.vstack([chunks[0][0]] + [c[1] for c in chunks]), model.n_modes)
-    d0 = max(D0, 10.0 * float(options.rtol))
+    d0 = perturbation(options) if d0 is None else float(d0)
     v, logs = v0, []
     for start, ends, _, t_s in chunks:
         g, v, calls, st = tangent_chunk(model, param, start, ends, v, scale, options=options,
