@@ -164,3 +164,35 @@ def test_intermediate_shaft_thrusts_of_same_hand_gears_oppose():
     assert axial["shaft12"] == pytest.approx(thrust["stage19"], rel=5e-3)
     assert axial["shaft14"] == pytest.approx(thrust["stage20"], rel=5e-3)
     assert axial["shaft13"] == pytest.approx(thrust["stage19"] - thrust["stage20"], rel=5e-3)
+
+
+@pytest.mark.slow
+def test_fva_at_a_tenth_of_its_load_is_not_called_chaotic_where_the_exponent_is_negative():
+    """FVA at 10 % of its load, 543 rpm (kv 1.001: the response follows the forcing).  The
+    largest Lyapunov exponent, computed here as the reference at rtol 1e-8 with a
+    perturbation 1e-4 of the state's scale (10^4 x rtol: the integration noise cannot make
+    it grow), is negative; the sweep point, at its own rtol (3.9e-4), must not call the
+    motion chaotic.  Before the chaos rule kept the perturbation at rtol / 10 it did
+    (+0.57 per period, 95 % lower bound +0.30, confirmed by +0.74 at rtol / 10)."""
+    import dataclasses
+
+    from vibrogear.analyses.study import build_study, integration_options
+    from vibrogear.config.options import SweepOptions
+    from vibrogear.solvers.sequential.lyapunov import largest_lyapunov
+    from vibrogear.solvers.sequential.motion import CHAOTIC
+    from vibrogear.solvers.sequential.sweep_point import end_phase, run_point
+
+    scene = load_scene(SCENES["fva_two_stage"], (
+        'scene.analyses=["sweep"]', "gearbox.couplings[0].torque=45.6",
+        "gearbox.couplings[1].torque=127.3275362"))
+    study = build_study(scene)
+    model, rpm = study.model, 543.0
+    opts = integration_options(scene, record=True, section=scene.sweep, study=study)
+    rec = run_point(model, rpm, study.start(rpm), "up", 0, SweepOptions.of(scene.sweep),
+                    options=opts)
+    assert rec.ok
+    fine = dataclasses.replace(opts, rtol=1e-8, atol=opts.atol * 1e-8 / opts.rtol)
+    ref = largest_lyapunov(model, rpm, rec.u_end, 64, options=fine, chunk=4, d0=1e-4,
+                           phase0=end_phase(model, rec))
+    assert ref.ci[1] < 0.0                           # contracting: no chaos to find
+    assert rec.motion_class != CHAOTIC, rec.metrics.get("lyapunov_per_period")

@@ -155,12 +155,13 @@ def block_estimate(log_growth, period: float, chunk: int = CHUNK, burn: int = 1)
 def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
                      options: IntegrationOptions = IntegrationOptions(), chunk: int = CHUNK,
                      d0: float = D0, burn: int = 1, seed: int = 0,
-                     direction=None) -> LyapunovResult:
+                     direction=None, phase0: int = 0) -> LyapunovResult:
     """The largest Lyapunov exponent over ``periods`` excitation periods from ``u0`` (at
     phase 0, on or near the attractor); see the module docstring.  ``direction``: the
     starting tangent (state units; e.g. the difference of two successive stroboscopic
     samples of a trajectory converging to u0: it is already along the slowest decaying
-    direction), default random (``seed``)."""
+    direction), default random (``seed``).  ``phase0``: the excitation periods the forcing
+    has run at ``u0`` (a multi-frequency model's: ``sweep_point.end_phase``)."""
     wall = time.perf_counter()
     u = np.array(u0, dtype=float)
     T = model.excitation_period(param)
@@ -173,7 +174,7 @@ def largest_lyapunov(model: ReducedModel, param: float, u0, periods: int, *,
     logs, calls = [], 0
     status, message = Status.OK, "ok"
     for i in range(int(periods) // chunk):
-        t_s = model.phase_time(i * chunk, param)     # the forcing carried on (0: periodic)
+        t_s = model.phase_time(phase0 + i * chunk, param)    # the forcing carried on
         t_eval = t_s + np.arange(1, chunk + 1) * T
         ref = integrate(model, param, u, t_s, t_s + chunk * T, t_eval=t_eval, options=options)
         calls += ref.rhs_calls
