@@ -13,11 +13,10 @@ cheap: no numba, dolfinx or matplotlib until a run needs them)::
 """
 import os as _os
 
-# GNU OpenMP is not fork-safe: once a process has run an OpenMP region (CHOLMOD's
-# factorisation of a housing's stiffness, through PETSc), worker processes forked from it
-# deadlock in their first OpenMP region (found in `make test-slow`: an optimisation whose
-# forked evaluations each built a housing hung in cholmod_super_numeric).  One OpenMP
-# thread keeps every fork safe; the parallelism is the worker processes and MPI ranks.
+# One OpenMP thread per process: the parallelism is the worker processes and MPI ranks.  (It
+# does not make GNU OpenMP fork-safe: CHOLMOD starts its own team whatever this says, and a
+# process forked from one that ran it deadlocks in its first CHOLMOD factorisation; the
+# housing's factorisation takes MUMPS in such a process: models/housing/fe_eigen.py.)
 # Set before any library that reads it is loaded; a value the user sets is kept.
 _os.environ.setdefault("OMP_NUM_THREADS", "1")
 

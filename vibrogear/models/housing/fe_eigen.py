@@ -24,15 +24,33 @@ BLOCK = 16
 _SMOOTH = 2
 
 
+#: the process that ran a CHOLMOD factorisation (None: none has).  CHOLMOD's supernodal
+#: factorisation starts GNU OpenMP threads of its own (a team of 4, whatever OMP_NUM_THREADS
+#: says), and GNU OpenMP is not fork-safe: a process forked from one that has them deadlocks
+#: in its own first CHOLMOD factorisation (an optimisation's evaluations, each building a
+#: housing in a worker process, after the parent had built one: cholmod_super_numeric waits
+#: forever).  A process whose pid differs from this one was forked from it: MUMPS there.
+_CHOLMOD_PID: list = [None]
+
+
+def _cholmod_safe() -> bool:
+    import os
+    return _CHOLMOD_PID[0] in (None, os.getpid())
+
+
 def cholesky_factor(K, comm):
     """KSP (preonly, Cholesky) factored once; CHOLMOD on one process (METIS/AMD ordering: ~25 % fewer
     factor entries than MUMPS with PORD and half the time per triangular solve), MUMPS under MPI
-    (ICNTL(14) = 50: INFOG(1) = -9 otherwise).  ``-vghousing_st_pc_factor_mat_solver_type``
-    overrides the choice."""
+    (ICNTL(14) = 50: INFOG(1) = -9 otherwise) and in a process forked from one that ran
+    CHOLMOD (:data:`_CHOLMOD_PID`).  ``-vghousing_st_pc_factor_mat_solver_type`` overrides the
+    choice."""
+    import os
+
     from petsc4py import PETSc
 
     K.setOption(PETSc.Mat.Option.SPD, True)
-    package = "cholmod" if comm.size == 1 and PETSc.Sys.hasExternalPackage("suitesparse") else "mumps"
+    package = "cholmod" if (comm.size == 1 and PETSc.Sys.hasExternalPackage("suitesparse")
+                            and _cholmod_safe()) else "mumps"
     ksp = PETSc.KSP().create(comm)
     ksp.setOptionsPrefix(f"{_PREFIX}st_")
     ksp.setOperators(K)
@@ -42,6 +60,8 @@ def cholesky_factor(K, comm):
     pc.setFactorSolverType(package)
     with option_defaults(f"{_PREFIX}st_", {"mat_mumps_icntl_14": 50}):
         ksp.setFromOptions()
+        if pc.getFactorSolverType() == "cholmod":
+            _CHOLMOD_PID[0] = os.getpid()
         ksp.setUp()
     return ksp
 
