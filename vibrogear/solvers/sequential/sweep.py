@@ -17,12 +17,10 @@ losses of the monitored contact, the contact events.  The motion class with its 
 (period-n, else the largest Lyapunov exponent with its interval) and the rattle / contact
 metrics per contact group come from them (:mod:`.motion`, :mod:`.lyapunov`).
 
-Each point starts at t = 0 where the excitation phase is cos(W t) = 1; since a whole
-number of periods is integrated, the end state is again at phase 0 and seeds the next
-point directly (a multi-frequency model's end state lies at ``u_end_t``, n excitation periods
-into its forcing; the next point, at another speed, continues the forcing from n periods:
-``sweep_point.end_phase``).  A failed point keeps NaN values and its integrator
-status and message; the unit goes on from its last good state.  Solvers never print."""
+Each point starts at phase 0 (t = 0, cos(W t) = 1) and integrates whole periods: its end
+state seeds the next point (a multi-frequency model's lies n periods into its forcing, and
+the next point continues from there: ``sweep_point.end_phase``).  A failed point keeps NaN
+values and its status and message; the unit goes on from its last good state."""
 from __future__ import annotations
 
 import math
